@@ -1,0 +1,47 @@
+# slamaware: `make demo` and `make test` work on a fresh Debian machine (see README.md).
+BUILD   ?= build
+JOBS    ?= $(shell nproc)
+SHARED  ?= ../shared/data
+CTEST_ARGS ?=
+
+.PHONY: all deps build test demo eval bench record synth spy clean
+
+all: build
+
+deps:
+	@scripts/install-deps
+
+$(BUILD)/CMakeCache.txt:
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release
+
+build: $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j$(JOBS)
+
+test: deps build
+	cd $(BUILD) && ctest --output-on-failure --timeout 1200 $(CTEST_ARGS)
+
+# The whole pipeline on the bundled sample (or SOURCE=...), in a private network namespace
+# unless NETNS=0 (then it runs on the host bus, ttl=0, for lcm-spy to watch).
+SOURCE ?= $(SHARED)/sequences/middlebury_temple_ring
+NETNS ?= 1
+demo: deps build
+	scripts/demo "$(SOURCE)" $(NETNS)
+
+# Evaluation on the default suite or SEQUENCES="dir ...": build/eval/report.{json,md} + plots.
+eval: deps build
+	scripts/eval $(SEQUENCES)
+
+# Benchmarks: build/bench/report.json.
+bench: deps build
+	scripts/bench
+
+# Records a camera session: make record SOURCE=... OUT=logs/session.lcm
+OUT ?= $(BUILD)/record.lcm
+record: deps build
+	scripts/record "$(SOURCE)" "$(OUT)"
+
+spy: build
+	scripts/lcm-spy
+
+clean:
+	rm -rf $(BUILD)

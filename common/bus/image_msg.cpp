@@ -1,0 +1,68 @@
+#include "common/bus/image_msg.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include "common/image_codec.h"
+
+namespace slamaware {
+
+image_t makeImageMessage(const cv::Mat& bgr, int64_t utime, int32_t seq, int8_t pixel_format, int jpeg_quality) {
+  image_t msg;
+  msg.utime = utime;
+  msg.seq = seq;
+  msg.width = bgr.cols;
+  msg.height = bgr.rows;
+  msg.pixel_format = pixel_format;
+  if (pixel_format == image_t::PIXEL_FORMAT_JPEG) {
+    msg.data = encodeJpeg(bgr, jpeg_quality);
+  } else if (pixel_format == image_t::PIXEL_FORMAT_RGB8) {
+    cv::Mat rgb;
+    cv::cvtColor(bgr, rgb, bgr.channels() == 1 ? cv::COLOR_GRAY2RGB : cv::COLOR_BGR2RGB);
+    msg.data.assign(rgb.data, rgb.data + rgb.total() * 3);
+  } else if (pixel_format == image_t::PIXEL_FORMAT_GRAY8) {
+    cv::Mat grey = bgr;
+    if (bgr.channels() == 3) cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+    if (!grey.isContinuous()) grey = grey.clone();
+    msg.data.assign(grey.data, grey.data + grey.total());
+  } else {
+    throw ImageError("makeImageMessage: unknown pixel format " + std::to_string(pixel_format));
+  }
+  msg.size = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+cv::Mat decodeImageMessage(const image_t& msg, const std::string& what, bool grey) {
+  if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384)
+    throw ImageError(what + ": bad image size " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
+  cv::Mat out;
+  switch (msg.pixel_format) {
+    case image_t::PIXEL_FORMAT_JPEG: {
+      out = decodeImage(msg.data.data(), msg.data.size(), what, grey);
+      if (out.cols != msg.width || out.rows != msg.height)
+        throw ImageError(what + ": JPEG is " + std::to_string(out.cols) + "x" + std::to_string(out.rows) +
+                         " but the message says " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
+      return out;
+    }
+    case image_t::PIXEL_FORMAT_RGB8: {
+      if (msg.data.size() != static_cast<size_t>(msg.width) * msg.height * 3)
+        throw ImageError(what + ": RGB8 data has " + std::to_string(msg.data.size()) + " bytes, expected " +
+                         std::to_string(static_cast<size_t>(msg.width) * msg.height * 3));
+      cv::Mat rgb(msg.height, msg.width, CV_8UC3, const_cast<uint8_t*>(msg.data.data()));
+      cv::cvtColor(rgb, out, grey ? cv::COLOR_RGB2GRAY : cv::COLOR_RGB2BGR);
+      return out;
+    }
+    case image_t::PIXEL_FORMAT_GRAY8: {
+      if (msg.data.size() != static_cast<size_t>(msg.width) * msg.height)
+        throw ImageError(what + ": GRAY8 data has " + std::to_string(msg.data.size()) + " bytes, expected " +
+                         std::to_string(static_cast<size_t>(msg.width) * msg.height));
+      cv::Mat g(msg.height, msg.width, CV_8UC1, const_cast<uint8_t*>(msg.data.data()));
+      if (grey) return g.clone();
+      cv::cvtColor(g, out, cv::COLOR_GRAY2BGR);
+      return out;
+    }
+    default:
+      throw ImageError(what + ": unknown pixel format " + std::to_string(msg.pixel_format));
+  }
+}
+
+}  // namespace slamaware

@@ -1,0 +1,56 @@
+#include "common/bus/lockstep.h"
+
+#include <chrono>
+#include <memory>
+#include <set>
+
+#include "common/bus/bus.h"
+#include "common/bus/frame_stamp.h"
+#include "common/bus/shutdown.h"
+
+namespace slamaware {
+
+using Clock = std::chrono::steady_clock;
+
+LockstepGate::LockstepGate(Bus& bus, const std::string& channel) : bus_(bus), channel_(channel) {
+  bus_.subscribeRaw(channel_, [this](const Bus::RawMessage& m) {
+    if (auto s = peekFrameStamp(m.data, m.size)) acked_ = std::max(acked_, s->seq);
+  });
+}
+
+bool LockstepGate::waitFor(int32_t seq, double timeout_s, const std::function<void()>& idle) {
+  const auto start = Clock::now();
+  while (acked_ < seq) {
+    if (shutdownRequested()) return false;
+    if (Clock::now() - start > std::chrono::duration<double>(timeout_s)) return false;
+    bus_.handle(20);
+    if (idle) idle();
+  }
+  return true;
+}
+
+std::vector<std::string> waitForChannels(Bus& bus, const std::vector<std::string>& channels, double timeout_s,
+                                         const std::function<void()>& idle) {
+  auto waiting = std::make_shared<std::set<std::string>>(channels.begin(), channels.end());
+  for (const auto& c : channels) bus.subscribeRaw(c, [waiting, c](const Bus::RawMessage&) { waiting->erase(c); });
+  const auto start = Clock::now();
+  while (!waiting->empty() && !shutdownRequested() &&
+         Clock::now() - start < std::chrono::duration<double>(timeout_s)) {
+    bus.handle(50);
+    if (idle) idle();
+  }
+  return {waiting->begin(), waiting->end()};
+}
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= s.size()) {
+    const size_t comma = std::min(s.find(',', start), s.size());
+    if (comma > start) out.push_back(s.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace slamaware

@@ -1,0 +1,42 @@
+#include "common/bus/node.h"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+
+#include "common/bus/shutdown.h"
+
+namespace slamaware {
+
+void addNodeOptions(CLI::App& app, NodeArgs& args, bool with_lockstep_flag) {
+  app.add_option("--config", args.config, "YAML file with this process's options (default: built-in defaults)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--system", args.system, "system.yaml with bus and channel settings (default: built-in)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--lcm-url", args.lcm_url, "LCM URL, overrides bus.url");
+  if (with_lockstep_flag)
+    app.add_flag("--lockstep", args.lockstep, "deterministic mode: handle every frame, one output per input");
+  app.add_option("--log-level", args.log_level, "trace, debug, info, warn, error")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+}
+
+SystemConfig loadSystem(const NodeArgs& args) {
+  SystemConfig sys = loadSystemConfig(args.system);
+  if (!args.lcm_url.empty()) sys.bus.url = args.lcm_url;
+  if (args.lockstep) sys.bus.lockstep = true;
+  return sys;
+}
+
+int runNode(const std::string& name, const NodeArgs& args, const std::function<int()>& body) {
+  spdlog::set_level(spdlog::level::from_str(args.log_level));
+  spdlog::set_pattern("[%H:%M:%S.%e] [" + name + "] [%^%l%$] %v");
+  installShutdownHandlers();
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+}
+
+}  // namespace slamaware

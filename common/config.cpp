@@ -1,0 +1,291 @@
+#include "common/config.h"
+
+#include <spdlog/spdlog.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace slamaware {
+
+struct ConfigFile::Impl {
+  YAML::Node root;
+};
+
+namespace {
+
+std::string where(const std::string& path, const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  if (mark.line < 0) return path;
+  return path + ":" + std::to_string(mark.line + 1);
+}
+
+std::string show(const YAML::Node& node) {
+  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsSequence()) return "a list";
+  if (node.IsMap()) return "a map";
+  return "nothing";
+}
+
+template <class T>
+T scalarAs(const YAML::Node& node, const std::string& file, const std::string& key,
+           const char* type_name) {
+  if (!node.IsScalar()) {
+    throw ConfigError(where(file, node) + ": key '" + key + "': expected " + type_name + ", got " +
+                      show(node));
+  }
+  try {
+    return node.as<T>();
+  } catch (const YAML::Exception&) {
+    throw ConfigError(where(file, node) + ": key '" + key + "': expected " + type_name + ", got " +
+                      show(node));
+  }
+}
+
+// yaml-cpp accepts "1.5" as an int by truncation in some versions; be strict.
+bool looksIntegral(const std::string& s) {
+  if (s.empty()) return false;
+  size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  if (i == s.size()) return false;
+  for (; i < s.size(); ++i)
+    if (s[i] < '0' || s[i] > '9') return false;
+  return true;
+}
+
+template <class T>
+std::vector<T> listAs(const YAML::Node& node, const std::string& file, const std::string& key,
+                      const char* type_name) {
+  if (!node.IsSequence()) {
+    throw ConfigError(where(file, node) + ": key '" + key + "': expected a list of " + type_name +
+                      ", got " + show(node));
+  }
+  std::vector<T> out;
+  for (size_t i = 0; i < node.size(); ++i) {
+    const std::string item_key = key + "[" + std::to_string(i) + "]";
+    if constexpr (std::is_same_v<T, int>) {
+      if (!node[i].IsScalar() || !looksIntegral(node[i].Scalar()))
+        throw ConfigError(where(file, node[i]) + ": key '" + item_key + "': expected an integer, got " +
+                          show(node[i]));
+    }
+    out.push_back(scalarAs<T>(node[i], file, item_key, type_name));
+  }
+  return out;
+}
+
+void assign(const OptionList::Field& field, const YAML::Node& node, const std::string& file) {
+  const std::string& key = field.key;
+  std::visit(
+      [&](auto* ptr) {
+        using T = std::remove_pointer_t<decltype(ptr)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          *ptr = scalarAs<bool>(node, file, key, "true or false");
+        } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, int64_t> ||
+                             std::is_same_v<T, uint64_t>) {
+          if (!node.IsScalar() || !looksIntegral(node.Scalar()))
+            throw ConfigError(where(file, node) + ": key '" + key + "': expected an integer, got " +
+                              show(node));
+          *ptr = scalarAs<T>(node, file, key, "an integer");
+        } else if constexpr (std::is_same_v<T, float> || std::is_same_v<T, double>) {
+          const T v = scalarAs<T>(node, file, key, "a number");
+          if (!std::isfinite(v))
+            throw ConfigError(where(file, node) + ": key '" + key + "': expected a finite number, got " +
+                              show(node));
+          *ptr = v;
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          *ptr = scalarAs<std::string>(node, file, key, "a string");
+        } else if constexpr (std::is_same_v<T, std::vector<int>>) {
+          *ptr = listAs<int>(node, file, key, "integers");
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+          *ptr = listAs<double>(node, file, key, "numbers");
+        } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+          *ptr = listAs<std::string>(node, file, key, "strings");
+        }
+      },
+      field.ref);
+}
+
+// Walks `node` and checks that every key (dotted path under `prefix`) names a field or a
+// section that holds fields.
+void checkKeys(const YAML::Node& node, const std::string& prefix, const std::set<std::string>& fields,
+               const std::set<std::string>& sections, const std::string& file,
+               const std::string& section) {
+  for (const auto& kv : node) {
+    const std::string name = kv.first.as<std::string>();
+    const std::string key = prefix + name;
+    if (fields.count(key)) continue;
+    if (sections.count(key)) {
+      if (!kv.second.IsMap())
+        throw ConfigError(where(file, kv.second) + ": key '" + key + "': expected a map, got " +
+                          show(kv.second));
+      checkKeys(kv.second, key + ".", fields, sections, file, section);
+      continue;
+    }
+    std::string known;
+    for (const auto& f : fields) {
+      if (f.rfind(prefix, 0) == 0 && f.find('.', prefix.size()) == std::string::npos)
+        known += (known.empty() ? "" : ", ") + f.substr(prefix.size());
+    }
+    throw ConfigError(where(file, kv.first) + ": unknown key '" + key + "'" +
+                      (section.empty() ? "" : " in section '" + section + "'") +
+                      " (known here: " + known + ")");
+  }
+}
+
+void emitValue(std::ostringstream& out, const OptionList::Ref& ref) {
+  std::visit(
+      [&](auto* ptr) {
+        using T = std::remove_pointer_t<decltype(ptr)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          out << (*ptr ? "true" : "false");
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          YAML::Emitter e;
+          e << YAML::DoubleQuoted << *ptr;
+          out << e.c_str();
+        } else if constexpr (std::is_same_v<T, double> || std::is_same_v<T, float>) {
+          std::ostringstream s;
+          s.precision(std::numeric_limits<T>::max_digits10);
+          s << *ptr;
+          out << s.str();
+        } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, int64_t> ||
+                             std::is_same_v<T, uint64_t>) {
+          out << *ptr;
+        } else {
+          out << "[";
+          for (size_t i = 0; i < ptr->size(); ++i) {
+            if (i) out << ", ";
+            if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+              YAML::Emitter e;
+              e << YAML::DoubleQuoted << (*ptr)[i];
+              out << e.c_str();
+            } else {
+              std::ostringstream s;
+              s.precision(17);
+              s << (*ptr)[i];
+              out << s.str();
+            }
+          }
+          out << "]";
+        }
+      },
+      ref);
+}
+
+}  // namespace
+
+ConfigFile::ConfigFile(const std::string& path) : path_(path), impl_(std::make_unique<Impl>()) {
+  try {
+    impl_->root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open config file");
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+  if (impl_->root.IsNull()) impl_->root = YAML::Node(YAML::NodeType::Map);
+  if (!impl_->root.IsMap()) throw ConfigError(path + ": expected a map of keys at the top level");
+}
+
+ConfigFile::~ConfigFile() = default;
+ConfigFile::ConfigFile(ConfigFile&&) noexcept = default;
+
+bool ConfigFile::hasSection(const std::string& section) const {
+  return static_cast<bool>(impl_->root[section]);
+}
+
+void ConfigFile::load(const std::string& section, OptionList& list) const {
+  YAML::Node node = impl_->root;
+  if (!section.empty()) {
+    node = impl_->root[section];
+    if (!node || node.IsNull()) return;  // section absent: defaults
+    if (!node.IsMap())
+      throw ConfigError(where(path_, node) + ": section '" + section + "': expected a map, got " +
+                        show(node));
+  }
+  std::set<std::string> fields, sections;
+  for (const auto& f : list.fields()) {
+    fields.insert(f.key);
+    for (size_t dot = f.key.find('.'); dot != std::string::npos; dot = f.key.find('.', dot + 1))
+      sections.insert(f.key.substr(0, dot));
+  }
+  checkKeys(node, "", fields, sections, path_, section);
+  for (const auto& f : list.fields()) {
+    YAML::Node value = node;
+    size_t start = 0;
+    bool found = true;
+    while (true) {
+      const size_t dot = f.key.find('.', start);
+      const std::string part = f.key.substr(start, dot == std::string::npos ? dot : dot - start);
+      value = value[part];
+      if (!value) {
+        found = false;
+        break;
+      }
+      if (dot == std::string::npos) break;
+      start = dot + 1;
+    }
+    if (found) assign(f, value, path_);
+  }
+}
+
+void ConfigFile::checkSections(const std::vector<std::string>& known) const {
+  for (const auto& kv : impl_->root) {
+    const std::string name = kv.first.as<std::string>();
+    bool ok = false;
+    for (const auto& k : known) ok = ok || k == name;
+    if (!ok) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw ConfigError(where(path_, kv.first) + ": unknown section '" + name + "' (known: " + list + ")");
+    }
+  }
+}
+
+std::string describeOptions(const OptionList& list) {
+  std::ostringstream out;
+  std::vector<std::string> open;  // currently open section path
+  for (const auto& f : list.fields()) {
+    std::vector<std::string> parts;
+    size_t start = 0;
+    for (size_t dot = f.key.find('.'); dot != std::string::npos; dot = f.key.find('.', start)) {
+      parts.push_back(f.key.substr(start, dot - start));
+      start = dot + 1;
+    }
+    const std::string leaf = f.key.substr(start);
+    size_t common = 0;
+    while (common < open.size() && common < parts.size() && open[common] == parts[common]) ++common;
+    open.resize(common);
+    for (size_t i = common; i < parts.size(); ++i) {
+      out << std::string(2 * i, ' ') << parts[i] << ":\n";
+      open.push_back(parts[i]);
+    }
+    out << std::string(2 * parts.size(), ' ') << leaf << ": ";
+    emitValue(out, f.ref);
+    if (!f.doc.empty()) out << "  # " << f.doc;
+    out << "\n";
+  }
+  return out.str();
+}
+
+bool optionsEqual(const OptionList& a, const OptionList& b) {
+  if (a.fields().size() != b.fields().size()) return false;
+  for (size_t i = 0; i < a.fields().size(); ++i) {
+    const auto& fa = a.fields()[i];
+    const auto& fb = b.fields()[i];
+    if (fa.key != fb.key || fa.ref.index() != fb.ref.index()) return false;
+    const bool same = std::visit(
+        [&](auto* pa) {
+          using P = decltype(pa);
+          return *pa == *std::get<P>(fb.ref);
+        },
+        fa.ref);
+    if (!same) return false;
+  }
+  return true;
+}
+
+void logOptions(const std::string& title, const std::string& source, const OptionList& list) {
+  spdlog::info("{} ({}):\n{}", title, source, describeOptions(list));
+}
+
+}  // namespace slamaware

@@ -1,0 +1,92 @@
+#include "common/image_codec.h"
+
+#include <fstream>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
+
+namespace slamaware {
+
+namespace {
+bool isJpeg(const uint8_t* d, size_t n) { return n >= 4 && d[0] == 0xFF && d[1] == 0xD8; }
+bool isPng(const uint8_t* d, size_t n) {
+  static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  return n >= 8 && std::equal(sig, sig + 8, d);
+}
+}  // namespace
+
+std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality) {
+  if (image.empty() || image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 1))
+    throw ImageError("encodeJpeg: need a non-empty 8-bit BGR or grey image");
+  std::vector<uint8_t> out;
+  if (!cv::imencode(".jpg", image, out, {cv::IMWRITE_JPEG_QUALITY, std::clamp(quality, 1, 100)}))
+    throw ImageError("encodeJpeg: OpenCV could not encode the image");
+  return out;
+}
+
+std::vector<uint8_t> encodePng(const cv::Mat& image, int compression) {
+  if (image.empty()) throw ImageError("encodePng: empty image");
+  std::vector<uint8_t> out;
+  if (!cv::imencode(".png", image, out, {cv::IMWRITE_PNG_COMPRESSION, std::clamp(compression, 0, 9)}))
+    throw ImageError("encodePng: OpenCV could not encode the image");
+  return out;
+}
+
+cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, bool grey) {
+  if (size == 0) throw ImageError(what + ": empty image data");
+  if (!isJpeg(data, size) && !isPng(data, size))
+    throw ImageError(what + ": not a JPEG or PNG image (" + std::to_string(size) + " bytes)");
+  // A JPEG must end with the EOI marker; libjpeg fills a truncated image with grey and only warns.
+  if (isJpeg(data, size)) {
+    size_t end = size;
+    while (end > 2 && data[end - 1] == 0) --end;  // some encoders pad
+    if (end < 4 || data[end - 2] != 0xFF || data[end - 1] != 0xD9)
+      throw ImageError(what + ": truncated JPEG (no end-of-image marker)");
+  }
+  if (isPng(data, size)) {
+    static const uint8_t iend[8] = {'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+    if (size < 20 || !std::equal(iend, iend + 8, data + size - 8))
+      throw ImageError(what + ": truncated PNG (no IEND chunk)");
+  }
+  cv::Mat img;
+  try {
+    img = cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(data)),
+                       grey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw ImageError(what + ": corrupt image: " + e.what());
+  }
+  if (img.empty()) throw ImageError(what + ": corrupt image (decoder failed)");
+  return img;
+}
+
+namespace {
+std::vector<uint8_t> readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ImageError(path + ": cannot open image file");
+  return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+}  // namespace
+
+cv::Mat readImage(const std::string& path, bool grey) {
+  const std::vector<uint8_t> bytes = readFile(path);
+  return decodeImage(bytes.data(), bytes.size(), path, grey);
+}
+
+cv::Mat readImageUnchanged(const std::string& path) {
+  const std::vector<uint8_t> bytes = readFile(path);
+  if (bytes.empty()) throw ImageError(path + ": empty image file");
+  cv::Mat img = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  if (img.empty()) throw ImageError(path + ": corrupt image");
+  return img;
+}
+
+void writeImage(const std::string& path, const cv::Mat& image, int jpeg_quality) {
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, image, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+  } catch (const cv::Exception& e) {
+    throw ImageError(path + ": cannot write image: " + e.what());
+  }
+  if (!ok) throw ImageError(path + ": cannot write image");
+}
+
+}  // namespace slamaware

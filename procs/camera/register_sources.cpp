@@ -1,0 +1,5 @@
+#include "procs/camera/register_sources.h"
+
+namespace slamaware {
+void registerBuiltinSourceSchemes() {}
+}  // namespace slamaware

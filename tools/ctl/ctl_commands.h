@@ -1,0 +1,20 @@
+#pragma once
+// slamaware-ctl subcommands. Each file adds one subcommand to the app; the callback stores the
+// command's exit code.
+#include "common/bus/node.h"
+
+namespace CLI {
+class App;
+}
+
+namespace slamaware {
+
+struct CtlContext {
+  NodeArgs node;
+  int exit_code = 0;
+};
+
+/// `bus`: a live table of what is on the bus (channel, type, rate, bandwidth, last message).
+void addBusCommand(CLI::App& app, CtlContext& ctx);
+
+}  // namespace slamaware
