@@ -194,9 +194,11 @@ bool ConfigFile::hasSection(const std::string& section) const {
 }
 
 void ConfigFile::load(const std::string& section, OptionList& list) const {
-  YAML::Node node = impl_->root;
+  // yaml-cpp: Node::operator= writes into the node it refers to; reset() rebinds.
+  YAML::Node node;
+  node.reset(impl_->root);
   if (!section.empty()) {
-    node = impl_->root[section];
+    node.reset(impl_->root[section]);
     if (!node || node.IsNull()) return;  // section absent: defaults
     if (!node.IsMap())
       throw ConfigError(where(path_, node) + ": section '" + section + "': expected a map, got " +
@@ -210,13 +212,18 @@ void ConfigFile::load(const std::string& section, OptionList& list) const {
   }
   checkKeys(node, "", fields, sections, path_, section);
   for (const auto& f : list.fields()) {
-    YAML::Node value = node;
+    YAML::Node value;
+    value.reset(node);
     size_t start = 0;
     bool found = true;
     while (true) {
       const size_t dot = f.key.find('.', start);
       const std::string part = f.key.substr(start, dot == std::string::npos ? dot : dot - start);
-      value = value[part];
+      if (!value.IsMap()) {
+        found = false;
+        break;
+      }
+      value.reset(value[part]);
       if (!value) {
         found = false;
         break;

@@ -13,7 +13,8 @@ struct FrameStamp {
   int32_t seq = -1;
 };
 
-/// utime and seq of an encoded per-frame message, or nullopt if the bytes are not one of them.
+/// utime and seq of an encoded per-frame message, or nullopt if the bytes are not a complete,
+/// well-formed one of them (the whole message is decoded to check).
 std::optional<FrameStamp> peekFrameStamp(const uint8_t* data, size_t size);
 
 }  // namespace slamaware

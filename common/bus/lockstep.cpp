@@ -14,7 +14,10 @@ using Clock = std::chrono::steady_clock;
 
 LockstepGate::LockstepGate(Bus& bus, const std::string& channel) : bus_(bus), channel_(channel) {
   bus_.subscribeRaw(channel_, [this](const Bus::RawMessage& m) {
-    if (auto s = peekFrameStamp(m.data, m.size)) acked_ = std::max(acked_, s->seq);
+    if (auto s = peekFrameStamp(m.data, m.size))
+      acked_ = std::max(acked_, s->seq);
+    else
+      bus_.reject(m.channel, "not a well-formed per-frame message (lockstep answer)");
   });
 }
 

@@ -1,0 +1,160 @@
+// Config: defaults, nested sections, and errors that name the file, line and key.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "common/bus/system_config.h"
+#include "common/config.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+
+namespace {
+
+struct FilterOptions {
+  double min_depth = 0.1;
+  int iterations = 5;
+  template <class V>
+  void visit(V& v) {
+    v("min_depth", min_depth, "m");
+    v("iterations", iterations, "");
+  }
+};
+
+struct ToyOptions {
+  bool enabled = true;
+  int count = 3;
+  uint64_t seed = 42;
+  double ratio = 0.5;
+  std::string name = "toy";
+  std::vector<double> weights = {1, 2};
+  std::vector<std::string> tags = {"a"};
+  FilterOptions filter;
+  template <class V>
+  void visit(V& v) {
+    v("enabled", enabled, "switch");
+    v("count", count, "how many");
+    v("seed", seed, "random seed");
+    v("ratio", ratio, "a ratio");
+    v("name", name, "a name");
+    v("weights", weights, "weights");
+    v("tags", tags, "tags");
+    v.section("filter", filter);
+  }
+};
+
+std::string writeYaml(const std::string& name, const std::string& text) {
+  const std::string path = test::tempDir("config") + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string errorOf(const std::string& yaml, const std::string& section = "toy") {
+  const std::string path = writeYaml("bad.yaml", yaml);
+  try {
+    loadConfig<ToyOptions>(path, section, false);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Config, DefaultsWithoutFile) {
+  const ToyOptions o = loadConfig<ToyOptions>("", "toy", false);
+  EXPECT_EQ(o.count, 3);
+  EXPECT_EQ(o.filter.iterations, 5);
+}
+
+TEST(Config, LoadsValuesAndNestedSections) {
+  const std::string path = writeYaml("ok.yaml",
+                                     "toy:\n  count: 7\n  seed: 18446744073709551615\n  ratio: 2\n  name: x\n"
+                                     "  weights: [3.5, 4]\n  tags: [p, q]\n  filter:\n    min_depth: 0.25\n"
+                                     "other: {anything: 1}\n");
+  const ToyOptions o = loadConfig<ToyOptions>(path, "toy", false);
+  EXPECT_EQ(o.count, 7);
+  EXPECT_EQ(o.seed, 18446744073709551615ull);
+  EXPECT_DOUBLE_EQ(o.ratio, 2.0);
+  EXPECT_EQ(o.name, "x");
+  EXPECT_EQ(o.weights, (std::vector<double>{3.5, 4}));
+  EXPECT_EQ(o.tags, (std::vector<std::string>{"p", "q"}));
+  EXPECT_DOUBLE_EQ(o.filter.min_depth, 0.25);
+  EXPECT_EQ(o.filter.iterations, 5) << "keys absent from the file keep their defaults";
+}
+
+TEST(Config, UnknownKeyNamesKeyFileAndLine) {
+  const std::string e = errorOf("toy:\n  count: 1\n  cuont: 2\n");
+  EXPECT_NE(e.find("unknown key 'cuont'"), std::string::npos) << e;
+  EXPECT_NE(e.find("bad.yaml:3"), std::string::npos) << e;
+  EXPECT_NE(e.find("count"), std::string::npos) << "lists the known keys: " << e;
+}
+
+TEST(Config, UnknownNestedKey) {
+  const std::string e = errorOf("toy:\n  filter:\n    min_dpth: 1\n");
+  EXPECT_NE(e.find("unknown key 'filter.min_dpth'"), std::string::npos) << e;
+}
+
+TEST(Config, IllTypedValues) {
+  EXPECT_NE(errorOf("toy:\n  count: abc\n").find("key 'count': expected an integer, got 'abc'"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  count: 1.5\n").find("key 'count': expected an integer"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  enabled: maybe\n").find("key 'enabled': expected true or false"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  ratio: [1]\n").find("key 'ratio': expected a number, got a list"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  ratio: .nan\n").find("finite"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  weights: 3\n").find("key 'weights': expected a list"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  weights: [1, x]\n").find("key 'weights[1]'"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  filter: 3\n").find("key 'filter': expected a map"), std::string::npos);
+  EXPECT_NE(errorOf("toy: 3\n").find("section 'toy': expected a map"), std::string::npos);
+}
+
+TEST(Config, SyntaxErrorAndMissingFile) {
+  EXPECT_NE(errorOf("toy: [\n").find("YAML syntax error"), std::string::npos);
+  try {
+    loadConfig<ToyOptions>("/nonexistent/dir/x.yaml", "toy", false);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos);
+  }
+}
+
+TEST(Config, DescribeRoundTripsAndEquals) {
+  ToyOptions a;
+  a.count = 11;
+  a.name = "with \"quotes\": and colon";
+  a.filter.min_depth = 0.123456789012345;
+  a.weights = {0.1, 1e-9};
+  const std::string text = "toy:\n" + [&] {
+    std::string d = describeOptions(optionListOf(a)), out;
+    size_t start = 0;
+    while (start < d.size()) {
+      const size_t nl = d.find('\n', start);
+      out += "  " + d.substr(start, nl - start + 1);
+      start = nl + 1;
+    }
+    return out;
+  }();
+  const ToyOptions b = loadConfig<ToyOptions>(writeYaml("round.yaml", text), "toy", false);
+  ToyOptions a2 = a, b2 = b;
+  EXPECT_TRUE(optionsEqual(a2, b2)) << text;
+  ToyOptions c;
+  EXPECT_FALSE(optionsEqual(a2, c));
+}
+
+TEST(Config, SystemConfigRejectsUnknownSection) {
+  const std::string path = writeYaml("system.yaml", "bus:\n  lockstep: true\nchanels:\n  camera: X\n");
+  try {
+    loadSystemConfig(path, false);
+    FAIL() << "an unknown section must be refused";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown section 'chanels'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Config, ChannelPrefixAndStatusNames) {
+  const std::string path = writeYaml("system2.yaml", "channels:\n  prefix: R1_\n  camera: CAM\n");
+  const SystemConfig sys = loadSystemConfig(path, false);
+  EXPECT_EQ(sys.channels.camera, "R1_CAM");
+  EXPECT_EQ(sys.channels.slam_pose, "R1_SLAM_POSE");
+  EXPECT_EQ(sys.channels.statusOf("slam"), "R1_SLAM_STATUS");
+}
+

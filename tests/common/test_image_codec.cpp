@@ -1,0 +1,101 @@
+// Image codecs: round trips, and corrupt data refused with a message.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/bus/image_msg.h"
+#include "common/image_codec.h"
+
+using namespace slamaware;
+
+namespace {
+cv::Mat testImage() {
+  cv::Mat img(120, 160, CV_8UC3);
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c) img.at<cv::Vec3b>(r, c) = cv::Vec3b(r * 2, c, (r + c) % 256);
+  return img;
+}
+}  // namespace
+
+TEST(ImageCodec, PngIsLossless) {
+  const cv::Mat img = testImage();
+  const auto png = encodePng(img);
+  const cv::Mat back = decodeImage(png.data(), png.size(), "test");
+  EXPECT_EQ(cv::norm(img, back, cv::NORM_INF), 0);
+}
+
+TEST(ImageCodec, Png16BitDepth) {
+  cv::Mat depth(10, 10, CV_16UC1);
+  for (int i = 0; i < 100; ++i) depth.at<uint16_t>(i / 10, i % 10) = static_cast<uint16_t>(i * 600);
+  const auto png = encodePng(depth);
+  const cv::Mat back = cv::imdecode(png, cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(back.type(), CV_16UC1);
+  EXPECT_EQ(cv::norm(depth, back, cv::NORM_INF), 0);
+}
+
+TEST(ImageCodec, JpegQualityAffectsErrorAndSize) {
+  const cv::Mat img = testImage();
+  const auto q95 = encodeJpeg(img, 95), q30 = encodeJpeg(img, 30);
+  EXPECT_GT(q95.size(), q30.size());
+  const double e95 = cv::norm(img, decodeImage(q95.data(), q95.size(), "q95"), cv::NORM_L1) / img.total();
+  const double e30 = cv::norm(img, decodeImage(q30.data(), q30.size(), "q30"), cv::NORM_L1) / img.total();
+  EXPECT_LT(e95, e30);
+  EXPECT_LT(e95, 6.0);
+}
+
+TEST(ImageCodec, CorruptDataIsRefused) {
+  const auto jpeg = encodeJpeg(testImage(), 90);
+  auto errorOf = [](const std::vector<uint8_t>& d) -> std::string {
+    try {
+      decodeImage(d.data(), d.size(), "CAMERA seq 7");
+    } catch (const ImageError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(errorOf({}).find("empty"), std::string::npos);
+  EXPECT_NE(errorOf({1, 2, 3, 4, 5}).find("not a JPEG or PNG"), std::string::npos);
+  std::vector<uint8_t> truncated(jpeg.begin(), jpeg.begin() + jpeg.size() / 2);
+  EXPECT_NE(errorOf(truncated).find("truncated JPEG"), std::string::npos);
+  EXPECT_NE(errorOf(truncated).find("CAMERA seq 7"), std::string::npos) << "names the source";
+  auto png = encodePng(testImage());
+  png.resize(png.size() - 20);
+  EXPECT_NE(errorOf(png).find("truncated PNG"), std::string::npos);
+}
+
+TEST(ImageCodec, MissingFileNamed) {
+  try {
+    readImage("/nonexistent/frame.png");
+    FAIL();
+  } catch (const ImageError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/frame.png"), std::string::npos);
+  }
+}
+
+TEST(ImageMessage, RoundTripsEveryFormat) {
+  const cv::Mat img = testImage();
+  const image_t raw = makeImageMessage(img, 5, 6, image_t::PIXEL_FORMAT_RGB8);
+  EXPECT_EQ(raw.size, 160 * 120 * 3);
+  EXPECT_EQ(raw.data[0], img.at<cv::Vec3b>(0, 0)[2]) << "RGB8 is r, g, b";
+  EXPECT_EQ(cv::norm(img, decodeImageMessage(raw, "raw"), cv::NORM_INF), 0);
+  const image_t grey = makeImageMessage(img, 5, 6, image_t::PIXEL_FORMAT_GRAY8);
+  EXPECT_EQ(grey.size, 160 * 120);
+  EXPECT_EQ(decodeImageMessage(grey, "grey", true).channels(), 1);
+  const image_t jpeg = makeImageMessage(img, 5, 6, image_t::PIXEL_FORMAT_JPEG, 95);
+  EXPECT_LT(cv::norm(img, decodeImageMessage(jpeg, "jpeg"), cv::NORM_L1) / img.total(), 6.0);
+}
+
+TEST(ImageMessage, InconsistentMessagesAreRefused) {
+  image_t m = makeImageMessage(testImage(), 5, 6, image_t::PIXEL_FORMAT_RGB8);
+  m.width = 161;
+  EXPECT_THROW(decodeImageMessage(m, "x"), ImageError);
+  image_t j = makeImageMessage(testImage(), 5, 6, image_t::PIXEL_FORMAT_JPEG);
+  j.height = 100;  // JPEG says 120
+  EXPECT_THROW(decodeImageMessage(j, "x"), ImageError);
+  j.height = 120;
+  j.pixel_format = 9;
+  EXPECT_THROW(decodeImageMessage(j, "x"), ImageError);
+  j.width = -3;
+  EXPECT_THROW(decodeImageMessage(j, "x"), ImageError);
+}

@@ -1,0 +1,68 @@
+#pragma once
+// Helpers shared by tests: paths of binaries and data, child processes, recording the bus.
+#include <gtest/gtest.h>
+#include <sys/types.h>
+
+#include <chrono>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace slamaware::test {
+
+/// build/bin/<name>
+std::string binPath(const std::string& name);
+/// <source>/<relative>
+std::string sourcePath(const std::string& relative);
+/// ../shared/data/<relative>, or "" if the shared data is not beside the project.
+std::string sharedData(const std::string& relative);
+/// A fresh empty folder under the build tree for one test.
+std::string tempDir(const std::string& name);
+/// The bus URL tests use (inside their own network namespace).
+std::string testUrl();
+
+/// Skips the current test with a clear message when the shared data is absent.
+#define SKIP_WITHOUT_SHARED_DATA(path)                                                         \
+  if ((path).empty()) {                                                                        \
+    GTEST_SKIP() << "../shared/data is not beside the project: this test needs the real data"; \
+  }
+
+/// A child process with its output in a log file; killed (SIGKILL) when destroyed.
+class ChildProcess {
+ public:
+  ChildProcess(const std::vector<std::string>& argv, const std::string& log_path);
+  ~ChildProcess();
+  ChildProcess(const ChildProcess&) = delete;
+  pid_t pid() const { return pid_; }
+  /// True while the process has not exited (reaps it if it has).
+  bool running();
+  void signal(int sig);
+  /// Waits for exit; returns the exit code, 128+signal if killed, -1 on timeout.
+  int wait(std::chrono::milliseconds timeout);
+  /// SIGINT, then SIGKILL after `grace`; returns the exit status as wait().
+  int stop(std::chrono::milliseconds grace = std::chrono::milliseconds(3000));
+  std::string log() const;
+
+ private:
+  pid_t pid_ = -1;
+  int status_ = -1;
+  bool exited_ = false;
+  std::string log_path_;
+};
+
+/// lcm-logger recording the test bus into `path` while alive (stopped with SIGINT).
+class BusRecorder {
+ public:
+  BusRecorder(const std::string& path, const std::string& channels = ".*");
+  ~BusRecorder();
+  void stop();
+
+ private:
+  ChildProcess logger_;
+  bool stopped_ = false;
+};
+
+/// Polls `pred` every 10 ms until true or timeout; returns its last value.
+bool waitUntil(const std::function<bool()>& pred, std::chrono::milliseconds timeout);
+
+}  // namespace slamaware::test
