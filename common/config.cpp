@@ -204,13 +204,35 @@ void ConfigFile::load(const std::string& section, OptionList& list) const {
       throw ConfigError(where(path_, node) + ": section '" + section + "': expected a map, got " +
                         show(node));
   }
+  loadNode(&node, section, list);
+}
+
+size_t ConfigFile::listSize(const std::string& section) const {
+  const YAML::Node node = impl_->root[section];
+  if (!node || node.IsNull()) return 0;
+  if (!node.IsSequence())
+    throw ConfigError(where(path_, node) + ": section '" + section + "': expected a list, got " + show(node));
+  return node.size();
+}
+
+void ConfigFile::loadListItem(const std::string& section, size_t index, OptionList& list) const {
+  YAML::Node node;
+  node.reset(impl_->root[section][index]);
+  const std::string what = section + "[" + std::to_string(index) + "]";
+  if (!node.IsMap())
+    throw ConfigError(where(path_, node) + ": '" + what + "': expected a map, got " + show(node));
+  loadNode(&node, what, list);
+}
+
+void ConfigFile::loadNode(const void* node_ptr, const std::string& what, OptionList& list) const {
+  const YAML::Node& node = *static_cast<const YAML::Node*>(node_ptr);
   std::set<std::string> fields, sections;
   for (const auto& f : list.fields()) {
     fields.insert(f.key);
     for (size_t dot = f.key.find('.'); dot != std::string::npos; dot = f.key.find('.', dot + 1))
       sections.insert(f.key.substr(0, dot));
   }
-  checkKeys(node, "", fields, sections, path_, section);
+  checkKeys(node, "", fields, sections, path_, what);
   for (const auto& f : list.fields()) {
     YAML::Node value;
     value.reset(node);

@@ -81,8 +81,13 @@ class ConfigFile {
   void load(const std::string& section, OptionList& list) const;
   /// Throws ConfigError when the file has a top-level key not in `known`.
   void checkSections(const std::vector<std::string>& known) const;
+  /// Number of items of a top-level list section (0 if absent); throws if it is not a list.
+  size_t listSize(const std::string& section) const;
+  /// Loads item `index` of a top-level list section (a map) like load().
+  void loadListItem(const std::string& section, size_t index, OptionList& list) const;
 
  private:
+  void loadNode(const void* node, const std::string& what, OptionList& list) const;
   struct Impl;
   std::string path_;
   std::unique_ptr<Impl> impl_;

@@ -84,6 +84,8 @@ bool Bus::publishFailed(const std::string& channel, const std::string& why) {
 
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
 
+int Bus::fileno() const { return lcm_->getFileno(); }
+
 void Bus::note(const std::string& channel, const std::string& what, const std::string& why) {
   // Log the first problem of a channel, then at most one line per 5 s (a flood of bad messages
   // must not flood the log).

@@ -74,6 +74,8 @@ class Bus {
   /// Waits up to timeout_ms for messages and dispatches them. Returns the number handled (0 on
   /// timeout), -1 if LCM failed.
   int handle(int timeout_ms);
+  /// The bus's file descriptor, readable when a message waits (for poll() with other fds).
+  int fileno() const;
 
   /// Rejected messages per channel (over the cap, undecodable, trailing bytes).
   std::map<std::string, int64_t> rejects() const;

@@ -18,6 +18,8 @@ void addNodeOptions(CLI::App& app, NodeArgs& args, bool with_lockstep_flag) {
     app.add_flag("--lockstep", args.lockstep, "deterministic mode: handle every frame, one output per input");
   app.add_option("--log-level", args.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+  app.add_option("--name", args.name,
+                 "process name when several of one kind run (status on <NAME>_STATUS; default: the kind)");
 }
 
 SystemConfig loadSystem(const NodeArgs& args) {
@@ -29,7 +31,7 @@ SystemConfig loadSystem(const NodeArgs& args) {
 
 int runNode(const std::string& name, const NodeArgs& args, const std::function<int()>& body) {
   spdlog::set_level(spdlog::level::from_str(args.log_level));
-  spdlog::set_pattern("[%H:%M:%S.%e] [" + name + "] [%^%l%$] %v");
+  spdlog::set_pattern("[%H:%M:%S.%e] [" + args.nameOr(name) + "] [%^%l%$] %v");
   installShutdownHandlers();
   try {
     return body();

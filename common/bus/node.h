@@ -1,6 +1,6 @@
 #pragma once
 // Command-line conventions every process shares: --help, --config FILE (the process's own
-// options), --system FILE (bus and channels), --lcm-url URL, --lockstep, --log-level.
+// options), --system FILE (bus and channels), --lcm-url URL, --lockstep, --log-level, --name.
 #include <functional>
 #include <string>
 
@@ -18,6 +18,10 @@ struct NodeArgs {
   std::string lcm_url;    ///< overrides bus.url
   bool lockstep = false;  ///< overrides bus.lockstep when set
   std::string log_level = "info";
+  std::string name;       ///< process name ("" = its kind): status on <NAME>_STATUS, log prefix
+
+  /// The process's name: --name when given, else its kind ("camera", "slam", ...).
+  std::string nameOr(const std::string& kind) const { return name.empty() ? kind : name; }
 };
 
 /// Adds the shared options to `app`; with_lockstep_flag = false for processes that define their

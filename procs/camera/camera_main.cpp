@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
     if (lockstep && speed == 1.0 && !app.count("--speed")) speed = 0;  // lockstep alone: as fast as acks come
 
     Bus bus(sys.bus.url);
-    StatusReporter status(bus, "camera", sys.channels.statusOf("camera"));
+    StatusReporter status(bus, node.nameOr("camera"), sys.channels.statusOf(node.nameOr("camera")));
     const Channels& ch = sys.channels;
 
     std::unique_ptr<LockstepGate> gate;

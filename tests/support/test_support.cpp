@@ -12,6 +12,8 @@
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
+#include <lcm/lcm-cpp.hpp>
+
 #include "common/dataset.h"
 #include "common/image_codec.h"
 
@@ -100,10 +102,24 @@ std::string ChildProcess::log() const {
   return s.str();
 }
 
+const char* const BusRecorder::kProbeChannel = "TEST_RECORDER_PROBE";
+
 BusRecorder::BusRecorder(const std::string& path, const std::string& channels)
-    : logger_({"lcm-logger", "--lcm-url=" + testUrl(), "-f", "-c", channels, path}, path + ".out") {
-  // lcm-logger has no ready signal: give it time to join the group.
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    : logger_({"lcm-logger", "--lcm-url=" + testUrl(), "--flush-interval=10", "-f", "-c",
+               "(" + channels + ")|" + kProbeChannel, path},
+              path + ".out") {
+  // lcm-logger has no ready signal: publish probes until one of them reaches the file, so that
+  // nothing published after the constructor returns can be missed by a logger still starting.
+  lcm::LCM lcm(testUrl());
+  const uint8_t probe[1] = {0};
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  std::error_code ec;
+  while (std::chrono::steady_clock::now() < end) {
+    lcm.publish(kProbeChannel, probe, sizeof(probe));
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    if (fs::exists(path, ec) && fs::file_size(path, ec) > 0) return;
+  }
+  ADD_FAILURE() << "lcm-logger recording " << path << " did not start within 20 s: " << logger_.log();
 }
 
 BusRecorder::~BusRecorder() { stop(); }

@@ -50,9 +50,12 @@ class ChildProcess {
   std::string log_path_;
 };
 
-/// lcm-logger recording the test bus into `path` while alive (stopped with SIGINT).
+/// lcm-logger recording the test bus into `path` while alive (stopped with SIGINT). The
+/// constructor returns once the logger is recording; the log also holds a few messages on
+/// kProbeChannel from that handshake.
 class BusRecorder {
  public:
+  static const char* const kProbeChannel;
   BusRecorder(const std::string& path, const std::string& channels = ".*");
   ~BusRecorder();
   void stop();

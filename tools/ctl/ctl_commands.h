@@ -16,5 +16,7 @@ struct CtlContext {
 
 /// `bus`: a live table of what is on the bus (channel, type, rate, bandwidth, last message).
 void addBusCommand(CLI::App& app, CtlContext& ctx);
+/// `status`, `start`, `stop`, `restart`, `logs`: the supervisors' table and commands.
+void addProcCommands(CLI::App& app, CtlContext& ctx);
 
 }  // namespace slamaware

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
     const std::regex keep(channels), drop(exclude);
     LogReader reader(log_path);
     Bus bus(sys.bus.url);
-    StatusReporter status(bus, "replay", sys.channels.statusOf("replay"));
+    StatusReporter status(bus, node.nameOr("replay"), sys.channels.statusOf(node.nameOr("replay")));
     auto idle = [&]() { status.tick(); };
     const bool lockstep = !lockstep_channel.empty();
     std::unique_ptr<LockstepGate> gate;
