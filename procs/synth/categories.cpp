@@ -99,6 +99,25 @@ Mesh roundBody(float R, float H, const std::function<float(float theta, float ph
       seg, rings);
 }
 
+// Arc-length fraction of a lathe profile at point `index` (the texture's v there).
+float arcFraction(const std::vector<ProfilePoint>& p, size_t index) {
+  float upto = 0, total = 0;
+  for (size_t i = 1; i < p.size(); ++i) {
+    const float d = std::hypot(p[i].r - p[i - 1].r, p[i].z - p[i - 1].z);
+    total += d;
+    if (i <= index) upto += d;
+  }
+  return total > 0 ? upto / total : 0.f;
+}
+
+// Repaints the rows of a lathe texture above v = v_rim (the inside of a vessel) in the plain glaze.
+void plainInside(Rng& r, cv::Mat& t, const cv::Vec3f& col, float v_rim) {
+  const int rows = std::clamp(static_cast<int>((1.f - v_rim) * static_cast<float>(t.rows)), 0, t.rows);
+  if (rows == 0) return;
+  cv::Mat plain = ceramicTexture(r, t.cols, t.rows, col, "plain");
+  plain(cv::Rect(0, 0, t.cols, rows)).copyTo(t(cv::Rect(0, 0, t.cols, rows)));
+}
+
 void polygonCcw(std::vector<V2>& p) {
   float a = 0;
   for (size_t i = 0; i < p.size(); ++i) {
@@ -217,7 +236,9 @@ void makeMug(Builder& b) {
   const cv::Vec3f col = ceramicColor(r);
   std::string pat = pattern(r);
   if (pat == "plain" && r.chance(0.6)) pat = "logo";
-  b.add(std::move(body), tex(ceramicTexture(r, 512, 256, col, pat)), r.uniformf(0.2f, 0.4f), 5);
+  cv::Mat t = ceramicTexture(r, 512, 256, col, pat);
+  plainInside(r, t, col, arcFraction(prof, 3));  // the print is on the outside only
+  b.add(std::move(body), tex(t), r.uniformf(0.2f, 0.4f), 5);
   // Handle: a C-shaped tube on the +x side.
   const float d = r.uniformf(0.022f, 0.032f), hh = H * r.uniformf(0.55f, 0.75f), zm = H * r.uniformf(0.45f, 0.55f);
   std::vector<V3> curve;
@@ -363,7 +384,7 @@ void makePepper(Builder& b) {
   Mesh m = parametricSphere(
       [&](float s, float t) {
         const float th = kPi * t, ph = 2 * kPi * s;
-        const float prof = std::pow(std::sin(th), 0.6f) * (0.85f + 0.2f * t);
+        const float prof = std::pow(std::max(0.f, std::sin(th)), 0.6f) * (0.85f + 0.2f * t);
         const float k = 1.f + depth * std::cos(lobes * ph) * std::sin(th);
         float z = 0.5f * H * (1.f - std::cos(th));
         z -= 0.012f * std::exp(-std::pow((kPi - th) / 0.5f, 2.f));
@@ -808,7 +829,9 @@ void makePitcher(Builder& b) {
     v.p.x() += 0.025f * k;
   }
   const cv::Vec3f col = ceramicColor(r);
-  b.add(std::move(m), tex(ceramicTexture(r, 512, 256, col, pattern(r))), 0.3f, 5);
+  cv::Mat t = ceramicTexture(r, 512, 256, col, pattern(r));
+  plainInside(r, t, col, arcFraction(prof, 13));
+  b.add(std::move(m), tex(t), 0.3f, 5);
   const float d = R * 0.55f, hh = H * 0.6f, zm = H * 0.55f;
   std::vector<V3> curve;
   for (int i = 0; i <= 20; ++i) {

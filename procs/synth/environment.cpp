@@ -50,7 +50,7 @@ Eigen::Affine3f wallFrame(const V3& base, const V3& u, const V3& n) {
 }
 
 cv::Vec3f woodLight(Rng& r) {
-  static const cv::Vec3f kTones[] = {{0.55f, 0.72f, 0.86f}, {0.62f, 0.8f, 0.92f}, {0.3f, 0.42f, 0.6f}, {0.33f, 0.45f, 0.72f}, {0.75f, 0.78f, 0.8f}};
+  static const cv::Vec3f kTones[] = {{0.42f, 0.64f, 0.82f}, {0.52f, 0.74f, 0.9f}, {0.22f, 0.34f, 0.5f}, {0.24f, 0.38f, 0.64f}, {0.7f, 0.75f, 0.78f}};
   return kTones[r.range(0, 4)];
 }
 
@@ -258,7 +258,7 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
   const std::string floor_style = ro.floor == "random" ? rng.pick(kFloors) : ro.floor;
   {
     Rng fr = rng.fork(1);
-    cv::Mat ft = floorTexture(fr, floor_style, X, Y, std::max(0.0025f, std::max(X, Y) / 4000.f));
+    cv::Mat ft = floorTexture(fr, floor_style, X, Y, std::max(0.003f, std::max(X, Y) / 4000.f));
     Mesh m = orientedQuad(V3(env.room_x0, env.room_y1, 0), V3(X, 0, 0), V3(0, -Y, 0), V3::UnitZ(), 4, 4);
     for (auto& v : m.vertices) v.uv2 = {(v.p.x() - env.room_x0) / X, (v.p.y() - env.room_y0) / Y};
     Material mat;

@@ -40,15 +40,26 @@ uint32_t hash32(int x, int y, uint32_t seed) {
 
 float hash01(int x, int y, uint32_t seed) { return static_cast<float>(hash32(x, y, seed) >> 8) * (1.f / 16777216.f); }
 
+namespace {
+// A cheap lattice hash: only a few bits pick a gradient.
+inline uint32_t latticeHash(int x, int y, uint32_t s) {
+  uint32_t h = static_cast<uint32_t>(x) * 0x8DA6B343u ^ static_cast<uint32_t>(y) * 0xD8163841u ^ s;
+  h ^= h >> 15;
+  h *= 0x2C1B3C6Du;
+  return h ^ (h >> 13);
+}
+}  // namespace
+
 float gradientNoise(float x, float y, uint32_t seed, int period_x) {
   const float fx = std::floor(x), fy = std::floor(y);
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
   const float dx = x - fx, dy = y - fy;
-  const int x0 = wrapIndex(ix, period_x), x1 = wrapIndex(ix + 1, period_x);
-  const float n00 = grad(hash32(x0, iy, seed), dx, dy);
-  const float n10 = grad(hash32(x1, iy, seed), dx - 1.f, dy);
-  const float n01 = grad(hash32(x0, iy + 1, seed), dx, dy - 1.f);
-  const float n11 = grad(hash32(x1, iy + 1, seed), dx - 1.f, dy - 1.f);
+  const int x0 = period_x > 0 ? wrapIndex(ix, period_x) : ix, x1 = period_x > 0 ? wrapIndex(ix + 1, period_x) : ix + 1;
+  const uint32_t s = seed * 0xCB1AB31Fu;
+  const float n00 = grad(latticeHash(x0, iy, s), dx, dy);
+  const float n10 = grad(latticeHash(x1, iy, s), dx - 1.f, dy);
+  const float n01 = grad(latticeHash(x0, iy + 1, s), dx, dy - 1.f);
+  const float n11 = grad(latticeHash(x1, iy + 1, s), dx - 1.f, dy - 1.f);
   const float u = fade(dx), v = fade(dy);
   const float a = n00 + u * (n10 - n00);
   const float b = n01 + u * (n11 - n01);

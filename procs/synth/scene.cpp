@@ -23,8 +23,9 @@ std::vector<std::string> distractorPool(const ObjectOptions& o) {
 
 }  // namespace
 
-SyntheticScene::SyntheticScene(const SceneOptions& options, int64_t seed) : opt_(options) {
+SyntheticScene::SyntheticScene(const SceneOptions& options, int64_t seed, int frames) : opt_(options) {
   if (seed >= 0) opt_.seed = seed;
+  frames_ = frames > 0 ? std::min(frames, opt_.frames) : opt_.frames;
   if (opt_.seed < 0) throw std::invalid_argument("scene: no seed given");
   seed_ = static_cast<uint64_t>(opt_.seed);
   K_.fx = static_cast<float>(opt_.camera.fx);
@@ -84,7 +85,8 @@ void SyntheticScene::placeObjects(Rng& rng) {
         for (const auto& p : placed)
           clear = clear && std::hypot(p.x - x, p.y - y) >= p.r + r + static_cast<float>(o.min_gap);
         if (!clear) continue;
-        const double yaw = rng.uniform(0, 2 * 3.141592653589793);
+        const double random_yaw = rng.uniform(0, 2 * 3.141592653589793);
+        const double yaw = o.yaw_deg >= 0 ? o.yaw_deg * 3.141592653589793 / 180.0 : random_yaw;
         Eigen::Affine3f pose = Eigen::Affine3f::Identity();
         pose.translate(Eigen::Vector3f(x, y, T.top_z));
         pose.rotate(Eigen::AngleAxisf(static_cast<float>(yaw), Eigen::Vector3f::UnitZ()));
@@ -202,7 +204,7 @@ SequenceInfo SyntheticScene::sequenceInfo(const std::string& config_name) const 
   src << "slamaware-synth scene, config " << config_name << ", seed " << seed_;
   info.source = src.str();
   info.fps = opt_.camera.fps;
-  info.frames = opt_.frames;
+  info.frames = frames_;
   info.camera = camera();
   info.classes = paperClasses();
   std::ostringstream notes;

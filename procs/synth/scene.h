@@ -41,13 +41,15 @@ class SyntheticScene {
   static constexpr double kMinVisibleFraction = 0.3;
   static constexpr int kMinBoxSide = 20;
 
-  /// Builds the scene; `seed` replaces options.seed when >= 0. Throws std::invalid_argument when
-  /// the objects cannot be placed on the table.
-  SyntheticScene(const SceneOptions& options, int64_t seed = -1);
+  /// Builds the scene; `seed` replaces options.seed when >= 0; `frames` > 0 renders only the first
+  /// frames of the sequence (the camera path is the one of options.frames). Throws
+  /// std::invalid_argument when the objects cannot be placed on the table.
+  SyntheticScene(const SceneOptions& options, int64_t seed = -1, int frames = -1);
 
   const SceneOptions& options() const { return opt_; }
   uint64_t seed() const { return seed_; }
-  int frames() const { return opt_.frames; }
+  /// Frames to render (options.frames unless fewer were asked for).
+  int frames() const { return frames_; }
   double fps() const { return opt_.camera.fps; }
   CameraModel camera() const;
   const Intrinsics& intrinsics() const { return K_; }
@@ -75,6 +77,7 @@ class SyntheticScene {
 
   SceneOptions opt_;
   uint64_t seed_ = 0;
+  int frames_ = 0;
   Intrinsics K_;
   RenderScene scene_;
   Environment env_;

@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   CLI::App* scene_cmd = app.add_subcommand("scene", "render a scene config into a sequence folder");
   scene_cmd->add_option("--config", config, "scene config (config/scenes/*.yaml)")->required();
   scene_cmd->add_option("--seed", seed, "scene seed (default: the config's)");
-  scene_cmd->add_option("--frames", frames, "number of frames (default: the config's)");
+  scene_cmd->add_option("--frames", frames, "render only the first N frames (default: all of the config's)");
   scene_cmd->add_option("--out", out, "output sequence folder")->required();
   scene_cmd->add_flag("--quiet", quiet, "no progress bar");
   CLI::App* objects_cmd = app.add_subcommand("objects", "render an object-set config (turntable views)");
@@ -51,13 +51,13 @@ int main(int argc, char** argv) {
     const std::string config_name = std::filesystem::path(config).filename().string();
     if (scene_cmd->parsed()) {
       if (frames == 0 || frames < -1) throw ConfigError("--frames: expected a positive number of frames");
-      SceneOptions o = loadSceneOptions(config);
-      if (frames > 0) o.frames = frames;
-      spdlog::info("scene '{}' from {} (seed {}, {} frames) -> {}", o.name, config, seed >= 0 ? seed : o.seed, o.frames, out);
-      SyntheticScene scene(o, seed);
+      const SceneOptions o = loadSceneOptions(config);
+      SyntheticScene scene(o, seed, frames);
+      spdlog::info("scene '{}' from {} (seed {}, {} of {} frames) -> {}", o.name, config, scene.seed(), scene.frames(), o.frames,
+                   out);
       const WriteStats st = writeSceneFolder(scene, out, config_name, !quiet);
       spdlog::info("wrote {} files, {:.1f} MB in {:.1f} s ({:.1f} frames/s)", st.files, st.bytes / 1e6, st.seconds,
-                   o.frames / std::max(1e-9, st.seconds));
+                   scene.frames() / std::max(1e-9, st.seconds));
       return 0;
     }
     if (objects_cmd->parsed()) {

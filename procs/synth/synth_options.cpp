@@ -97,6 +97,7 @@ void validate(const SceneOptions& o, const std::string& where) {
   range(where, "objects.min_gap", o.objects.min_gap, 0, 0.5);
   range(where, "objects.edge_margin", o.objects.edge_margin, 0, 0.5);
   range(where, "objects.spread", o.objects.spread, 0.2, 1);
+  range(where, "objects.yaw_deg", o.objects.yaw_deg, -1, 360);
   const TrajectoryOptions& t = o.trajectory;
   range(where, "trajectory.radius_min", t.radius_min, 0.3, 3);
   range(where, "trajectory.radius_max", t.radius_max, t.radius_min, 3);

@@ -69,6 +69,7 @@ struct ObjectOptions {
   double min_gap = 0.05;        ///< m, free space between objects
   double edge_margin = 0.05;    ///< m, free space to the table edge
   double spread = 1.0;          ///< fraction of the table top the objects may use (around the centre)
+  double yaw_deg = -1;          ///< rotation of every object about z (-1: random per object)
 
   template <class V>
   void visit(V& v) {
@@ -79,6 +80,7 @@ struct ObjectOptions {
     v("min_gap", min_gap, "m, free space between two objects");
     v("edge_margin", edge_margin, "m, free space between an object and the table edge");
     v("spread", spread, "fraction of the table top (around its centre) the objects may use");
+    v("yaw_deg", yaw_deg, "deg, rotation of every object about z (-1: random per object)");
   }
 };
 
@@ -127,7 +129,7 @@ struct LightOptions {
 struct SceneOptions {
   std::string name;      ///< required: the sequence name
   int64_t seed = -1;     ///< required: the scene seed (--seed overrides)
-  int frames = 450;      ///< number of frames (--frames overrides)
+  int frames = 450;      ///< frames of the sequence (its camera path); --frames renders fewer
   bool write_depth = true;  ///< depth/ 16-bit PNG in millimetres
   CameraOptions camera;
   RoomOptions room;
@@ -142,7 +144,7 @@ struct SceneOptions {
   void visit(V& v) {
     v("name", name, "sequence name (required)");
     v("seed", seed, "scene seed (required; --seed overrides)");
-    v("frames", frames, "number of frames (--frames overrides)");
+    v("frames", frames, "frames of the sequence (the camera path spans them; --frames renders the first N)");
     v("write_depth", write_depth, "write depth/ (16-bit PNG, mm)");
     v("notes", notes, "free text copied into sequence.yaml");
     v.section("camera", camera);

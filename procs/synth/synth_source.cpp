@@ -14,9 +14,8 @@ namespace {
 class SynthSource : public FrameSource {
  public:
   SynthSource(const std::string& arg, const std::string& config, int64_t seed, int frames) : arg_(arg) {
-    synth::SceneOptions o = synth::loadSceneOptions(config);
-    if (frames > 0) o.frames = frames;
-    scene_ = std::make_unique<synth::SyntheticScene>(o, seed);
+    const synth::SceneOptions o = synth::loadSceneOptions(config);
+    scene_ = std::make_unique<synth::SyntheticScene>(o, seed, frames);
     camera_ = scene_->camera();
   }
   const CameraModel& camera() const override { return camera_; }

@@ -3,7 +3,7 @@
 // `slamaware-synth scene` writes it (same pixels, same JPEG bytes, seq = frame index,
 // utime = frame index / fps).
 //   synth:CONFIG                 the config's seed and frame count
-//   synth:CONFIG?seed=N&frames=M overrides
+//   synth:CONFIG?seed=N&frames=M another seed; only the first M frames
 #include <memory>
 #include <string>
 

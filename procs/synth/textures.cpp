@@ -21,10 +21,11 @@ float smoothstep(float e0, float e1, float x) {
 cv::Vec3f mix(const cv::Vec3f& a, const cv::Vec3f& b, float t) { return a + (b - a) * t; }
 cv::Vec3f scale(const cv::Vec3f& a, float s) { return a * s; }
 cv::Scalar toScalar(const cv::Vec3f& c) { return cv::Scalar(255.f * c[0], 255.f * c[1], 255.f * c[2]); }
-cv::Vec3f jitter(Rng& rng, const cv::Vec3f& c, float amount) {
+// The colour a little lighter or darker, and (hue_share of that) a little shifted in hue.
+cv::Vec3f jitter(Rng& rng, const cv::Vec3f& c, float amount, float hue_share = 0.4f) {
   cv::Vec3f out;
   const float common = rng.uniformf(-amount, amount);
-  for (int k = 0; k < 3; ++k) out[k] = clamp01(c[k] * (1.f + common + rng.uniformf(-amount, amount) * 0.4f));
+  for (int k = 0; k < 3; ++k) out[k] = clamp01(c[k] * (1.f + common + rng.uniformf(-amount, amount) * hue_share));
   return out;
 }
 uint32_t seed32(Rng& rng) { return static_cast<uint32_t>(rng.next() >> 32); }
@@ -32,6 +33,9 @@ uint32_t seed32(Rng& rng) { return static_cast<uint32_t>(rng.next() >> 32); }
 int sidePx(float metres, float texel) {
   return std::clamp(static_cast<int>(std::lround(metres / texel)), 4, kMaxTextureSide);
 }
+
+// Rounds a value in [0, 255] (already clamped) to a byte.
+inline uint8_t toByte(float v) { return static_cast<uint8_t>(static_cast<int>(v + 0.5f)); }
 
 // Fills a w x h image from fn(x, y) -> BGR in [0, 1], with x, y the texel centre in the units
 // given by `unit` per texel.
@@ -43,34 +47,75 @@ cv::Mat generate(int w, int h, float unit, Fn fn) {
     const float fy = (static_cast<float>(y) + 0.5f) * unit;
     for (int x = 0; x < w; ++x) {
       const cv::Vec3f c = fn((static_cast<float>(x) + 0.5f) * unit, fy);
-      for (int k = 0; k < 3; ++k) row[3 * x + k] = static_cast<uint8_t>(std::lround(255.f * clamp01(c[k])));
+      for (int k = 0; k < 3; ++k) row[3 * x + k] = toByte(255.f * clamp01(c[k]));
     }
   }
   return img;
 }
 
-// Multiplies every texel by (1 + amount * noise) with per-texel noise and a mid-scale component,
-// the grain every real surface has.
+// As generate(), fn(x, y, ix, iy) also gets the texel indices (for CoarseField lookups).
+template <class Fn>
+cv::Mat generateIdx(int w, int h, float unit, Fn fn) {
+  cv::Mat img(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y) {
+    uint8_t* row = img.ptr<uint8_t>(y);
+    const float fy = (static_cast<float>(y) + 0.5f) * unit;
+    for (int x = 0; x < w; ++x) {
+      const cv::Vec3f c = fn((static_cast<float>(x) + 0.5f) * unit, fy, x, y);
+      for (int k = 0; k < 3; ++k) row[3 * x + k] = toByte(255.f * clamp01(c[k]));
+    }
+  }
+  return img;
+}
+
+// A smooth field evaluated every `step` texels and interpolated bilinearly in between: low
+// frequencies cost a fraction of a per-texel evaluation.
+class CoarseField {
+ public:
+  template <class Fn>
+  CoarseField(int w, int h, int step, Fn fn) : step_(step), gw_(w / step + 2), gh_(h / step + 2), v_(static_cast<size_t>(gw_) * gh_) {
+    for (int j = 0; j < gh_; ++j)
+      for (int i = 0; i < gw_; ++i) v_[static_cast<size_t>(j) * gw_ + i] = fn(static_cast<float>(i * step), static_cast<float>(j * step));
+  }
+  float at(int x, int y) const {
+    const int i = x / step_, j = y / step_;
+    const float fx = static_cast<float>(x - i * step_) / static_cast<float>(step_);
+    const float fy = static_cast<float>(y - j * step_) / static_cast<float>(step_);
+    const float* r0 = &v_[static_cast<size_t>(j) * gw_ + i];
+    const float* r1 = r0 + gw_;
+    const float a = r0[0] + fx * (r0[1] - r0[0]), b = r1[0] + fx * (r1[1] - r1[0]);
+    return a + fy * (b - a);
+  }
+
+ private:
+  int step_, gw_, gh_;
+  std::vector<float> v_;
+};
+
+// Multiplies every texel by (1 + noise): per-texel noise of amplitude `fine` plus gradient
+// noise of amplitude `mid` with cells of `mid_cells` texels: the grain every real surface has.
 void addGrain(cv::Mat& img, uint32_t seed, float fine, float mid, float mid_cells) {
+  const CoarseField field(img.cols, img.rows, std::max(1, static_cast<int>(mid_cells / 3.f)), [&](float x, float y) {
+    return mid > 0.f ? mid * gradientNoise(x / mid_cells, y / mid_cells, seed + 1) : 0.f;
+  });
   for (int y = 0; y < img.rows; ++y) {
     uint8_t* row = img.ptr<uint8_t>(y);
     for (int x = 0; x < img.cols; ++x) {
-      const float n = fine * (2.f * hash01(x, y, seed) - 1.f) +
-                      mid * gradientNoise(static_cast<float>(x) / mid_cells, static_cast<float>(y) / mid_cells, seed + 1);
-      for (int k = 0; k < 3; ++k)
-        row[3 * x + k] = static_cast<uint8_t>(std::clamp(std::lround(row[3 * x + k] * (1.f + n)), 0L, 255L));
+      const float n = fine * (2.f * hash01(x, y, seed) - 1.f) + field.at(x, y);
+      for (int k = 0; k < 3; ++k) row[3 * x + k] = toByte(std::min(255.f, std::max(0.f, row[3 * x + k] * (1.f + n))));
     }
   }
 }
 
 // Large-scale lighting and dirt variation (a wall is never evenly lit or evenly clean).
 void addMottle(cv::Mat& img, uint32_t seed, float amount, float cells) {
+  const CoarseField field(img.cols, img.rows, std::max(1, static_cast<int>(cells / 16.f)),
+                          [&](float x, float y) { return amount * fbm(x / cells, y / cells, seed, 4); });
   for (int y = 0; y < img.rows; ++y) {
     uint8_t* row = img.ptr<uint8_t>(y);
     for (int x = 0; x < img.cols; ++x) {
-      const float n = amount * fbm(static_cast<float>(x) / cells, static_cast<float>(y) / cells, seed, 4);
-      for (int k = 0; k < 3; ++k)
-        row[3 * x + k] = static_cast<uint8_t>(std::clamp(std::lround(row[3 * x + k] * (1.f + n)), 0L, 255L));
+      const float n = field.at(x, y);
+      for (int k = 0; k < 3; ++k) row[3 * x + k] = toByte(std::min(255.f, std::max(0.f, row[3 * x + k] * (1.f + n))));
     }
   }
 }
@@ -87,8 +132,8 @@ struct Wood {
 
 Wood randomWood(Rng& rng, const cv::Vec3f& light, const cv::Vec3f& dark) {
   Wood w;
-  w.light = jitter(rng, light, 0.08f);
-  w.dark = jitter(rng, dark, 0.08f);
+  w.light = jitter(rng, light, 0.08f, 0.15f);
+  w.dark = jitter(rng, dark, 0.08f, 0.15f);
   w.ring_freq = rng.uniformf(70.f, 220.f);
   w.axis_y = rng.uniformf(-0.3f, 0.3f);
   w.axis_z = rng.uniformf(0.01f, 0.12f);
@@ -100,13 +145,13 @@ Wood randomWood(Rng& rng, const cv::Vec3f& light, const cv::Vec3f& dark) {
 
 // Wood at (x, y) metres, grain along x.
 cv::Vec3f woodAt(const Wood& p, float x, float y) {
-  const float warp = 0.015f * fbm(x * 1.2f, y * 5.f, p.seed, 3);
+  const float warp = 0.015f * fbm(x * 1.2f, y * 5.f, p.seed, 2);
   const float dy = y - p.axis_y + warp + 0.003f * gradientNoise(x * 9.f, y * 40.f, p.seed + 5);
   float ring = (std::sqrt(dy * dy + p.axis_z * p.axis_z) + p.slope * x) * p.ring_freq;
   ring -= std::floor(ring);
   const float late = smoothstep(0.5f, 0.88f, ring) * (1.f - smoothstep(0.93f, 1.f, ring));
-  const float streak = 0.5f + 0.5f * fbm(x * 5.f, y * 450.f, p.seed + 11, 3);
-  const float broad = 0.5f + 0.5f * fbm(x * 0.9f, y * 3.f, p.seed + 17, 3);
+  const float streak = 0.5f + 0.5f * fbm(x * 5.f, y * 450.f, p.seed + 11, 2);
+  const float broad = 0.5f + 0.5f * gradientNoise(x * 0.9f, y * 3.f, p.seed + 17);
   float t = p.figure * late + 0.25f * streak + 0.3f * broad - 0.1f;
   // Pores: short dark dashes along the grain.
   if (hash01(static_cast<int>(std::floor(x / 0.004f)), static_cast<int>(std::floor(y / 0.0008f)), p.seed + 23) > 0.985f)
@@ -114,13 +159,14 @@ cv::Vec3f woodAt(const Wood& p, float x, float y) {
   return mix(p.light, p.dark, clamp01(t));
 }
 
+// B, G, R of early (light) and late (dark) wood.
 const cv::Vec3f kWoodTones[][2] = {
-    {{0.55f, 0.72f, 0.86f}, {0.30f, 0.45f, 0.62f}},  // oak
-    {{0.62f, 0.80f, 0.92f}, {0.40f, 0.58f, 0.76f}},  // pine / birch
-    {{0.30f, 0.42f, 0.60f}, {0.14f, 0.22f, 0.36f}},  // walnut
-    {{0.33f, 0.45f, 0.72f}, {0.16f, 0.24f, 0.46f}},  // cherry
-    {{0.47f, 0.62f, 0.78f}, {0.25f, 0.36f, 0.52f}},  // teak
-    {{0.66f, 0.74f, 0.80f}, {0.45f, 0.52f, 0.60f}},  // white-washed
+    {{0.42f, 0.64f, 0.82f}, {0.20f, 0.38f, 0.58f}},  // oak
+    {{0.52f, 0.74f, 0.90f}, {0.28f, 0.50f, 0.72f}},  // pine / birch
+    {{0.22f, 0.34f, 0.50f}, {0.09f, 0.16f, 0.28f}},  // walnut
+    {{0.24f, 0.38f, 0.64f}, {0.10f, 0.18f, 0.38f}},  // cherry
+    {{0.34f, 0.52f, 0.70f}, {0.15f, 0.28f, 0.44f}},  // teak
+    {{0.62f, 0.70f, 0.76f}, {0.40f, 0.48f, 0.56f}},  // white-washed
 };
 
 void pickWoodTone(Rng& rng, cv::Vec3f* light, cv::Vec3f* dark) {
@@ -280,18 +326,21 @@ cv::Mat floorTexture(Rng& rng, const std::string& style, float width_m, float he
     const cv::Vec3f alt = hsvColor(rng.uniformf(0.f, 360.f), rng.uniformf(0.2f, 0.6f), rng.uniformf(0.3f, 0.7f));
     const float motif = rng.uniformf(0.15f, 0.35f);
     const bool pattern = rng.chance(0.6);
-    img = generate(w, h, unit, [&](float x, float y) {
-      float t = 0.5f + 0.5f * fbm(x * 2.f, y * 2.f, seed, 4);
+    const CoarseField big(w, h, 16, [&](float ix, float iy) { return fbm(ix * unit * 2.f, iy * unit * 2.f, seed, 4); });
+    const CoarseField warp_x(w, h, 8, [&](float ix, float iy) { return fbm(ix * unit * 3.f, iy * unit * 3.f, seed + 2, 2); });
+    const CoarseField warp_y(w, h, 8, [&](float ix, float iy) { return fbm(iy * unit * 3.f, ix * unit * 3.f, seed + 3, 2); });
+    img = generateIdx(w, h, unit, [&](float x, float y, int ix, int iy) {
+      float t = 0.5f + 0.5f * big.at(ix, iy);
       cv::Vec3f c = scale(base, 0.85f + 0.3f * t);
       if (pattern) {
         // Irregular blots and rings on a grid that drifts (a printed rug, never exactly repeating).
-        const float wx = x + 0.04f * fbm(x * 3.f, y * 3.f, seed + 2, 2), wy = y + 0.04f * fbm(y * 3.f, x * 3.f, seed + 3, 2);
+        const float wx = x + 0.04f * warp_x.at(ix, iy), wy = y + 0.04f * warp_y.at(ix, iy);
         const Cell cell = worley(wx / motif, wy / motif, seed + 4);
         const float ring = std::fabs(cell.f1 - 0.3f - 0.1f * static_cast<float>(cell.id & 3));
         if (ring < 0.06f) c = mix(c, alt, 0.8f);
         if (cell.f2 - cell.f1 < 0.05f) c = mix(c, scale(alt, 0.6f), 0.6f);
       }
-      const float loops = gradientNoise(x * 350.f, y * 350.f, seed + 5);
+      const float loops = 2.f * hash01(ix, iy, seed + 5) - 1.f;
       return scale(c, 0.92f + 0.1f * loops);
     });
     addGrain(img, seed + 6, 0.12f, 0.f, 1.f);
@@ -299,13 +348,15 @@ cv::Mat floorTexture(Rng& rng, const std::string& style, float width_m, float he
   } else if (style == "concrete") {
     const float v = rng.uniformf(0.45f, 0.7f);
     const cv::Vec3f base = hsvColor(rng.uniformf(20.f, 50.f), rng.uniformf(0.02f, 0.1f), v);
-    img = generate(w, h, unit, [&](float x, float y) {
-      const float big = fbm(x * 0.8f, y * 0.8f, seed, 4), mid = fbm(x * 9.f, y * 9.f, seed + 1, 4);
-      cv::Vec3f c = scale(base, 0.9f + 0.12f * big + 0.1f * mid);
+    const CoarseField big(w, h, 16, [&](float ix, float iy) { return fbm(ix * unit * 0.8f, iy * unit * 0.8f, seed, 4); });
+    const CoarseField mid(w, h, 3, [&](float ix, float iy) { return fbm(ix * unit * 9.f, iy * unit * 9.f, seed + 1, 4); });
+    const CoarseField cracks(w, h, 2, [&](float ix, float iy) { return ridged(ix * unit * 1.5f, iy * unit * 1.5f, seed + 3, 5); });
+    img = generateIdx(w, h, unit, [&](float x, float y, int ix, int iy) {
+      cv::Vec3f c = scale(base, 0.9f + 0.12f * big.at(ix, iy) + 0.1f * mid.at(ix, iy));
       const Cell cell = worley(x * 150.f, y * 150.f, seed + 2);
       if ((cell.id & 3) == 0 && cell.f1 < 0.3f) c = scale(c, 0.75f);
       if ((cell.id & 7) == 1 && cell.f1 < 0.25f) c = scale(c, 1.2f);
-      const float crack = ridged(x * 1.5f, y * 1.5f, seed + 3, 5);
+      const float crack = cracks.at(ix, iy);
       if (crack > 0.93f) c = scale(c, 0.6f);
       return c;
     });
@@ -336,9 +387,10 @@ cv::Mat wallTexture(Rng& rng, const std::string& style, float width_m, float hei
   cv::Mat img;
   if (style == "plaster" || style == "wallpaper" || style == "stripes") {
     const cv::Vec3f base = hsvColor(rng.uniformf(0.f, 360.f), rng.uniformf(0.03f, 0.25f), rng.uniformf(0.7f, 0.92f));
-    img = generate(w, h, unit, [&](float x, float y) {
-      return scale(base, 0.95f + 0.05f * fbm(x * 4.f, y * 4.f, seed, 4) + 0.03f * gradientNoise(x * 60.f, y * 60.f, seed + 1));
+    const CoarseField f(w, h, 2, [&](float ix, float iy) {
+      return 0.05f * fbm(ix * unit * 4.f, iy * unit * 4.f, seed, 4) + 0.03f * gradientNoise(ix * unit * 60.f, iy * unit * 60.f, seed + 1);
     });
+    img = generateIdx(w, h, unit, [&](float, float, int ix, int iy) { return scale(base, 0.95f + f.at(ix, iy)); });
     if (style == "wallpaper") {
       // Motifs on a loose grid: each one drawn with its own jitter, colour and shape.
       const float cell = rng.uniformf(0.07f, 0.16f);
@@ -492,6 +544,8 @@ cv::Mat tableTexture(Rng& rng, const std::string& style, float width_m, float he
                                            : cv::Vec3f(0.93f, 0.94f, 0.95f);
     const float check = style == "checker" ? rng.uniformf(0.04f, 0.09f) : rng.uniformf(0.015f, 0.04f);
     const int pattern = style == "checker" ? 0 : rng.range(0, 2);  // 0 gingham, 1 stripes, 2 floral
+    const cv::Vec3f flower = hsvColor(rng.uniformf(0.f, 360.f), rng.uniformf(0.3f, 0.6f), rng.uniformf(0.5f, 0.85f));
+    const cv::Vec3f leaf = hsvColor(rng.uniformf(90.f, 140.f), 0.4f, 0.5f);
     img = generate(w, h, unit, [&](float x, float y) {
       // Folds and creases bend the pattern a little.
       const float fx = x + 0.01f * fbm(x * 4.f, y * 4.f, seed + 1, 3), fy = y + 0.01f * fbm(y * 4.f, x * 4.f, seed + 2, 3);
@@ -504,9 +558,11 @@ cv::Mat tableTexture(Rng& rng, const std::string& style, float width_m, float he
         const float s = std::sin(fx / check * 3.14159f);
         c = mix(b, a, smoothstep(0.2f, 0.5f, s) * 0.9f);
       } else {
-        const Cell cell = worley(fx / (check * 2.f), fy / (check * 2.f), seed + 3);
-        if (cell.f1 < 0.22f) c = mix(b, hsvColor(static_cast<float>(cell.id % 360), 0.6f, 0.8f), 0.9f);
-        else if (cell.f1 < 0.3f) c = mix(b, a, 0.8f);
+        // Small flowers in two colours on a plain ground, a leaf now and then.
+        const Cell cell = worley(fx / (check * 1.5f), fy / (check * 1.5f), seed + 3);
+        if (cell.id % 3 == 0 && cell.f1 < 0.16f) c = mix(b, (cell.id >> 4) & 1 ? a : flower, 0.85f);
+        else if (cell.id % 3 == 0 && cell.f1 < 0.22f) c = mix(b, scale(a, 0.6f), 0.5f);
+        else if (cell.id % 7 == 1 && cell.f1 < 0.12f) c = mix(b, leaf, 0.7f);
       }
       // Weave.
       const float weave = std::sin(x / 0.0012f) * std::sin(y / 0.0012f);

@@ -90,7 +90,7 @@ WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir_s, con
   for (int i = 0; i < scene.frames(); ++i) {
     const cv::Mat img = scene.render(i, &fb);
     writeBytes(dir / "rgb" / frameName(i, ".jpg"), encodeJpeg(img, scene.options().sensor.jpeg_quality), &st);
-    if (depth) writeBytes(dir / "depth" / frameName(i, ".png"), encodePng(depthMillimetres(fb), 6), &st);
+    if (depth) writeBytes(dir / "depth" / frameName(i, ".png"), encodePng(depthMillimetres(fb), 3), &st);
     const auto vis = scene.visibility(i, fb);
     for (const auto& b : scene.boxes(i, vis)) boxes.push_back(b);
     for (const auto& v : vis) {
