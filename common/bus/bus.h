@@ -48,7 +48,7 @@ class Bus {
     subscribeRaw(
         channel,
         [this, handler = std::move(handler)](const RawMessage& raw) {
-          Msg msg;
+          Msg msg{};
           if (!decodeInto(raw.channel, raw.data, raw.size, Msg::getTypeName(), [&](const void* d, int n) {
                 return msg.decode(d, 0, n);
               }))

@@ -24,7 +24,7 @@ int64_t readBigEndian(const uint8_t* p, int bytes) {
 template <class Msg>
 bool decodesExactly(const uint8_t* data, size_t size) {
   try {
-    Msg m;
+    Msg m{};
     return m.decode(data, 0, static_cast<int>(size)) == static_cast<int>(size);
   } catch (const std::exception&) {
     return false;

@@ -7,7 +7,7 @@
 namespace slamaware {
 
 image_t makeImageMessage(const cv::Mat& bgr, int64_t utime, int32_t seq, int8_t pixel_format, int jpeg_quality) {
-  image_t msg;
+  image_t msg{};
   msg.utime = utime;
   msg.seq = seq;
   msg.width = bgr.cols;

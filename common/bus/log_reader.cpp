@@ -23,14 +23,26 @@ LogReader::~LogReader() = default;
 
 std::optional<LogRecord> LogReader::next() {
   if (done_) return std::nullopt;
+  if (pending_error_) {
+    done_ = true;
+    throw *pending_error_;
+  }
   const lcm::LogEvent* ev = log_->readNextEvent();
   if (!ev) {
     done_ = true;
     if (expected_offset_ == file_size_) return std::nullopt;
-    throw LogError(path_ + ": corrupt log: " + std::to_string(file_size_ - expected_offset_) +
-                       " bytes at byte offset " + std::to_string(expected_offset_) +
-                       " do not form a complete event (truncated or damaged)",
-                   expected_offset_);
+    // LCM refuses an intact event when the header after it is damaged ("Invalid header after
+    // log data"): read that event ourselves and report the damage where it really is.
+    std::optional<LogRecord> intact = readEventAt(expected_offset_);
+    const int64_t bad = intact ? intact->offset + recordSize(*intact) : expected_offset_;
+    LogError error(path_ + ": corrupt log: " + std::to_string(file_size_ - bad) + " bytes at byte offset " +
+                       std::to_string(bad) + " do not form a complete event (truncated or damaged)",
+                   bad);
+    if (!intact) throw error;
+    done_ = false;
+    pending_error_ = std::make_unique<LogError>(error);
+    expected_offset_ = bad;
+    return intact;
   }
   const int64_t end = std::ftell(log_->getFilePtr());
   const int64_t size = kHeaderBytes + static_cast<int64_t>(ev->channel.size()) + ev->datalen;
@@ -51,6 +63,43 @@ std::optional<LogRecord> LogReader::next() {
   r.data.assign(d, d + ev->datalen);
   expected_offset_ = end;
   return r;
+}
+
+int64_t LogReader::recordSize(const LogRecord& r) {
+  return kHeaderBytes + static_cast<int64_t>(r.channel.size()) + static_cast<int64_t>(r.data.size());
+}
+
+std::optional<LogRecord> LogReader::readEventAt(int64_t offset) const {
+  // The event layout: sync word, eventnum, timestamp, channel length, data length (big-endian),
+  // then the channel name and the data.
+  std::FILE* f = std::fopen(path_.c_str(), "rb");
+  if (!f) return std::nullopt;
+  std::optional<LogRecord> out;
+  uint8_t h[kHeaderBytes];
+  auto be = [&](int at, int n) {
+    uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v = (v << 8) | h[at + i];
+    return v;
+  };
+  if (std::fseek(f, offset, SEEK_SET) == 0 && std::fread(h, 1, kHeaderBytes, f) == kHeaderBytes &&
+      be(0, 4) == 0xEDA1DA01u) {
+    const int64_t channel_len = static_cast<int32_t>(be(20, 4));
+    const int64_t data_len = static_cast<int32_t>(be(24, 4));
+    if (channel_len > 0 && channel_len < 1000 && data_len >= 0 &&
+        offset + kHeaderBytes + channel_len + data_len <= file_size_) {
+      LogRecord r;
+      r.eventnum = static_cast<int64_t>(be(4, 8));
+      r.timestamp = static_cast<int64_t>(be(12, 8));
+      r.channel.resize(channel_len);
+      r.data.resize(data_len);
+      r.offset = offset;
+      if (std::fread(r.channel.data(), 1, channel_len, f) == static_cast<size_t>(channel_len) &&
+          std::fread(r.data.data(), 1, data_len, f) == static_cast<size_t>(data_len))
+        out = std::move(r);
+    }
+  }
+  std::fclose(f);
+  return out;
 }
 
 std::vector<LogRecord> LogReader::readAll(const std::string& path) {

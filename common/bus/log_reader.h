@@ -50,7 +50,11 @@ class LogReader {
   static std::vector<LogRecord> readAll(const std::string& path);
 
  private:
+  static int64_t recordSize(const LogRecord& r);
+  std::optional<LogRecord> readEventAt(int64_t offset) const;
+
   std::string path_;
+  std::unique_ptr<LogError> pending_error_;
   std::unique_ptr<lcm::LogFile> log_;
   int64_t file_size_ = 0;
   int64_t expected_offset_ = 0;

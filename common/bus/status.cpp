@@ -67,7 +67,7 @@ void StatusReporter::tick() {
 }
 
 void StatusReporter::publish() {
-  status_t msg;
+  status_t msg{};
   {
     std::lock_guard<std::mutex> lock(mutex_);
     last_publish_ = std::chrono::steady_clock::now();

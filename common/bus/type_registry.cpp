@@ -32,7 +32,7 @@ template <class Msg, class Fn>
 std::pair<int64_t, TypeEntry> entry(Fn fn) {
   return {Msg::getHash(), TypeEntry{std::string("slamaware.") + Msg::getTypeName(),
                                     [fn](const uint8_t* d, size_t n) -> std::string {
-                                      Msg m;
+                                      Msg m{};
                                       if (m.decode(d, 0, static_cast<int>(n)) != static_cast<int>(n)) return "(malformed)";
                                       return fn(m);
                                     }}};

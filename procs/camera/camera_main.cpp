@@ -24,7 +24,7 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 camera_info_t makeInfo(const FrameSource& src, const std::string& frame_id) {
-  camera_info_t info;
+  camera_info_t info{};
   const CameraModel& c = src.camera();
   info.utime = wallUtime();
   info.frame_id = frame_id;
@@ -149,7 +149,7 @@ int main(int argc, char** argv) {
           idle();
         }
       }
-      image_t msg;
+      image_t msg{};
       if (format == image_t::PIXEL_FORMAT_JPEG && opts.passthrough_jpeg && !frame.jpeg.empty()) {
         msg.utime = frame.utime;
         msg.seq = frame.seq;

@@ -62,6 +62,10 @@ class BusRecorder {
   bool stopped_ = false;
 };
 
+/// Writes a sequence folder of `frames` textured 640x480 PNG frames (a pattern that moves from
+/// frame to frame) at `fps`; returns its path.
+std::string makeTestSequence(const std::string& name, int frames, double fps);
+
 /// Polls `pred` every 10 ms until true or timeout; returns its last value.
 bool waitUntil(const std::function<bool()>& pred, std::chrono::milliseconds timeout);
 
