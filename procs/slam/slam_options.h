@@ -63,8 +63,10 @@ struct TrackingOptions {
   int min_inliers_relocalized = 40;      ///< the same just after relocalisation
   int max_local_keyframes = 60;          ///< keyframes in the local map
   double reference_match_ratio = 0.75;   ///< descriptor ratio when matching against a keyframe
-  double keyframe_ratio = 0.9;           ///< keyframe when tracked points < this x the reference's
-  double max_keyframe_interval_s = 1.0;  ///< s, a keyframe at least this often (if the ratio test says so)
+  double keyframe_ratio = 0.9;           ///< keyframe when tracked points < this x the reference's...
+  double min_keyframe_baseline = 0.06;   ///< ...and the camera moved this x the scene depth since the last
+  double weak_tracking_ratio = 0.5;      ///< below this x the reference's points: a keyframe regardless
+  double max_keyframe_interval_s = 1.0;  ///< s, or this long passed (if the ratio test says so)
   int min_keyframe_points = 15;          ///< no keyframe with fewer tracked points
   double max_velocity_age_s = 2.0;       ///< s, a motion model older than this is not used
 
@@ -77,8 +79,10 @@ struct TrackingOptions {
     v("min_inliers_relocalized", min_inliers_relocalized, "inliers needed just after relocalisation");
     v("max_local_keyframes", max_local_keyframes, "keyframes in the local map");
     v("reference_match_ratio", reference_match_ratio, "descriptor ratio when matching to a keyframe");
-    v("keyframe_ratio", keyframe_ratio, "new keyframe when tracked points fall below this x the reference's");
-    v("max_keyframe_interval_s", max_keyframe_interval_s, "s, longest time without a keyframe");
+    v("keyframe_ratio", keyframe_ratio, "new keyframe when tracked points fall below this x the reference's...");
+    v("min_keyframe_baseline", min_keyframe_baseline, "...and the camera moved this x the median scene depth");
+    v("weak_tracking_ratio", weak_tracking_ratio, "below this x the reference's points: a keyframe regardless");
+    v("max_keyframe_interval_s", max_keyframe_interval_s, "s, or this long passed since the last keyframe");
     v("min_keyframe_points", min_keyframe_points, "no keyframe with fewer tracked points");
     v("max_velocity_age_s", max_velocity_age_s, "s, an older motion model is not used");
   }
@@ -144,7 +148,7 @@ struct DepthFilterOptions {
   int max_keyframes = 4;                ///< seeds live until this many newer keyframes exist
   double convergence_ratio = 200.0;     ///< converged when sigma < inverse-depth range / this
   double pixel_noise = 1.0;             ///< px, matching noise (tau of SVO's computeTau)
-  double max_search_px = 120.0;         ///< px, longer epipolar segments are not searched
+  double max_search_px = 400.0;         ///< px, longer epipolar segments are not searched
   double max_ssd_per_sample = 300.0;    ///< grey levels^2 per sample, worst accepted match
   double uniqueness_ratio = 0.7;        ///< best / second-best SSD must be below this
   double min_epipolar_gradient = 6.0;   ///< grey levels, seed gradient along the epipolar line

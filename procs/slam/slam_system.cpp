@@ -156,6 +156,7 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
   cv::cvtColor(frame.bgr, frame.grey, cv::COLOR_BGR2GRAY);
   frame.features = std::make_shared<FrameFeatures>(extractor_->extract(frame.grey), intrinsics_);
   frame.resetMatches();
+  stats_.extract_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const TrackResult r = tracker_->track(frame, continuous, mapper_->idle());
   stats_.track_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (!r.event.empty()) out.events.push_back(r.event);
@@ -204,8 +205,9 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
   }
   last_state_ = pose.state;
 
-  for (const auto& kf : r.new_keyframes) mapper_->insert(r.map, kf);
+  // The depth filter's snapshot of keyframe poses is taken before local mapping may move them.
   postDepthWork(r, frame);
+  for (const auto& kf : r.new_keyframes) mapper_->insert(r.map, kf);
   if (lockstep_) {
     mapper_->waitIdle();
     depth_worker_->waitIdle();

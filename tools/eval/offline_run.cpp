@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <opencv2/core/utility.hpp>
 
 #include "common/image_codec.h"
 #include "procs/slam/slam_system.h"
@@ -12,6 +13,7 @@ namespace slamaware {
 SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options, bool verbose,
                              OfflineRunStats* stats) {
   SlamRecording run;
+  cv::setNumThreads(1);  // as the node does: our own threads are the parallelism
   SlamSystem slam(options, true);
   slam.setCamera(sequence.info().camera);
   int64_t depth_updates = 0;
@@ -40,9 +42,9 @@ SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& 
     }
     run.poses[out.pose.seq] = {static_cast<int8_t>(out.pose.state), out.pose.T_world_camera, out.pose.map_id};
     if (verbose) {
-      spdlog::info("seq {:4d} {:12s} map {} tracked {:4d} kfs {:3d} points {:5d} seeds {:6d} dpts {:7d} track {:.1f} ms depth {:.1f} ms",
+      spdlog::info("seq {:4d} {:12s} map {} tracked {:4d} kfs {:3d} points {:5d} seeds {:6d} dpts {:7d} track {:.1f} ms (orb {:.1f}) depth {:.1f} ms",
                    i, poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked, st.keyframes, st.points,
-                   st.depth_seeds, st.depth_points, st.track_ms, st.depth_update_ms);
+                   st.depth_seeds, st.depth_points, st.track_ms, st.extract_ms, st.depth_update_ms);
       for (const auto& e : out.events) spdlog::info("  {}", e);
     }
   }

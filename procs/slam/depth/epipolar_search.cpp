@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace slamaware {
 
@@ -82,15 +83,19 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   // Samples along the segment at one-pixel steps, from the far end (plus the margins).
   const int steps = static_cast<int>(std::ceil(length));
   const int n = steps + 1 + 2 * kHalf;
-  float cur_buf[256];
-  bool ok_buf[256];
-  if (n > 256) return m;
+  // Scratch buffers reused across calls (one set per thread).
+  thread_local std::vector<float> cur_buf, costs;
+  thread_local std::vector<uint8_t> ok_buf;
+  if (static_cast<int>(cur_buf.size()) < n) {
+    cur_buf.resize(n);
+    costs.resize(n);
+    ok_buf.resize(n);
+  }
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector2f s = px_far + float(k - kHalf) * dir;
     ok_buf[k] = sample(frame, s.x(), s.y(), &cur_buf[k]);
   }
   const float inf = std::numeric_limits<float>::max();
-  float costs[256];
   int best = -1;
   float best_cost = inf;
   for (int c = 0; c <= steps; ++c) {

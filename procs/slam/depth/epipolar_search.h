@@ -14,7 +14,7 @@ namespace slamaware {
 
 struct EpipolarSearchParams {
   float fx = 1, fy = 1, cx = 0, cy = 0;   ///< pinhole camera of both images (undistorted)
-  float max_search_px = 120;             ///< longer segments are not searched
+  float max_search_px = 400;             ///< px, longer segments are not searched
   float max_ssd_per_sample = 300;        ///< grey levels^2
   float uniqueness_ratio = 0.7f;         ///< best / second best (non-adjacent) SSD
   float min_epipolar_gradient = 6;       ///< grey levels, RMS difference of neighbouring host samples

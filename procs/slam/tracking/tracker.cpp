@@ -290,12 +290,18 @@ bool Tracker::relocalize(Frame& frame, std::shared_ptr<KeyFrame>* matched) {
 
 bool Tracker::needNewKeyFrame(const Frame& frame, int inliers, bool mapper_idle) const {
   if (!reference_kf_) return true;
+  if (inliers <= options_.tracking.min_keyframe_points) return false;
+  const TrackingOptions& o = options_.tracking;
   const int min_obs = map_->keyframes.size() <= 2 ? 2 : 3;
   const int ref_points = reference_kf_->trackedPoints(min_obs);
-  const bool interval = frame.utime - last_keyframe_utime_ >= options_.tracking.max_keyframe_interval_s * 1e6;
-  const bool weaker = inliers < options_.tracking.keyframe_ratio * ref_points &&
-                      inliers > options_.tracking.min_keyframe_points;
-  return (interval || mapper_idle) && weaker;
+  // ORB-SLAM's test (fewer points than the reference keyframe tracks), gated by how far the
+  // camera moved: a keyframe every few frames of a slow camera adds cost and no parallax.
+  const bool weak = inliers < o.weak_tracking_ratio * ref_points;
+  const bool fewer = inliers < o.keyframe_ratio * ref_points;
+  const double depth = reference_kf_->medianDepth();
+  const bool moved = depth > 0 && (frame.center() - last_keyframe_center_).norm() >= o.min_keyframe_baseline * depth;
+  const bool waited = frame.utime - last_keyframe_utime_ >= o.max_keyframe_interval_s * 1e6;
+  return weak || (fewer && mapper_idle && (moved || waited));
 }
 
 std::shared_ptr<KeyFrame> Tracker::createKeyFrame(Frame& frame) {
@@ -305,6 +311,7 @@ std::shared_ptr<KeyFrame> Tracker::createKeyFrame(Frame& frame) {
   reference_kf_ = kf;
   frame.reference = kf;
   last_keyframe_utime_ = frame.utime;
+  last_keyframe_center_ = frame.center();
   return kf;
 }
 
@@ -326,6 +333,7 @@ TrackResult Tracker::initialize(Frame& frame, bool after_loss) {
   for (const auto& [id, kf] : map->keyframes) r.new_keyframes.push_back(kf);
   reference_kf_ = r.new_keyframes.back();
   last_keyframe_utime_ = frame.utime;
+  last_keyframe_center_ = frame.center();
   // Velocity from the two initial views.
   const auto& kf0 = r.new_keyframes.front();
   const double dt = (frame.utime - kf0->utime) * 1e-6;
