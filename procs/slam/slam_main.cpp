@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
     int32_t last_seq = -1;
     int rc = 0;
     while (!shutdownRequested()) {
-      if (bus.handle(pending.empty() ? 20 : 0) < 0) {
+      if (bus.handle(pending.empty() ? 20 : 0) < 0 && !shutdownRequested()) {
         spdlog::error("LCM failed; stopping");
         rc = 1;
         break;

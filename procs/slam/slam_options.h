@@ -24,7 +24,7 @@ struct OrbOptions {
     v("fast_threshold", fast_threshold, "FAST threshold tried first in each cell");
     v("fast_threshold_min", fast_threshold_min, "FAST threshold in cells where the first finds nothing");
     v("cell_size_px", cell_size_px, "px, side of the cells FAST runs in");
-    v("pattern_seed", pattern_seed, "seed of the BRIEF test pattern (changing it invalidates nothing stored)");
+    v("pattern_seed", pattern_seed, "seed of the BRIEF test pattern (descriptors of different seeds do not match)");
   }
 };
 
