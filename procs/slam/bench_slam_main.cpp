@@ -49,7 +49,8 @@ int main(int argc, char** argv) {
     SourceFrame f;
     while ((max_frames < 0 || static_cast<int64_t>(frames.size()) < max_frames) && src->next(&f))
       if (f.error.empty()) frames.push_back(f);
-    spdlog::info("{}: {} frames {}x{}", src->describe(), frames.size(), src->camera().width(), src->camera().height());
+    spdlog::info("{}: {} frames {}x{}", src->describe(), frames.size(), src->camera().width(),
+                 src->camera().height());
 
     const SlamOptions options = loadConfig<SlamOptions>(config, "slam", false);
     SlamSystem slam(options, true);
@@ -74,9 +75,11 @@ int main(int argc, char** argv) {
     j["slam_bench_width"] = src->camera().width();
     j["slam_bench_height"] = src->camera().height();
     std::ofstream(out) << j.dump(2) << "\n";
-    spdlog::info("track {:.2f} ms median ({:.2f} p90), depth filter {:.2f} ms median per frame ({:.2f} p90), {} of {} located",
-                 median(track_ms), percentile(track_ms, 0.9), median(depth_ms), percentile(depth_ms, 0.9), located,
-                 frames.size());
+    spdlog::info(
+        "track {:.2f} ms median ({:.2f} p90), depth filter {:.2f} ms median per frame ({:.2f} "
+        "p90), {} of {} located",
+        median(track_ms), percentile(track_ms, 0.9), median(depth_ms), percentile(depth_ms, 0.9),
+        located, frames.size());
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -55,14 +55,16 @@ void reportStats(const SlamSystem& slam, StatusReporter& status) {
   status.setCounter("keyframes_culled", s.keyframes_culled);
   status.setCounter("track_us", static_cast<int64_t>(s.track_ms * 1000));
   status.setCounter("depth_update_us", static_cast<int64_t>(s.depth_update_ms * 1000));
-  status.setState(s.state == "LOST" ? StatusReporter::State::kDegraded : StatusReporter::State::kRunning);
+  status.setState(s.state == "LOST" ? StatusReporter::State::kDegraded
+                                    : StatusReporter::State::kRunning);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-slam: monocular SLAM with semi-dense depth (CAMERA_INFO, CAMERA -> SLAM_POSE, "
-               "SLAM_KEYFRAME, SLAM_MAP)"};
+  CLI::App app{
+      "slamaware-slam: monocular SLAM with semi-dense depth (CAMERA_INFO, CAMERA -> SLAM_POSE, "
+      "SLAM_KEYFRAME, SLAM_MAP)"};
   NodeArgs node;
   addNodeOptions(app, node);
   CLI11_PARSE(app, argc, argv);
@@ -92,11 +94,11 @@ int main(int argc, char** argv) {
           if (slam.setCamera(camera)) {
             status.count("camera_changes");
             status.setMessage("camera changed: SLAM restarted");
-            spdlog::warn("CAMERA_INFO changed to {}x{} fx {:.1f}: SLAM restarted", camera.width(), camera.height(),
-                         camera.fx());
+            spdlog::warn("CAMERA_INFO changed to {}x{} fx {:.1f}: SLAM restarted", camera.width(),
+                         camera.height(), camera.fx());
           } else if (first) {
-            spdlog::info("camera {}x{} fx {:.1f} fy {:.1f} from {}", camera.width(), camera.height(), camera.fx(),
-                         camera.fy(), info.source);
+            spdlog::info("camera {}x{} fx {:.1f} fy {:.1f} from {}", camera.width(),
+                         camera.height(), camera.fx(), camera.fy(), info.source);
           }
         },
         sys.bus.max_message_bytes);
@@ -120,14 +122,17 @@ int main(int argc, char** argv) {
           bus.reject(ch.camera, e.what());
           status.count("frames_corrupt");
         }
-        if (!bgr.empty() && (bgr.cols != slam.camera().width() || bgr.rows != slam.camera().height())) {
-          bus.reject(ch.camera, what + ": frame is " + std::to_string(bgr.cols) + "x" + std::to_string(bgr.rows) +
-                                    " but CAMERA_INFO says " + std::to_string(slam.camera().width()) + "x" +
+        if (!bgr.empty() &&
+            (bgr.cols != slam.camera().width() || bgr.rows != slam.camera().height())) {
+          bus.reject(ch.camera, what + ": frame is " + std::to_string(bgr.cols) + "x" +
+                                    std::to_string(bgr.rows) + " but CAMERA_INFO says " +
+                                    std::to_string(slam.camera().width()) + "x" +
                                     std::to_string(slam.camera().height()));
           status.count("frames_wrong_size");
           bgr.release();
         }
-        out = bgr.empty() ? slam.skipFrame(img.utime, img.seq) : slam.processFrame(img.utime, img.seq, bgr);
+        out = bgr.empty() ? slam.skipFrame(img.utime, img.seq)
+                          : slam.processFrame(img.utime, img.seq, bgr);
       }
       publish(bus, ch, out, status);
       status.addProcessed();
@@ -158,7 +163,8 @@ int main(int argc, char** argv) {
         handleFrame(img);
         if (!lockstep) break;  // look at the bus again before the next one
       }
-      if (!lockstep && slam.hasCamera()) publish(bus, ch, slam.collectBackground(last_utime, last_seq), status);
+      if (!lockstep && slam.hasCamera())
+        publish(bus, ch, slam.collectBackground(last_utime, last_seq), status);
       reportStats(slam, status);
       status.setQueueDepth(static_cast<int32_t>(pending.size()));
       status.tick();
@@ -168,9 +174,11 @@ int main(int argc, char** argv) {
     reportStats(slam, status);
     status.publish();
     const SlamStats s = slam.stats();
-    spdlog::info("handled {} frames: {} located, {} lost, {} relocalisations, {} re-initialisations, {} maps",
-                 s.frames + s.frames_unusable, s.frames_located, s.frames_lost, s.relocalizations,
-                 s.reinitializations, s.maps);
+    spdlog::info(
+        "handled {} frames: {} located, {} lost, {} relocalisations, {} re-initialisations, {} "
+        "maps",
+        s.frames + s.frames_unusable, s.frames_located, s.frames_lost, s.relocalizations,
+        s.reinitializations, s.maps);
     return rc;
   });
 }

@@ -18,16 +18,22 @@ namespace slamaware {
 
 const char* poseStateName(PoseState s) {
   switch (s) {
-    case PoseState::kInitializing: return "INITIALIZING";
-    case PoseState::kTracking: return "TRACKING";
-    case PoseState::kLost: return "LOST";
-    case PoseState::kRelocalized: return "RELOCALIZED";
+    case PoseState::kInitializing:
+      return "INITIALIZING";
+    case PoseState::kTracking:
+      return "TRACKING";
+    case PoseState::kLost:
+      return "LOST";
+    case PoseState::kRelocalized:
+      return "RELOCALIZED";
   }
   return "?";
 }
 
 SlamSystem::SlamSystem(const SlamOptions& options, bool lockstep)
-    : options_(options), lockstep_(lockstep), extractor_(std::make_unique<OrbExtractor>(options.orb)),
+    : options_(options),
+      lockstep_(lockstep),
+      extractor_(std::make_unique<OrbExtractor>(options.orb)),
       ids_(std::make_unique<IdSource>()) {}
 
 SlamSystem::~SlamSystem() {
@@ -52,8 +58,9 @@ void SlamSystem::restart() {
   mapper_.reset();
   tracker_ = std::make_unique<Tracker>(options_, *ids_);
   mapper_ = std::make_unique<LocalMapper>(options_, *ids_, !lockstep_);
-  depth_ = std::make_unique<DepthFilter>(options_.depth, camera_.width(), camera_.height(), intrinsics_->fx,
-                                         intrinsics_->fy, intrinsics_->cx, intrinsics_->cy);
+  depth_ = std::make_unique<DepthFilter>(options_.depth, camera_.width(), camera_.height(),
+                                         intrinsics_->fx, intrinsics_->fy, intrinsics_->cx,
+                                         intrinsics_->cy);
   depth_worker_ = std::make_unique<SerialWorker>(options_.depth.threaded);
   {
     std::lock_guard<std::mutex> lock(finished_mutex_);
@@ -85,11 +92,13 @@ SlamOutput SlamSystem::skipFrame(int64_t utime, int32_t seq) {
 
 void SlamSystem::postDepthWork(const TrackResult& r, const Frame& frame) {
   if (!options_.depth.enabled) return;
-  const bool located = r.outcome == TrackOutcome::kTracked || r.outcome == TrackOutcome::kRelocalized ||
+  const bool located = r.outcome == TrackOutcome::kTracked ||
+                       r.outcome == TrackOutcome::kRelocalized ||
                        r.outcome == TrackOutcome::kNewMap;
   if (!located) return;
   // Real time: a filter that falls behind skips plain frames (never keyframes).
-  if (!lockstep_ && r.new_keyframes.empty() && depth_worker_->pending() > static_cast<size_t>(options_.depth.max_queue)) {
+  if (!lockstep_ && r.new_keyframes.empty() &&
+      depth_worker_->pending() > static_cast<size_t>(options_.depth.max_queue)) {
     ++stats_.depth_frames_skipped;
     return;
   }
@@ -103,7 +112,8 @@ void SlamSystem::postDepthWork(const TrackResult& r, const Frame& frame) {
   {
     // Snapshot of keyframe poses now, so that the filter never reads the live map.
     std::shared_lock<std::shared_mutex> lock(r.map->mutex);
-    for (const auto& [id, kf] : r.map->keyframes) input->keyframe_poses.push_back({id, kf->T_world_camera()});
+    for (const auto& [id, kf] : r.map->keyframes)
+      input->keyframe_poses.push_back({id, kf->T_world_camera()});
     for (const auto& kf : r.new_keyframes) {
       DepthKeyframeInput k;
       k.id = kf->id;
@@ -117,7 +127,8 @@ void SlamSystem::postDepthWork(const TrackResult& r, const Frame& frame) {
       input->new_keyframes.push_back(k);
     }
   }
-  // A new map's first keyframe is not the frame itself: it is seeded and then updated with this one.
+  // A new map's first keyframe is not the frame itself: it is seeded and then updated with this
+  // one.
   depth_worker_->post([this, input]() {
     const std::vector<int64_t> finished = depth_->process(*input);
     if (finished.empty()) return;
@@ -140,8 +151,9 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
   SlamOutput out;
   if (!continuous) {
     ++stats_.discontinuities;
-    out.events.push_back("time went from " + std::to_string(last_utime_) + " to " + std::to_string(utime) +
-                         " us at seq " + std::to_string(seq) + ": relocalising");
+    out.events.push_back("time went from " + std::to_string(last_utime_) + " to " +
+                         std::to_string(utime) + " us at seq " + std::to_string(seq) +
+                         ": relocalising");
   }
   have_last_ = true;
   last_utime_ = utime;
@@ -156,9 +168,11 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
   cv::cvtColor(frame.bgr, frame.grey, cv::COLOR_BGR2GRAY);
   frame.features = std::make_shared<FrameFeatures>(extractor_->extract(frame.grey), intrinsics_);
   frame.resetMatches();
-  stats_.extract_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  stats_.extract_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const TrackResult r = tracker_->track(frame, continuous, mapper_->idle());
-  stats_.track_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  stats_.track_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (!r.event.empty()) out.events.push_back(r.event);
 
   PoseOutput& pose = out.pose;
@@ -238,7 +252,8 @@ std::shared_ptr<Map> SlamSystem::mapById(int map_id) const {
   return nullptr;
 }
 
-void SlamSystem::appendPoints(const SemiDenseKeyframe& s, const SE3& T_world_camera, CloudOutput* c) {
+void SlamSystem::appendPoints(const SemiDenseKeyframe& s, const SE3& T_world_camera,
+                              CloudOutput* c) {
   const Eigen::Isometry3f T = T_world_camera.cast<float>();
   for (const auto& p : s.points) {
     CloudPoint q;
@@ -268,7 +283,8 @@ CloudOutput SlamSystem::keyframeCloud(int64_t keyframe_id, int64_t utime, int32_
   return c;
 }
 
-CloudOutput SlamSystem::fullCloud(const std::shared_ptr<Map>& map, int64_t utime, int32_t seq) const {
+CloudOutput SlamSystem::fullCloud(const std::shared_ptr<Map>& map, int64_t utime,
+                                  int32_t seq) const {
   CloudOutput c;
   c.utime = utime;
   c.seq = seq;
@@ -281,7 +297,8 @@ CloudOutput SlamSystem::fullCloud(const std::shared_ptr<Map>& map, int64_t utime
     // Points move with their keyframe: use its current pose while it is in the map (a culled
     // keyframe keeps its last one).
     auto live = map->keyframes.find(s.id);
-    appendPoints(s, live != map->keyframes.end() ? live->second->T_world_camera() : s.T_world_camera, &c);
+    appendPoints(
+        s, live != map->keyframes.end() ? live->second->T_world_camera() : s.T_world_camera, &c);
     listed.insert(s.id);
   }
   for (const auto& [id, kf] : map->keyframes)
@@ -289,8 +306,8 @@ CloudOutput SlamSystem::fullCloud(const std::shared_ptr<Map>& map, int64_t utime
   return c;
 }
 
-void SlamSystem::collect(int64_t utime, int32_t seq, const std::vector<std::shared_ptr<KeyFrame>>& created,
-                         SlamOutput* out) {
+void SlamSystem::collect(int64_t utime, int32_t seq,
+                         const std::vector<std::shared_ptr<KeyFrame>>& created, SlamOutput* out) {
   const MappingEvents events = mapper_->takeEvents();
   std::vector<std::shared_ptr<KeyFrame>> touched = created;
   touched.insert(touched.end(), events.moved.begin(), events.moved.end());
@@ -323,7 +340,8 @@ void SlamSystem::collect(int64_t utime, int32_t seq, const std::vector<std::shar
   if (map->id != last_full_map_id_ || utime < last_full_utime_) {
     last_full_map_id_ = map->id;  // a new map (or a restarted clock) starts the period
     last_full_utime_ = utime;
-  } else if (utime - last_full_utime_ >= static_cast<int64_t>(options_.output.full_map_period_s * 1e6)) {
+  } else if (utime - last_full_utime_ >=
+             static_cast<int64_t>(options_.output.full_map_period_s * 1e6)) {
     out->clouds.push_back(fullCloud(map, utime, seq));
     last_full_utime_ = utime;
   }

@@ -61,15 +61,15 @@ struct KeyframeOutput {
 struct CloudPoint {
   Eigen::Vector3f p_world;
   uint8_t rgb[3] = {0, 0, 0};
-  float depth_std = 0;       ///< map units along the keyframe ray
+  float depth_std = 0;  ///< map units along the keyframe ray
   int64_t keyframe_id = -1;
 };
 
 struct CloudOutput {
-  int64_t utime = 0;          ///< the frame whose processing produced it
+  int64_t utime = 0;  ///< the frame whose processing produced it
   int32_t seq = -1;
   int map_id = 0;
-  int64_t keyframe_id = -1;   ///< incremental: the keyframe; full: -1
+  int64_t keyframe_id = -1;  ///< incremental: the keyframe; full: -1
   bool full = false;
   std::vector<CloudPoint> points;
   std::vector<std::pair<int64_t, Eigen::Vector3f>> keyframe_centers;  ///< world frame
@@ -88,16 +88,16 @@ struct SlamOutput {
 struct SlamStats {
   std::string state = "INITIALIZING";
   int map_id = 0;
-  int64_t maps = 0, keyframes = 0, points = 0;   ///< keyframes and points of the current map
+  int64_t maps = 0, keyframes = 0, points = 0;  ///< keyframes and points of the current map
   int64_t frames = 0, frames_located = 0, frames_lost = 0, frames_unusable = 0;
   int64_t frames_duplicate = 0, discontinuities = 0;
   int64_t relocalizations = 0, reinitializations = 0;
   int64_t depth_seeds = 0, depth_points = 0, depth_frames_skipped = 0;
   int64_t bundle_adjustments = 0, keyframes_culled = 0;
-  double track_ms = 0;          ///< last frame: features and tracking
-  double extract_ms = 0;        ///< last frame: features
-  double depth_update_ms = 0;   ///< last depth-filter update
-  int64_t depth_updates = 0;    ///< depth-filter updates so far
+  double track_ms = 0;         ///< last frame: features and tracking
+  double extract_ms = 0;       ///< last frame: features
+  double depth_update_ms = 0;  ///< last depth-filter update
+  int64_t depth_updates = 0;   ///< depth-filter updates so far
 };
 
 class SlamSystem {
@@ -130,7 +130,8 @@ class SlamSystem {
 
  private:
   void restart();
-  void collect(int64_t utime, int32_t seq, const std::vector<std::shared_ptr<KeyFrame>>& created, SlamOutput* out);
+  void collect(int64_t utime, int32_t seq, const std::vector<std::shared_ptr<KeyFrame>>& created,
+               SlamOutput* out);
   std::shared_ptr<Map> mapById(int map_id) const;
   static void appendPoints(const SemiDenseKeyframe& s, const SE3& T_world_camera, CloudOutput* c);
   KeyframeOutput describeKeyframe(const KeyFrame& kf) const;
@@ -154,7 +155,7 @@ class SlamSystem {
   int64_t last_utime_ = 0;
   int32_t last_seq_ = -1;
   SlamOutput last_answer_;
-  PoseOutput last_valid_;        ///< the last located pose (state TRACKING or RELOCALIZED)
+  PoseOutput last_valid_;  ///< the last located pose (state TRACKING or RELOCALIZED)
   bool have_valid_ = false;
   PoseState last_state_ = PoseState::kInitializing;
   int first_map_id_ = -1;
@@ -162,7 +163,8 @@ class SlamSystem {
   int64_t last_full_utime_ = 0;
 
   mutable std::mutex finished_mutex_;
-  std::vector<int64_t> depth_finished_;  ///< keyframes whose semi-dense points are final (from the worker)
+  std::vector<int64_t>
+      depth_finished_;  ///< keyframes whose semi-dense points are final (from the worker)
 
   SlamStats stats_;
 };

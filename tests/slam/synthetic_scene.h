@@ -20,11 +20,14 @@ struct PinholeCamera {
   Eigen::Vector2d project(const Eigen::Vector3d& p_camera) const {
     return {fx * p_camera.x() / p_camera.z() + cx, fy * p_camera.y() / p_camera.z() + cy};
   }
-  bool inImage(const Eigen::Vector2d& px) const { return px.x() >= 0 && px.y() >= 0 && px.x() < width && px.y() < height; }
+  bool inImage(const Eigen::Vector2d& px) const {
+    return px.x() >= 0 && px.y() >= 0 && px.x() < width && px.y() < height;
+  }
 };
 
 /// Points uniformly in a box [-w, w] x [-h, h] x [z0, z1] of the world frame.
-inline std::vector<Eigen::Vector3d> randomPoints(int n, double w, double h, double z0, double z1, uint64_t seed) {
+inline std::vector<Eigen::Vector3d> randomPoints(int n, double w, double h, double z0, double z1,
+                                                 uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(-w, w), uy(-h, h), uz(z0, z1);
   std::vector<Eigen::Vector3d> pts(n);

@@ -13,7 +13,8 @@ TEST(BundleAdjustment, LowersTheErrorAndRecoversAPerturbedPose) {
   const test::PinholeCamera cam;
   const auto points = test::randomPoints(250, 2.0, 1.5, 4.0, 8.0, 17);
   std::vector<SE3> truth;
-  for (int k = 0; k < 5; ++k) truth.push_back(test::cameraAt({0.25 * k, 0.02 * k, 0.1 * k}, {0, -0.03 * k, 0.01 * k}));
+  for (int k = 0; k < 5; ++k)
+    truth.push_back(test::cameraAt({0.25 * k, 0.02 * k, 0.1 * k}, {0, -0.03 * k, 0.01 * k}));
   std::mt19937_64 rng(4);
   std::normal_distribution<double> noise(0, 0.5), wobble(0, 0.05);
   BaProblem ba;
@@ -46,16 +47,21 @@ TEST(BundleAdjustment, LowersTheErrorAndRecoversAPerturbedPose) {
   EXPECT_LT(s.final_rms_px, 0.6);  // the pixel noise (0.5 px per axis) and no more
   EXPECT_TRUE(ba.cameras[0].T_camera_world.isApprox(fixed_before, 0));
   for (int k : {3, 4}) {
-    EXPECT_LT((ba.cameras[k].T_camera_world.inverse().translation() - truth[k].inverse().translation()).norm(), 0.01)
+    EXPECT_LT(
+        (ba.cameras[k].T_camera_world.inverse().translation() - truth[k].inverse().translation())
+            .norm(),
+        0.01)
         << "camera " << k;
-    EXPECT_LT(angleBetween(ba.cameras[k].T_camera_world, truth[k]) * 180 / M_PI, 0.1) << "camera " << k;
+    EXPECT_LT(angleBetween(ba.cameras[k].T_camera_world, truth[k]) * 180 / M_PI, 0.1)
+        << "camera " << k;
   }
 }
 
 TEST(BundleAdjustment, AnOutlierDoesNotDragTheSolutionWithTheRobustLoss) {
   const test::PinholeCamera cam;
   const auto points = test::randomPoints(150, 2.0, 1.5, 4.0, 8.0, 3);
-  const SE3 a = test::cameraAt({0, 0, 0}, {0, 0, 0}), b = test::cameraAt({0.5, 0, 0}, {0, -0.05, 0});
+  const SE3 a = test::cameraAt({0, 0, 0}, {0, 0, 0}),
+            b = test::cameraAt({0.5, 0, 0}, {0, -0.05, 0});
   BaProblem ba;
   ba.fx = cam.fx;
   ba.fy = cam.fy;
@@ -75,5 +81,7 @@ TEST(BundleAdjustment, AnOutlierDoesNotDragTheSolutionWithTheRobustLoss) {
   BaOptions options;
   options.iterations = 30;
   ASSERT_TRUE(bundleAdjust(&ba, options).usable);
-  EXPECT_LT((ba.cameras[1].T_camera_world.inverse().translation() - b.inverse().translation()).norm(), 0.005);
+  EXPECT_LT(
+      (ba.cameras[1].T_camera_world.inverse().translation() - b.inverse().translation()).norm(),
+      0.005);
 }

@@ -3,8 +3,8 @@
 // the depth of a textured plane seen from a moving camera.
 #include <gtest/gtest.h>
 
-#include <opencv2/imgproc.hpp>
 #include <algorithm>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "procs/slam/depth/depth_filter.h"
@@ -33,13 +33,14 @@ cv::Mat makeTexture(int size, uint64_t seed) {
 
 // The view of the plane Z_world = plane_z (texture on it, 1 texel = texel_m metres, centred) by a
 // camera with pose T_world_camera.
-cv::Mat renderPlane(const cv::Mat& texture, double texel_m, double plane_z, const SE3& T_world_camera,
-                    const test::PinholeCamera& cam) {
+cv::Mat renderPlane(const cv::Mat& texture, double texel_m, double plane_z,
+                    const SE3& T_world_camera, const test::PinholeCamera& cam) {
   cv::Mat map_x(cam.height, cam.width, CV_32F), map_y(cam.height, cam.width, CV_32F);
   const Eigen::Vector3d c = T_world_camera.translation();
   for (int v = 0; v < cam.height; ++v) {
     for (int u = 0; u < cam.width; ++u) {
-      const Eigen::Vector3d d = T_world_camera.linear() * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1);
+      const Eigen::Vector3d d = T_world_camera.linear() *
+                                Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1);
       const double s = (plane_z - c.z()) / d.z();
       const Eigen::Vector3d X = c + s * d;
       map_x.at<float>(v, u) = static_cast<float>(X.x() / texel_m + texture.cols / 2.0);
@@ -60,7 +61,8 @@ TEST(DepthSeedUpdate, ConvergesToTheTrueInverseDepthDespiteOutliers) {
   std::mt19937_64 rng(5);
   std::normal_distribution<float> inlier(truth, tau);
   std::uniform_real_distribution<float> outlier(0.f, seed.z_range), u01(0, 1);
-  for (int i = 0; i < 60; ++i) updateSeed(&seed, u01(rng) < 0.3f ? outlier(rng) : inlier(rng), tau * tau);
+  for (int i = 0; i < 60; ++i)
+    updateSeed(&seed, u01(rng) < 0.3f ? outlier(rng) : inlier(rng), tau * tau);
   EXPECT_NEAR(seed.mu, truth, 3 * tau / std::sqrt(40.f));
   EXPECT_LT(std::sqrt(seed.sigma2), 0.01f);
   // The Beta posterior has learnt the inlier ratio (0.7) roughly.
@@ -107,7 +109,7 @@ TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
   kf.map_id = 1;
   kf.grey = renderPlane(texture, texel, plane_z, SE3::Identity(), cam);
   cv::cvtColor(kf.grey, kf.bgr, cv::COLOR_GRAY2BGR);
-  kf.min_depth = 1.0;   // what the sparse map would say, roughly
+  kf.min_depth = 1.0;  // what the sparse map would say, roughly
   kf.mean_depth = 2.6;
   first.grey = kf.grey;
   first.new_keyframes.push_back(kf);
@@ -129,11 +131,12 @@ TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
     filter.process(f);
   }
   const SemiDenseKeyframe result = filter.keyframe(7);
-  EXPECT_GT(result.points.size(), 0.5 * seeds) << "converged " << result.points.size() << " of " << seeds;
+  EXPECT_GT(result.points.size(), 0.5 * seeds)
+      << "converged " << result.points.size() << " of " << seeds;
   std::vector<double> rel;
   for (const auto& p : result.points) rel.push_back(std::abs(p.p_camera.z() - plane_z) / plane_z);
   std::sort(rel.begin(), rel.end());
-  EXPECT_LT(rel[rel.size() / 2], 0.01);           // median relative error under 1%
-  EXPECT_LT(rel[rel.size() * 9 / 10], 0.02);      // 90% under 2%
+  EXPECT_LT(rel[rel.size() / 2], 0.01);       // median relative error under 1%
+  EXPECT_LT(rel[rel.size() * 9 / 10], 0.02);  // 90% under 2%
   for (const auto& p : result.points) EXPECT_GT(p.depth_std, 0);
 }

@@ -38,7 +38,8 @@ TEST(OrbExtractor, GivesTheRequestedNumberSpreadOverTheImage) {
   EXPECT_EQ(f.descriptors.rows, static_cast<int>(f.keypoints.size()));
   // Every cell of a 4 x 4 grid over the image holds features.
   int cells[4][4] = {};
-  for (const auto& kp : f.keypoints) ++cells[static_cast<int>(kp.pt.y * 4 / 480)][static_cast<int>(kp.pt.x * 4 / 640)];
+  for (const auto& kp : f.keypoints)
+    ++cells[static_cast<int>(kp.pt.y * 4 / 480)][static_cast<int>(kp.pt.x * 4 / 640)];
   for (auto& row : cells)
     for (int c : row) EXPECT_GT(c, opt.num_features / 16 / 3);
   // Several pyramid levels are used.
@@ -55,7 +56,8 @@ TEST(OrbExtractor, DescriptorsSurviveAnInPlaneRotation) {
   cv::Mat rotated;
   cv::warpAffine(image, rotated, R, image.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
   const OrbExtractor ex{OrbOptions()};
-  auto intrinsics = std::make_shared<Intrinsics>(CameraModel(640, 480, 500, 500, 319.5, 239.5), ex.pyramid());
+  auto intrinsics =
+      std::make_shared<Intrinsics>(CameraModel(640, 480, 500, 500, 319.5, 239.5), ex.pyramid());
   const FrameFeatures a(ex.extract(image), intrinsics), b(ex.extract(rotated), intrinsics);
   std::vector<int> all(a.size());
   for (int i = 0; i < a.size(); ++i) all[i] = i;
@@ -64,8 +66,10 @@ TEST(OrbExtractor, DescriptorsSurviveAnInPlaneRotation) {
   int correct = 0;
   for (const auto& [i, j] : m) {
     const cv::Point2f p = a.keypoints[i].pt;
-    const cv::Point2f q(static_cast<float>(R.at<double>(0, 0) * p.x + R.at<double>(0, 1) * p.y + R.at<double>(0, 2)),
-                        static_cast<float>(R.at<double>(1, 0) * p.x + R.at<double>(1, 1) * p.y + R.at<double>(1, 2)));
+    const cv::Point2f q(static_cast<float>(R.at<double>(0, 0) * p.x + R.at<double>(0, 1) * p.y +
+                                           R.at<double>(0, 2)),
+                        static_cast<float>(R.at<double>(1, 0) * p.x + R.at<double>(1, 1) * p.y +
+                                           R.at<double>(1, 2)));
     correct += cv::norm(q - b.keypoints[j].pt) < 3.0 * ex.pyramid().scale[a.keypoints[i].octave];
   }
   EXPECT_GT(correct, 0.9 * m.size());

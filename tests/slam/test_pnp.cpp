@@ -19,7 +19,8 @@ struct Observations {
   std::vector<bool> outlier;
 };
 
-Observations observe(const SE3& T_camera_world, int n, double noise_px, double outlier_ratio, uint64_t seed) {
+Observations observe(const SE3& T_camera_world, int n, double noise_px, double outlier_ratio,
+                     uint64_t seed) {
   const test::PinholeCamera cam;
   const auto points = test::randomPoints(n, 2.0, 1.5, 2.0, 8.0, seed);
   std::mt19937_64 rng(seed + 1);
@@ -48,8 +49,8 @@ TEST(Pnp, RecoversThePoseDespiteAThirdOfOutliers) {
   ASSERT_GT(o.pw.size(), 150u);
   const test::PinholeCamera cam;
   PnpOptions opt;
-  const PnpResult r = solvePnpRansac(o.pw, o.px, std::vector<double>(o.pw.size(), 1.0), cam.fx, cam.fy, cam.cx,
-                                     cam.cy, opt, 99);
+  const PnpResult r = solvePnpRansac(o.pw, o.px, std::vector<double>(o.pw.size(), 1.0), cam.fx,
+                                     cam.fy, cam.cx, cam.cy, opt, 99);
   ASSERT_TRUE(r.ok);
   EXPECT_LT((r.T_camera_world.inverse().translation() - T.inverse().translation()).norm(), 0.02);
   EXPECT_LT(angleBetween(r.T_camera_world, T) * 180 / M_PI, 0.3);
@@ -57,8 +58,8 @@ TEST(Pnp, RecoversThePoseDespiteAThirdOfOutliers) {
   for (size_t i = 0; i < o.pw.size(); ++i) agree += r.inliers[i] == !o.outlier[i];
   EXPECT_GT(agree, 0.97 * o.pw.size());
   // Deterministic for a seed.
-  const PnpResult again = solvePnpRansac(o.pw, o.px, std::vector<double>(o.pw.size(), 1.0), cam.fx, cam.fy, cam.cx,
-                                         cam.cy, opt, 99);
+  const PnpResult again = solvePnpRansac(o.pw, o.px, std::vector<double>(o.pw.size(), 1.0), cam.fx,
+                                         cam.fy, cam.cx, cam.cy, opt, 99);
   EXPECT_TRUE(again.T_camera_world.isApprox(r.T_camera_world, 0));
 }
 
@@ -66,8 +67,8 @@ TEST(Pnp, FailsWithoutEnoughSupport) {
   const SE3 T = test::cameraAt({0, 0, 0}, {0, 0, 0});
   const Observations o = observe(T, 60, 0.5, 1.0, 5);  // every match wrong
   const test::PinholeCamera cam;
-  const PnpResult r = solvePnpRansac(o.pw, o.px, std::vector<double>(o.pw.size(), 1.0), cam.fx, cam.fy, cam.cx,
-                                     cam.cy, PnpOptions(), 1);
+  const PnpResult r = solvePnpRansac(o.pw, o.px, std::vector<double>(o.pw.size(), 1.0), cam.fx,
+                                     cam.fy, cam.cx, cam.cy, PnpOptions(), 1);
   EXPECT_FALSE(r.ok);
 }
 

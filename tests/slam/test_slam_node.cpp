@@ -4,13 +4,13 @@
 // frames, time going backwards, malformed messages) leaves it running, with every state change
 // reported and no pose jump without one.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
 #include <filesystem>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
-#include <thread>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "common/bus/image_msg.h"
 #include "common/bus/log_reader.h"
@@ -39,7 +39,8 @@ std::vector<PoseMessage> readPoses(const std::string& log) {
   for (auto& r : LogReader::readAll(log)) {
     if (r.channel != "SLAM_POSE") continue;
     PoseMessage p;
-    EXPECT_EQ(p.msg.decode(r.data.data(), 0, static_cast<int>(r.data.size())), static_cast<int>(r.data.size()));
+    EXPECT_EQ(p.msg.decode(r.data.data(), 0, static_cast<int>(r.data.size())),
+              static_cast<int>(r.data.size()));
     p.bytes = std::move(r.data);
     out.push_back(std::move(p));
   }
@@ -69,13 +70,15 @@ std::map<std::string, int64_t> lastStatus(const std::string& log) {
 
 /// Plays `log` lockstep (each frame waits for the previous frame's SLAM_POSE) through
 /// slamaware-slam and records what it publishes. Returns the recording.
-std::string replayThroughSlam(const std::string& dir, const std::string& log, const std::string& name) {
+std::string replayThroughSlam(const std::string& dir, const std::string& log,
+                              const std::string& name) {
   const std::string out = dir + "/" + name + ".lcm";
   test::BusRecorder recorder(out, "SLAM_.*");
-  test::ChildProcess slam({test::binPath("slamaware-slam"), "--lockstep", "--lcm-url", test::testUrl()},
-                          dir + "/" + name + ".slam.txt");
-  test::ChildProcess replay({test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(), "--lockstep",
-                             "SLAM_POSE", "--wait-for", "SLAM_STATUS"},
+  test::ChildProcess slam(
+      {test::binPath("slamaware-slam"), "--lockstep", "--lcm-url", test::testUrl()},
+      dir + "/" + name + ".slam.txt");
+  test::ChildProcess replay({test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(),
+                             "--lockstep", "SLAM_POSE", "--wait-for", "SLAM_STATUS"},
                             dir + "/" + name + ".replay.txt");
   EXPECT_EQ(replay.wait(300s), 0) << replay.log();
   EXPECT_TRUE(slam.running()) << "slamaware-slam died:\n" << slam.log();
@@ -89,8 +92,8 @@ std::string replayThroughSlam(const std::string& dir, const std::string& log, co
 std::string recordSequence(const std::string& dir, const std::string& sequence, double speed) {
   const std::string log = dir + "/input.lcm";
   test::BusRecorder recorder(log, "CAMERA.*");
-  test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", sequence, "--lcm-url", test::testUrl(),
-                             "--speed", std::to_string(speed)},
+  test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", sequence, "--lcm-url",
+                             test::testUrl(), "--speed", std::to_string(speed)},
                             dir + "/camera.txt");
   EXPECT_EQ(camera.wait(120s), 0) << camera.log();
   recorder.stop();
@@ -99,13 +102,15 @@ std::string recordSequence(const std::string& dir, const std::string& sequence, 
 
 /// ATE RMSE (m) of TRACKING / RELOCALIZED poses against ground truth by seq, each map aligned
 /// on its own by Sim(3) (Umeyama).
-double ateRmse(const std::vector<PoseMessage>& poses, const std::map<int, Eigen::Vector3d>& truth, int* used) {
+double ateRmse(const std::vector<PoseMessage>& poses, const std::map<int, Eigen::Vector3d>& truth,
+               int* used) {
   std::map<int, std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> by_map;
   for (const auto& p : poses) {
     if (p.msg.state != pose_t::STATE_TRACKING && p.msg.state != pose_t::STATE_RELOCALIZED) continue;
     auto t = truth.find(p.msg.seq);
     if (t == truth.end()) continue;
-    by_map[p.msg.map_id].first.push_back(Eigen::Vector3d(p.msg.position[0], p.msg.position[1], p.msg.position[2]));
+    by_map[p.msg.map_id].first.push_back(
+        Eigen::Vector3d(p.msg.position[0], p.msg.position[1], p.msg.position[2]));
     by_map[p.msg.map_id].second.push_back(t->second);
   }
   double sq = 0;
@@ -160,7 +165,8 @@ TEST(SlamNode, LockstepReplayOfTheBundledSampleIsAccurate) {
   const std::string out = replayThroughSlam(dir, log, "sample");
   const std::vector<PoseMessage> poses = readPoses(out);
   // Ground truth: the generator's camera path for the sample scene (no rendering needed).
-  const synth::SceneOptions options = synth::loadSceneOptions(test::sourcePath("config/scenes/sample.yaml"));
+  const synth::SceneOptions options =
+      synth::loadSceneOptions(test::sourcePath("config/scenes/sample.yaml"));
   const synth::SyntheticScene scene(options);
   std::map<int, Eigen::Vector3d> truth;
   double path = 0;
@@ -229,32 +235,33 @@ TEST(SlamNode, BadInputKeepsItRunningAndEveryJumpComesWithAStateChange) {
     };
     int view = 12;
     auto good = [&]() { sendFrame(frameMsg(readImage(seq.framePath(view++)))); };
-    for (int i = 0; i < 5; ++i) good();                                     // initialise, track
+    for (int i = 0; i < 5; ++i) good();  // initialise, track
     sendFrame(frameMsg(cv::Mat(cam.height(), cam.width(), CV_8UC3, cv::Scalar(0, 0, 0))));  // black
     good();
     const image_t repeated = frameMsg(readImage(seq.framePath(view++)));
     sendFrame(repeated);
-    sendFrame(repeated);                                                     // the same message twice
+    sendFrame(repeated);  // the same message twice
     image_t corrupt = frameMsg(readImage(seq.framePath(view)));
-    corrupt.data.resize(corrupt.data.size() / 3);                            // a truncated JPEG
+    corrupt.data.resize(corrupt.data.size() / 3);  // a truncated JPEG
     corrupt.size = static_cast<int32_t>(corrupt.data.size());
     sendFrame(corrupt);
     good();
     cv::Mat small;
     cv::resize(readImage(seq.framePath(view)), small, cv::Size(320, 240));
-    sendFrame(frameMsg(small));                                              // the wrong size
+    sendFrame(frameMsg(small));  // the wrong size
     good();
     const cv::Mat same = readImage(seq.framePath(view - 1));
-    sendFrame(frameMsg(same));                                               // a frozen camera
+    sendFrame(frameMsg(same));  // a frozen camera
     image_t back = frameMsg(readImage(seq.framePath(view++)));
-    back.utime -= 5000000;                                                   // time goes backwards
+    back.utime -= 5000000;  // time goes backwards
     sendFrame(back);
-    write("CAMERA", {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22});  // not an image_t
-    write("CAMERA_INFO", {0xde, 0xad, 0xbe, 0xef});                         // not a camera_info_t
+    write("CAMERA", {1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11,
+                     12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22});  // not an image_t
+    write("CAMERA_INFO", {0xde, 0xad, 0xbe, 0xef});                 // not a camera_info_t
     image_t rgb = makeImageMessage(readImage(seq.framePath(view)), utime + 1000000, next_seq++,
                                    image_t::PIXEL_FORMAT_RGB8);
     utime += 1000000;
-    rgb.data.resize(100);                                                    // RGB8 with too few bytes
+    rgb.data.resize(100);  // RGB8 with too few bytes
     rgb.size = 100;
     sendFrame(rgb);
     for (int i = 0; i < 4; ++i) good();
@@ -287,20 +294,25 @@ TEST(SlamNode, BadInputKeepsItRunningAndEveryJumpComesWithAStateChange) {
     if (b.state == pose_t::STATE_LOST) {
       // A LOST pose repeats the last valid one.
       if (a.state != pose_t::STATE_INITIALIZING) {
-        for (int k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(a.position[k], b.position[k]) << "LOST pose moved at seq " << b.seq;
+        for (int k = 0; k < 3; ++k)
+          EXPECT_DOUBLE_EQ(a.position[k], b.position[k]) << "LOST pose moved at seq " << b.seq;
       }
       continue;
     }
     if (b.state != pose_t::STATE_TRACKING || a.map_id != b.map_id) continue;
     if (a.state != pose_t::STATE_TRACKING && a.state != pose_t::STATE_RELOCALIZED) continue;
-    const SE3 Ta = se3FromArrays(a.position, a.orientation), Tb = se3FromArrays(b.position, b.orientation);
-    EXPECT_LT((Ta.translation() - Tb.translation()).norm(), 0.5) << "jump without a state change at seq " << b.seq;
-    EXPECT_LT(angleBetween(Ta, Tb) * 180 / M_PI, 25.0) << "jump without a state change at seq " << b.seq;
+    const SE3 Ta = se3FromArrays(a.position, a.orientation),
+              Tb = se3FromArrays(b.position, b.orientation);
+    EXPECT_LT((Ta.translation() - Tb.translation()).norm(), 0.5)
+        << "jump without a state change at seq " << b.seq;
+    EXPECT_LT(angleBetween(Ta, Tb) * 180 / M_PI, 25.0)
+        << "jump without a state change at seq " << b.seq;
   }
 
   // Everything that was wrong is counted in SLAM_STATUS.
   const auto status = lastStatus(out);
-  EXPECT_GE(status.count("rejected.CAMERA") ? status.at("rejected.CAMERA") : 0, 4);  // corrupt, size, bytes, RGB8
+  EXPECT_GE(status.count("rejected.CAMERA") ? status.at("rejected.CAMERA") : 0,
+            4);  // corrupt, size, bytes, RGB8
   EXPECT_GE(status.count("rejected.CAMERA_INFO") ? status.at("rejected.CAMERA_INFO") : 0, 1);
   EXPECT_GE(status.count("frames_duplicate") ? status.at("frames_duplicate") : 0, 1);
   EXPECT_GE(status.count("time_discontinuities") ? status.at("time_discontinuities") : 0, 1);

@@ -18,8 +18,8 @@ struct Correspondences {
   std::vector<Eigen::Vector3d> points_ref;
 };
 
-Correspondences observe(const std::vector<Eigen::Vector3d>& points, const SE3& T_cur_ref, double noise_px,
-                        double outlier_ratio, uint64_t seed) {
+Correspondences observe(const std::vector<Eigen::Vector3d>& points, const SE3& T_cur_ref,
+                        double noise_px, double outlier_ratio, uint64_t seed) {
   const test::PinholeCamera cam;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0, noise_px);
@@ -91,6 +91,7 @@ TEST(TwoView, RefusesAPureRotation) {
   const auto points = test::randomPoints(300, 1.5, 1.0, 3.0, 6.0, 8);
   const SE3 T_cur_ref = test::cameraAt({0.0, 0.0, 0.0}, {0.0, 0.1, 0.0});
   const Correspondences c = observe(points, T_cur_ref, 0.5, 0.0, 9);
-  const TwoViewResult r = reconstructTwoView(c.ref, c.cur, test::PinholeCamera().K(), InitOptions(), 1);
+  const TwoViewResult r =
+      reconstructTwoView(c.ref, c.cur, test::PinholeCamera().K(), InitOptions(), 1);
   EXPECT_FALSE(r.ok);
 }

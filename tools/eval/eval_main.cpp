@@ -35,7 +35,8 @@ std::string selfDir() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-eval: the pipeline on sequence folders, lockstep, scored against ground truth"};
+  CLI::App app{
+      "slamaware-eval: the pipeline on sequence folders, lockstep, scored against ground truth"};
   std::string out, out_dir = "build/eval", system_path, slam_config, stages, log_level = "info";
   std::vector<std::string> sequences;
   bool offline = false, verbose = false;
@@ -49,7 +50,8 @@ int main(int argc, char** argv) {
   app.add_option("--config-dir", pipeline.config_dir, "folder of the processes' <name>.yaml");
   app.add_option("--stages", stages, "comma-separated stages to run (default: every built stage)");
   app.add_flag("--offline", offline, "run the SLAM library in-process instead of the processes");
-  app.add_option("--slam-config", slam_config, "offline: SLAM options file (default: <config-dir>/slam.yaml)");
+  app.add_option("--slam-config", slam_config,
+                 "offline: SLAM options file (default: <config-dir>/slam.yaml)");
   app.add_flag("--verbose", verbose, "offline: a line per frame");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
@@ -98,8 +100,9 @@ int main(int argc, char** argv) {
         nlohmann::json slam = evaluateSlam(run, seq, eo);
         for (auto it = slam.begin(); it != slam.end(); ++it) section[it.key()] = it.value();
         if (isSyntheticSequence(seq)) synthetic.push_back(slam);
-        spdlog::info("{}: tracked {}%, ATE {} m ({}% of path), {} maps", name, slam.value("tracked_pct", 0.0),
-                     slam.value("ate_rmse", 0.0), slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
+        spdlog::info("{}: tracked {}%, ATE {} m ({}% of path), {} maps", name,
+                     slam.value("tracked_pct", 0.0), slam.value("ate_rmse", 0.0),
+                     slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
       } catch (const std::exception& e) {
         section["error"] = e.what();
         spdlog::error("{}: {}", name, e.what());

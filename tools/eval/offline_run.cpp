@@ -10,8 +10,8 @@
 
 namespace slamaware {
 
-SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options, bool verbose,
-                             OfflineRunStats* stats) {
+SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options,
+                             bool verbose, OfflineRunStats* stats) {
   SlamRecording run;
   cv::setNumThreads(1);  // as the node does: our own threads are the parallelism
   SlamSystem slam(options, true);
@@ -40,11 +40,15 @@ SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& 
       for (const auto& p : c.points) pts.push_back({p.p_world, p.keyframe_id, p.depth_std});
       run.addCloud(c.map_id, c.full, c.keyframe_id, std::move(pts));
     }
-    run.poses[out.pose.seq] = {static_cast<int8_t>(out.pose.state), out.pose.T_world_camera, out.pose.map_id};
+    run.poses[out.pose.seq] = {static_cast<int8_t>(out.pose.state), out.pose.T_world_camera,
+                               out.pose.map_id};
     if (verbose) {
-      spdlog::info("seq {:4d} {:12s} map {} tracked {:4d} kfs {:3d} points {:5d} seeds {:6d} dpts {:7d} track {:.1f} ms (orb {:.1f}) depth {:.1f} ms",
-                   i, poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked, st.keyframes, st.points,
-                   st.depth_seeds, st.depth_points, st.track_ms, st.extract_ms, st.depth_update_ms);
+      spdlog::info(
+          "seq {:4d} {:12s} map {} tracked {:4d} kfs {:3d} points {:5d} seeds {:6d} dpts {:7d} "
+          "track {:.1f} ms (orb {:.1f}) depth {:.1f} ms",
+          i, poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked, st.keyframes,
+          st.points, st.depth_seeds, st.depth_points, st.track_ms, st.extract_ms,
+          st.depth_update_ms);
       for (const auto& e : out.events) spdlog::info("  {}", e);
     }
   }

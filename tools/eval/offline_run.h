@@ -10,12 +10,12 @@
 namespace slamaware {
 
 struct OfflineRunStats {
-  std::vector<double> track_ms;   ///< per frame
-  std::vector<double> depth_ms;   ///< per depth-filter update
+  std::vector<double> track_ms;  ///< per frame
+  std::vector<double> depth_ms;  ///< per depth-filter update
 };
 
 /// verbose: one log line per frame.
-SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options, bool verbose,
-                             OfflineRunStats* stats = nullptr);
+SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options,
+                             bool verbose, OfflineRunStats* stats = nullptr);
 
 }  // namespace slamaware

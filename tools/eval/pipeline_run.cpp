@@ -65,7 +65,8 @@ class Child {
   }
   /// SIGINT, then SIGKILL after `grace`.
   int stop(std::chrono::milliseconds grace) {
-    if (!running()) return exited_ ? (WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_)) : -1;
+    if (!running())
+      return exited_ ? (WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_)) : -1;
     kill(pid_, SIGINT);
     int rc = wait(grace);
     if (rc == -1) {
@@ -81,12 +82,15 @@ class Child {
   bool exited_ = false;
 };
 
-SE3 poseOf(const double position[3], const double orientation[4]) { return se3FromArrays(position, orientation); }
+SE3 poseOf(const double position[3], const double orientation[4]) {
+  return se3FromArrays(position, orientation);
+}
 
 template <class Msg>
 bool decodeExactly(const LogRecord& r, Msg* m) {
   try {
-    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) == static_cast<int>(r.data.size());
+    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) ==
+           static_cast<int>(r.data.size());
   } catch (const std::exception&) {
     return false;
   }
@@ -95,17 +99,20 @@ bool decodeExactly(const LogRecord& r, Msg* m) {
 }  // namespace
 
 std::vector<PipelineStage> pipelineStages(const Channels& ch) {
-  return {{"slam", ch.slam_pose}, {"proposals", ch.proposals}, {"recognizer", ch.detections},
+  return {{"slam", ch.slam_pose},
+          {"proposals", ch.proposals},
+          {"recognizer", ch.detections},
           {"objectmap", ch.object_map}};
 }
 
-PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path, const SystemConfig& system,
-                        const PipelineRunOptions& options) {
+PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
+                        const SystemConfig& system, const PipelineRunOptions& options) {
   PipelineRun result;
   const SequenceFolder sequence = SequenceFolder::open(sequence_dir);
   std::vector<PipelineStage> stages;
   for (const auto& s : pipelineStages(system.channels)) {
-    if (!options.only.empty() && std::find(options.only.begin(), options.only.end(), s.name) == options.only.end())
+    if (!options.only.empty() &&
+        std::find(options.only.begin(), options.only.end(), s.name) == options.only.end())
       continue;
     if (fs::exists(fs::path(options.bin_dir) / ("slamaware-" + s.name))) stages.push_back(s);
   }
@@ -120,12 +127,17 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     wait_for += (wait_for.empty() ? "" : ",") + system.channels.statusOf(s.name);
   }
 
-  Child logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path}, log_path + ".logger.txt");
+  Child logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path},
+               log_path + ".logger.txt");
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lcm-logger has no ready signal
   std::vector<std::unique_ptr<Child>> procs;
   for (const auto& s : stages) {
-    std::vector<std::string> argv = {(fs::path(options.bin_dir) / ("slamaware-" + s.name)).string(), "--lockstep",
-                                     "--lcm-url", options.lcm_url, "--log-level", "warn"};
+    std::vector<std::string> argv = {(fs::path(options.bin_dir) / ("slamaware-" + s.name)).string(),
+                                     "--lockstep",
+                                     "--lcm-url",
+                                     options.lcm_url,
+                                     "--log-level",
+                                     "warn"};
     const fs::path config = fs::path(options.config_dir) / (s.name + ".yaml");
     if (fs::exists(config)) {
       argv.push_back("--config");
@@ -133,20 +145,23 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     }
     procs.push_back(std::make_unique<Child>(argv, log_path + "." + s.name + ".txt"));
   }
-  Child camera({(fs::path(options.bin_dir) / "slamaware-camera").string(), "--source", sequence_dir, "--lockstep",
-                result.lockstep_channel, "--wait-for", wait_for, "--lcm-url", options.lcm_url, "--log-level", "warn"},
+  Child camera({(fs::path(options.bin_dir) / "slamaware-camera").string(), "--source", sequence_dir,
+                "--lockstep", result.lockstep_channel, "--wait-for", wait_for, "--lcm-url",
+                options.lcm_url, "--log-level", "warn"},
                log_path + ".camera.txt");
-  const auto timeout = std::chrono::milliseconds(
-      static_cast<int64_t>(1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, sequence.size()))));
+  const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(
+      1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, sequence.size()))));
   const int camera_rc = camera.wait(timeout);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last messages reach the logger
+  std::this_thread::sleep_for(
+      std::chrono::milliseconds(300));  // the last messages reach the logger
   bool crashed = false;
   for (size_t i = 0; i < procs.size(); ++i) {
     const bool alive = procs[i]->running();
     const int rc = procs[i]->stop(std::chrono::milliseconds(10000));
     if (!alive || (rc != 0 && rc != 128 + SIGINT)) {
       crashed = true;
-      result.error += "stage " + stages[i].name + (alive ? " exited with " + std::to_string(rc) : " died early") + "; ";
+      result.error += "stage " + stages[i].name +
+                      (alive ? " exited with " + std::to_string(rc) : " died early") + "; ";
     }
   }
   logger.stop(std::chrono::milliseconds(3000));

@@ -20,10 +20,10 @@ struct PipelineStage {
 std::vector<PipelineStage> pipelineStages(const Channels& channels);
 
 struct PipelineRunOptions {
-  std::string bin_dir;                  ///< where slamaware-* binaries are
-  std::string config_dir = "config";    ///< <name>.yaml passed as --config when it exists
+  std::string bin_dir;                ///< where slamaware-* binaries are
+  std::string config_dir = "config";  ///< <name>.yaml passed as --config when it exists
   std::string lcm_url;
-  std::vector<std::string> only;        ///< stage names to run ("" = every built stage)
+  std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
   double timeout_per_frame_s = 20.0;
 };
 
@@ -36,8 +36,8 @@ struct PipelineRun {
 
 /// Runs the pipeline on `sequence_dir`, recording the bus into `log_path` (process outputs go to
 /// <log_path>.<name>.txt).
-PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path, const SystemConfig& system,
-                        const PipelineRunOptions& options);
+PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
+                        const SystemConfig& system, const PipelineRunOptions& options);
 
 /// Reads SLAM_POSE, SLAM_KEYFRAME and SLAM_MAP from a recorded log. Throws LogError for a
 /// damaged log.

@@ -30,7 +30,8 @@ struct MapAlignment {
 };
 
 // Top-down view in the plane of the two main axes of the ground-truth positions.
-void drawPlot(const std::string& path, const std::string& title, const std::vector<Eigen::Vector3d>& gt_path,
+void drawPlot(const std::string& path, const std::string& title,
+              const std::vector<Eigen::Vector3d>& gt_path,
               const std::map<int, MapAlignment>& maps) {
   std::vector<Eigen::Vector3d> all = gt_path;
   for (const auto& [id, m] : maps) all.insert(all.end(), m.aligned.begin(), m.aligned.end());
@@ -56,13 +57,15 @@ void drawPlot(const std::string& path, const std::string& title, const std::vect
   const double scale = (size - 2 * margin) / span;
   auto toPixel = [&](const Eigen::Vector3d& p) {
     const double x = (p - mean).dot(ax), y = (p - mean).dot(ay);
-    return cv::Point(static_cast<int>(margin + (x - min_x) * scale), static_cast<int>(size - margin - (y - min_y) * scale));
+    return cv::Point(static_cast<int>(margin + (x - min_x) * scale),
+                     static_cast<int>(size - margin - (y - min_y) * scale));
   };
   cv::Mat img(size, size, CV_8UC3, cv::Scalar(255, 255, 255));
   std::vector<cv::Point> line;
   for (const auto& p : gt_path) line.push_back(toPixel(p));
   if (line.size() > 1) cv::polylines(img, line, false, cv::Scalar(60, 160, 60), 2, cv::LINE_AA);
-  const cv::Scalar colours[] = {{200, 80, 30}, {30, 30, 200}, {160, 40, 160}, {20, 140, 200}, {90, 90, 90}};
+  const cv::Scalar colours[] = {
+      {200, 80, 30}, {30, 30, 200}, {160, 40, 160}, {20, 140, 200}, {90, 90, 90}};
   int k = 0;
   for (const auto& [id, m] : maps) {
     const cv::Scalar c = colours[k++ % 5];
@@ -70,27 +73,30 @@ void drawPlot(const std::string& path, const std::string& title, const std::vect
       const cv::Point a = toPixel(m.aligned[i]);
       cv::line(img, a, toPixel(m.truth[i]), cv::Scalar(200, 200, 200), 1, cv::LINE_AA);
       cv::circle(img, a, 3, c, cv::FILLED, cv::LINE_AA);
-      if (i > 0 && m.seqs[i] == m.seqs[i - 1] + 1) cv::line(img, toPixel(m.aligned[i - 1]), a, c, 1, cv::LINE_AA);
+      if (i > 0 && m.seqs[i] == m.seqs[i - 1] + 1)
+        cv::line(img, toPixel(m.aligned[i - 1]), a, c, 1, cv::LINE_AA);
     }
-    cv::putText(img, "map " + std::to_string(id), cv::Point(margin, 20 + 18 * k), cv::FONT_HERSHEY_SIMPLEX, 0.5, c, 1,
-                cv::LINE_AA);
+    cv::putText(img, "map " + std::to_string(id), cv::Point(margin, 20 + 18 * k),
+                cv::FONT_HERSHEY_SIMPLEX, 0.5, c, 1, cv::LINE_AA);
   }
-  cv::putText(img, title, cv::Point(margin, size - 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
-              cv::LINE_AA);
-  cv::putText(img, "ground truth", cv::Point(size - 200, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(60, 160, 60),
-              1, cv::LINE_AA);
+  cv::putText(img, title, cv::Point(margin, size - 20), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(img, "ground truth", cv::Point(size - 200, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              cv::Scalar(60, 160, 60), 1, cv::LINE_AA);
   writeImage(path, img);
 }
 
 }  // namespace
 
-void SlamRecording::addCloud(int map_id, bool full, int64_t keyframe_id, std::vector<Point> cloud_points) {
+void SlamRecording::addCloud(int map_id, bool full, int64_t keyframe_id,
+                             std::vector<Point> cloud_points) {
   auto& pts = points[map_id];
   if (full) {
     pts = std::move(cloud_points);
     return;
   }
-  pts.erase(std::remove_if(pts.begin(), pts.end(), [&](const Point& p) { return p.keyframe_id == keyframe_id; }),
+  pts.erase(std::remove_if(pts.begin(), pts.end(),
+                           [&](const Point& p) { return p.keyframe_id == keyframe_id; }),
             pts.end());
   pts.insert(pts.end(), cloud_points.begin(), cloud_points.end());
 }
@@ -100,13 +106,15 @@ bool isSyntheticSequence(const SequenceFolder& sequence) {
   return sequence.size() > 0 && !sequence.depthPath(0).empty();
 }
 
-nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequence, const SlamEvalOptions& options) {
+nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequence,
+                            const SlamEvalOptions& options) {
   nlohmann::json s;
   const int frames = static_cast<int>(sequence.size());
   std::vector<TimedPose> gt;
   if (sequence.hasGroundTruth()) gt = sequence.groundTruth();
   std::vector<const TimedPose*> gt_of(frames, nullptr);
-  for (int i = 0; i < frames; ++i) gt_of[i] = closestPose(gt, sequence.timestamp(i), options.max_time_difference_s);
+  for (int i = 0; i < frames; ++i)
+    gt_of[i] = closestPose(gt, sequence.timestamp(i), options.max_time_difference_s);
 
   // Ground-truth path length and extent (largest distance between two camera centres).
   std::vector<Eigen::Vector3d> gt_path;
@@ -115,7 +123,8 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
   double path = 0, extent = 0;
   for (size_t i = 1; i < gt_path.size(); ++i) path += (gt_path[i] - gt_path[i - 1]).norm();
   for (size_t i = 0; i < gt_path.size(); ++i)
-    for (size_t j = i + 1; j < gt_path.size(); ++j) extent = std::max(extent, (gt_path[i] - gt_path[j]).norm());
+    for (size_t j = i + 1; j < gt_path.size(); ++j)
+      extent = std::max(extent, (gt_path[i] - gt_path[j]).norm());
 
   int tracked = 0;
   std::set<int32_t> localized;
@@ -210,7 +219,8 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
         const Eigen::Vector3d pc = kf->second.T_world_camera.inverse() * p.p_world.cast<double>();
         Eigen::Vector2d px;
         if (!camera.project(pc, &px) || !camera.inImage(px)) continue;
-        const uint16_t mm = d->second.at<uint16_t>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x())));
+        const uint16_t mm = d->second.at<uint16_t>(static_cast<int>(std::lround(px.y())),
+                                                   static_cast<int>(std::lround(px.x())));
         if (mm == 0) continue;
         const double truth = mm / 1000.0, estimate = m->second.sim.s * pc.z();
         rel.push_back(std::abs(estimate - truth) / truth);
@@ -226,8 +236,9 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
   }
   if (!options.plot_path.empty()) {
     char title[160];
-    std::snprintf(title, sizeof(title), "%s  ATE %.3f m (%.2f%% of path), tracked %.1f%%", sequence.info().name.c_str(),
-                  ate, path > 0 ? 100 * ate / path : 0.0, frames ? 100.0 * tracked / frames : 0.0);
+    std::snprintf(title, sizeof(title), "%s  ATE %.3f m (%.2f%% of path), tracked %.1f%%",
+                  sequence.info().name.c_str(), ate, path > 0 ? 100 * ate / path : 0.0,
+                  frames ? 100.0 * tracked / frames : 0.0);
     drawPlot(options.plot_path, title, gt_path, maps);
     s["plot"] = options.plot_path;
   }

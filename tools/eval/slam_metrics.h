@@ -41,7 +41,7 @@ struct SlamRecording {
 };
 
 struct SlamEvalOptions {
-  std::string plot_path;  ///< top-down trajectory PNG ("" = none)
+  std::string plot_path;                ///< top-down trajectory PNG ("" = none)
   double max_time_difference_s = 0.02;  ///< frame time <-> ground-truth time association
 };
 
@@ -49,7 +49,8 @@ struct SlamEvalOptions {
 /// alignment), ate_rmse_pct_of_path, ate_rmse_pct_of_extent, tracked_pct, localized_pct,
 /// reinitializations and, when the sequence has depth/, the semi-dense depth error and points per
 /// keyframe. Also writes the plot.
-nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequence, const SlamEvalOptions& options);
+nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequence,
+                            const SlamEvalOptions& options);
 
 /// The overall slam section over several sequences' sections (frames-weighted where it matters).
 nlohmann::json summarizeSlam(const std::vector<nlohmann::json>& sections);

@@ -10,8 +10,8 @@ namespace {
 constexpr int kSeedBorder = 8;  // px: host samples along the epipolar line need room
 }
 
-DepthFilter::DepthFilter(const DepthFilterOptions& options, int width, int height, double fx, double fy, double cx,
-                         double cy)
+DepthFilter::DepthFilter(const DepthFilterOptions& options, int width, int height, double fx,
+                         double fy, double cx, double cy)
     : options_(options), width_(width), height_(height), fx_(fx), fy_(fy), cx_(cx), cy_(cy) {
   search_.fx = static_cast<float>(fx);
   search_.fy = static_cast<float>(fy);
@@ -62,7 +62,8 @@ std::vector<Eigen::Vector2i> DepthFilter::selectSeedPixels(const cv::Mat& grey) 
       if (best >= min_g2) candidates.push_back({best, best_px});
     }
   }
-  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.g2 > b.g2; });
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.g2 > b.g2; });
   if (static_cast<int>(candidates.size()) > options_.max_seeds_per_keyframe)
     candidates.resize(std::max(0, options_.max_seeds_per_keyframe));
   std::vector<Eigen::Vector2i> out;
@@ -71,7 +72,8 @@ std::vector<Eigen::Vector2i> DepthFilter::selectSeedPixels(const cv::Mat& grey) 
   return out;
 }
 
-void DepthFilter::updateHost(Host& host, const DepthFrameInput& input, std::vector<SemiDensePoint>* converged) {
+void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
+                             std::vector<SemiDensePoint>* converged) {
   const SE3 T_cur_host = input.T_world_camera.inverse() * host.T_world_camera;
   const Eigen::Matrix3f R = T_cur_host.linear().cast<float>();
   const Eigen::Vector3f t = T_cur_host.translation().cast<float>();
@@ -151,7 +153,8 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
   };
   for (const auto& kf : input.new_keyframes) {
     for (auto it = hosts_.begin(); it != hosts_.end();) {
-      if (it->second.store->map_id != kf.map_id || ++it->second.newer_keyframes >= options_.max_keyframes)
+      if (it->second.store->map_id != kf.map_id ||
+          ++it->second.newer_keyframes >= options_.max_keyframes)
         it = finish(it);
       else
         ++it;
@@ -179,9 +182,12 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       s.T_world_camera = kf.T_world_camera;
       host.store = &s;
     }
-    const float mean_depth = static_cast<float>(kf.mean_depth), min_depth = static_cast<float>(kf.min_depth);
+    const float mean_depth = static_cast<float>(kf.mean_depth),
+                min_depth = static_cast<float>(kf.min_depth);
     for (const Eigen::Vector2i& px : selectSeedPixels(kf.grey)) {
-      const Eigen::Vector3f f = Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f).normalized();
+      const Eigen::Vector3f f =
+          Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f)
+              .normalized();
       DepthSeed seed = makeSeed(float(px.x()), float(px.y()), f, mean_depth, min_depth);
       if (!kf.bgr.empty()) {
         const uint8_t* bgr = kf.bgr.ptr<uint8_t>(px.y()) + 3 * px.x();
@@ -202,7 +208,8 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
   stats_.frames = frames_;
   stats_.measurements = measurements_;
   stats_.failures = failures_;
-  stats_.last_update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  stats_.last_update_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return finished;
 }
 

@@ -38,11 +38,12 @@ struct DepthFrameInput {
   int64_t utime = 0;
   int32_t seq = -1;
   int map_id = 0;
-  bool located = false;         ///< false: the frame only carries keyframes / pose updates
-  cv::Mat grey;                 ///< 8-bit, undistorted
+  bool located = false;  ///< false: the frame only carries keyframes / pose updates
+  cv::Mat grey;          ///< 8-bit, undistorted
   SE3 T_world_camera = SE3::Identity();
-  std::vector<DepthKeyframeInput> new_keyframes;                 ///< created with this frame
-  std::vector<std::pair<int64_t, SE3>> keyframe_poses;           ///< current T_world_camera of live keyframes
+  std::vector<DepthKeyframeInput> new_keyframes;  ///< created with this frame
+  std::vector<std::pair<int64_t, SE3>>
+      keyframe_poses;  ///< current T_world_camera of live keyframes
 };
 
 /// A converged seed.
@@ -60,22 +61,23 @@ struct SemiDenseKeyframe {
   int32_t seq = -1;
   SE3 T_world_camera = SE3::Identity();  ///< last known pose of the keyframe
   std::vector<SemiDensePoint> points;
-  bool finished = false;                 ///< no seeds left: the points are final
+  bool finished = false;  ///< no seeds left: the points are final
 };
 
 struct DepthFilterStats {
   int64_t active_seeds = 0;
-  int64_t points = 0;                 ///< converged points stored
-  int64_t frames = 0;                 ///< frames used for updates
+  int64_t points = 0;  ///< converged points stored
+  int64_t frames = 0;  ///< frames used for updates
   int64_t measurements = 0, failures = 0;
-  int64_t calls = 0;                  ///< process() calls
-  double last_update_ms = 0;          ///< time of the last process() call
+  int64_t calls = 0;          ///< process() calls
+  double last_update_ms = 0;  ///< time of the last process() call
 };
 
 class DepthFilter {
  public:
   /// width/height and the pinhole intrinsics of the (undistorted) images.
-  DepthFilter(const DepthFilterOptions& options, int width, int height, double fx, double fy, double cx, double cy);
+  DepthFilter(const DepthFilterOptions& options, int width, int height, double fx, double fy,
+              double cx, double cy);
 
   /// Updates the seeds with the frame, finishes keyframes that are too old (or of another map),
   /// then seeds the new keyframes. Returns the ids of keyframes finished by this call.

@@ -10,7 +10,7 @@ namespace slamaware {
 
 namespace {
 
-constexpr int kHalf = 2;                // samples each side of the centre
+constexpr int kHalf = 2;  // samples each side of the centre
 constexpr int kSamples = 2 * kHalf + 1;
 
 // Bilinear sample of an 8-bit image; false outside [0, w-1) x [0, h-1).
@@ -27,7 +27,8 @@ inline bool sample(const cv::Mat& img, float x, float y, float* value) {
 }  // namespace
 
 EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Eigen::Matrix3f& R,
-                             const Eigen::Vector3f& t, const DepthSeed& seed, const EpipolarSearchParams& p) {
+                             const Eigen::Vector3f& t, const DepthSeed& seed,
+                             const EpipolarSearchParams& p) {
   EpipolarMatch m;
   auto project = [&](const Eigen::Vector3f& q) {
     return Eigen::Vector2f(p.fx * q.x() / q.z() + p.cx, p.fy * q.y() / q.z() + p.cy);
@@ -38,7 +39,8 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   const Eigen::Vector3f q_near = R * (seed.f / rho_near) + t, q_far = R * (seed.f / rho_far) + t;
   const Eigen::Vector3f q_mean = R * (seed.f / seed.mu) + t;
   if (q_near.z() < 1e-4f || q_far.z() < 1e-4f || q_mean.z() < 1e-4f) return m;
-  const Eigen::Vector2f px_near = project(q_near), px_far = project(q_far), px_mean = project(q_mean);
+  const Eigen::Vector2f px_near = project(q_near), px_far = project(q_far),
+                        px_mean = project(q_mean);
   const float length = (px_near - px_far).norm();
   if (length > p.max_search_px) return m;
   // Direction of increasing inverse depth in the frame (defined even for a tiny segment).
@@ -58,7 +60,8 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   if (dir_host.norm() < 1e-6f) return m;
   dir_host.normalize();
   // Frame pixels per host pixel along the lines, and the sign that aligns the two directions.
-  const Eigen::Vector3f X3((u.x() + dir_host.x() - p.cx) / p.fx * X.z(), (u.y() + dir_host.y() - p.cy) / p.fy * X.z(), X.z());
+  const Eigen::Vector3f X3((u.x() + dir_host.x() - p.cx) / p.fx * X.z(),
+                           (u.y() + dir_host.y() - p.cy) / p.fy * X.z(), X.z());
   const Eigen::Vector3f q3 = R * X3 + t;
   if (q3.z() < 1e-4f) return m;
   float scale = (project(q3) - px_mean).dot(dir);
@@ -136,7 +139,8 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   }
   const Eigen::Vector2f px = px_far + (float(best) + offset) * dir;
   // Triangulation along the host ray: z_h R f + t = z_c f_cur, least squares in (z_h, z_c).
-  const Eigen::Vector3f f_cur = Eigen::Vector3f((px.x() - p.cx) / p.fx, (px.y() - p.cy) / p.fy, 1.f).normalized();
+  const Eigen::Vector3f f_cur =
+      Eigen::Vector3f((px.x() - p.cx) / p.fx, (px.y() - p.cy) / p.fy, 1.f).normalized();
   Eigen::Matrix<float, 3, 2> A;
   A.col(0) = R * seed.f;
   A.col(1) = f_cur;

@@ -13,24 +13,25 @@
 namespace slamaware {
 
 struct EpipolarSearchParams {
-  float fx = 1, fy = 1, cx = 0, cy = 0;   ///< pinhole camera of both images (undistorted)
+  float fx = 1, fy = 1, cx = 0, cy = 0;  ///< pinhole camera of both images (undistorted)
   float max_search_px = 400;             ///< px, longer segments are not searched
   float max_ssd_per_sample = 300;        ///< grey levels^2
   float uniqueness_ratio = 0.7f;         ///< best / second best (non-adjacent) SSD
-  float min_epipolar_gradient = 6;       ///< grey levels, RMS difference of neighbouring host samples
+  float min_epipolar_gradient = 6;  ///< grey levels, RMS difference of neighbouring host samples
 };
 
 struct EpipolarMatch {
   enum Result { kFound, kNoMatch, kSkipped };
-  Result result = kSkipped;  ///< kSkipped: not observable in this frame (outside, no gradient, no baseline)
+  Result result =
+      kSkipped;  ///< kSkipped: not observable in this frame (outside, no gradient, no baseline)
   float distance = 0;        ///< map units along the host bearing (kFound)
   Eigen::Vector2f px{0, 0};  ///< matched pixel in the frame (kFound)
 };
 
 /// Searches `seed` (of the host image) in the frame image; both 8-bit grey and the same camera.
 /// T_cur_host maps host-camera coordinates into the frame's camera.
-EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Eigen::Matrix3f& R_cur_host,
-                             const Eigen::Vector3f& t_cur_host, const DepthSeed& seed,
-                             const EpipolarSearchParams& params);
+EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame,
+                             const Eigen::Matrix3f& R_cur_host, const Eigen::Vector3f& t_cur_host,
+                             const DepthSeed& seed, const EpipolarSearchParams& params);
 
 }  // namespace slamaware

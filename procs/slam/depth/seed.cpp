@@ -5,7 +5,8 @@
 
 namespace slamaware {
 
-DepthSeed makeSeed(float u, float v, const Eigen::Vector3f& bearing, float mean_depth, float min_depth) {
+DepthSeed makeSeed(float u, float v, const Eigen::Vector3f& bearing, float mean_depth,
+                   float min_depth) {
   DepthSeed s;
   s.u = u;
   s.v = v;
@@ -25,7 +26,8 @@ void updateSeed(DepthSeed* s, float x, float tau2) {
   const float m = s2 * (s->mu / s->sigma2 + x / tau2);
   // Responsibilities of the inlier (Gaussian) and outlier (uniform) explanations of x.
   const float d = (x - s->mu) / norm_scale;
-  float c1 = s->a / (s->a + s->b) * std::exp(-0.5f * d * d) / (norm_scale * std::sqrt(2.f * float(M_PI)));
+  float c1 =
+      s->a / (s->a + s->b) * std::exp(-0.5f * d * d) / (norm_scale * std::sqrt(2.f * float(M_PI)));
   float c2 = s->b / (s->a + s->b) / s->z_range;
   const float normalization = c1 + c2;
   if (!(normalization > 0)) return;
@@ -49,7 +51,8 @@ void updateSeed(DepthSeed* s, float x, float tau2) {
   ++s->updates;
 }
 
-double depthUncertainty(const Eigen::Vector3d& t, const Eigen::Vector3d& f, double z, double px_error_angle) {
+double depthUncertainty(const Eigen::Vector3d& t, const Eigen::Vector3d& f, double z,
+                        double px_error_angle) {
   const Eigen::Vector3d a = f * z - t;
   const double t_norm = t.norm(), a_norm = a.norm();
   if (t_norm <= 0 || a_norm <= 0) return z;

@@ -12,7 +12,8 @@ namespace slamaware {
 
 namespace {
 
-constexpr int kBorder = OrbExtractor::kPatchRadius + 2;  // px a keypoint keeps from the level's edge
+constexpr int kBorder =
+    OrbExtractor::kPatchRadius + 2;  // px a keypoint keeps from the level's edge
 
 // A quadtree node: a region of the level image and the keypoints inside it.
 struct QuadNode {
@@ -22,9 +23,10 @@ struct QuadNode {
 
 // Keeps at most `n` keypoints spread over the region: nodes are split in four until there are
 // n of them (largest first when only some can still be split), then each keeps its strongest.
-std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& kps, float x0, float y0,
-                                             float x1, float y1, int n) {
-  if (static_cast<int>(kps.size()) <= n || n <= 0) return n <= 0 ? std::vector<cv::KeyPoint>{} : kps;
+std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& kps, float x0,
+                                             float y0, float x1, float y1, int n) {
+  if (static_cast<int>(kps.size()) <= n || n <= 0)
+    return n <= 0 ? std::vector<cv::KeyPoint>{} : kps;
   // Roughly square initial nodes along the longer side.
   const int roots = std::max(1, static_cast<int>(std::lround((x1 - x0) / std::max(1.f, y1 - y0))));
   std::vector<QuadNode> nodes;
@@ -34,12 +36,16 @@ std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& kp
     const int r = std::clamp(static_cast<int>((kps[i].pt.x - x0) / w), 0, roots - 1);
     nodes[r].members.push_back(i);
   }
-  nodes.erase(std::remove_if(nodes.begin(), nodes.end(), [](const QuadNode& q) { return q.members.empty(); }),
+  nodes.erase(std::remove_if(nodes.begin(), nodes.end(),
+                             [](const QuadNode& q) { return q.members.empty(); }),
               nodes.end());
 
   auto split = [&](const QuadNode& q, std::vector<QuadNode>* out) {
     const float mx = 0.5f * (q.x0 + q.x1), my = 0.5f * (q.y0 + q.y1);
-    QuadNode c[4] = {{q.x0, q.y0, mx, my, {}}, {mx, q.y0, q.x1, my, {}}, {q.x0, my, mx, q.y1, {}}, {mx, my, q.x1, q.y1, {}}};
+    QuadNode c[4] = {{q.x0, q.y0, mx, my, {}},
+                     {mx, q.y0, q.x1, my, {}},
+                     {q.x0, my, mx, q.y1, {}},
+                     {mx, my, q.x1, q.y1, {}}};
     for (int i : q.members) {
       const cv::Point2f& p = kps[i].pt;
       c[(p.x >= mx ? 1 : 0) + (p.y >= my ? 2 : 0)].members.push_back(i);
@@ -66,8 +72,9 @@ std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& kp
       continue;
     }
     // Last round: split the most crowded nodes first until there are enough.
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [&](int a, int b) { return nodes[a].members.size() > nodes[b].members.size(); });
+    std::stable_sort(candidates.begin(), candidates.end(), [&](int a, int b) {
+      return nodes[a].members.size() > nodes[b].members.size();
+    });
     std::vector<bool> do_split(nodes.size(), false);
     size_t count = nodes.size();
     for (int c : candidates) {
@@ -94,8 +101,9 @@ std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& kp
     out.push_back(kps[best]);
   }
   if (static_cast<int>(out.size()) > n) {
-    std::stable_sort(out.begin(), out.end(),
-                     [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+    std::stable_sort(out.begin(), out.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) {
+      return a.response > b.response;
+    });
     out.resize(n);
   }
   return out;
@@ -118,14 +126,16 @@ float intensityCentroidAngle(const cv::Mat& image, cv::Point2f pt, const std::ve
     }
     m01 += v * v_sum;
   }
-  float angle = static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10)) * 180.0 / M_PI);
+  float angle = static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10)) *
+                                   180.0 / M_PI);
   if (angle < 0) angle += 360.f;
   return angle;
 }
 
 }  // namespace
 
-ScalePyramid::ScalePyramid(double factor, int levels) : scale_factor(factor), log_scale(std::log(factor)) {
+ScalePyramid::ScalePyramid(double factor, int levels)
+    : scale_factor(factor), log_scale(std::log(factor)) {
   scale.resize(levels);
   sigma2.resize(levels);
   inv_sigma2.resize(levels);
@@ -159,7 +169,8 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
 
   umax_.resize(kPatchRadius + 1);
   for (int v = 0; v <= kPatchRadius; ++v)
-    umax_[v] = static_cast<int>(std::lround(std::sqrt(double(kPatchRadius * kPatchRadius - v * v))));
+    umax_[v] =
+        static_cast<int>(std::lround(std::sqrt(double(kPatchRadius * kPatchRadius - v * v))));
 
   // BRIEF test pairs drawn i.i.d. from an isotropic Gaussian (sigma = patch / 5, Calonder et al.'s
   // "G II"), kept inside the disk so that any rotation stays inside the patch.
@@ -167,12 +178,14 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   std::mt19937_64 rng(options_.pattern_seed);
   const double sigma = (2 * kPatchRadius + 1) / 5.0;
   auto gauss = [&]() {
-    const double u1 = (static_cast<double>(rng() >> 11) + 1.0) * 0x1.0p-53, u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+    const double u1 = (static_cast<double>(rng() >> 11) + 1.0) * 0x1.0p-53,
+                 u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
     return sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * M_PI * u2);
   };
   auto draw = [&](int8_t* x, int8_t* y) {
     while (true) {
-      const int a = static_cast<int>(std::lround(gauss())), b = static_cast<int>(std::lround(gauss()));
+      const int a = static_cast<int>(std::lround(gauss())),
+                b = static_cast<int>(std::lround(gauss()));
       if (a * a + b * b <= (kPatchRadius - 1) * (kPatchRadius - 1)) {
         *x = static_cast<int8_t>(a);
         *y = static_cast<int8_t>(b);
@@ -189,17 +202,21 @@ OrbExtractor::OrbExtractor(const OrbOptions& options)
   }
 }
 
-void OrbExtractor::detectLevel(const cv::Mat& image, int level, std::vector<cv::KeyPoint>* out) const {
-  const int x_min = kBorder, y_min = kBorder, x_max = image.cols - kBorder, y_max = image.rows - kBorder;
+void OrbExtractor::detectLevel(const cv::Mat& image, int level,
+                               std::vector<cv::KeyPoint>* out) const {
+  const int x_min = kBorder, y_min = kBorder, x_max = image.cols - kBorder,
+            y_max = image.rows - kBorder;
   if (x_max - x_min < 8 || y_max - y_min < 8) return;
   const int cell = std::max(8, options_.cell_size_px);
   const int cols = std::max(1, (x_max - x_min) / cell), rows = std::max(1, (y_max - y_min) / cell);
   const float cw = float(x_max - x_min) / cols, ch = float(y_max - y_min) / rows;
   std::vector<cv::KeyPoint> all, cell_kps;
   for (int r = 0; r < rows; ++r) {
-    const int y0 = y_min + static_cast<int>(r * ch), y1 = r + 1 == rows ? y_max : y_min + static_cast<int>((r + 1) * ch);
+    const int y0 = y_min + static_cast<int>(r * ch),
+              y1 = r + 1 == rows ? y_max : y_min + static_cast<int>((r + 1) * ch);
     for (int c = 0; c < cols; ++c) {
-      const int x0 = x_min + static_cast<int>(c * cw), x1 = c + 1 == cols ? x_max : x_min + static_cast<int>((c + 1) * cw);
+      const int x0 = x_min + static_cast<int>(c * cw),
+                x1 = c + 1 == cols ? x_max : x_min + static_cast<int>((c + 1) * cw);
       // FAST ignores 3 px at the edge of what it is given: widen the ROI by 3 so that it tests
       // exactly the cell's own pixels.
       const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
@@ -214,8 +231,8 @@ void OrbExtractor::detectLevel(const cv::Mat& image, int level, std::vector<cv::
       }
     }
   }
-  std::vector<cv::KeyPoint> kept =
-      distributeQuadtree(all, float(x_min), float(y_min), float(x_max), float(y_max), features_per_level_[level]);
+  std::vector<cv::KeyPoint> kept = distributeQuadtree(all, float(x_min), float(y_min), float(x_max),
+                                                      float(y_max), features_per_level_[level]);
   for (auto& kp : kept) {
     kp.octave = level;
     kp.angle = intensityCentroidAngle(image, kp.pt, umax_);

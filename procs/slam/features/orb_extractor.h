@@ -17,20 +17,22 @@ struct ScalePyramid {
   std::vector<double> sigma2;      ///< (s^l)^2, px^2 at level 0: variance of a level-l position
   std::vector<double> inv_sigma2;  ///< 1 / sigma2
   double scale_factor = 1.2;
-  double log_scale = 0;            ///< log(scale_factor)
+  double log_scale = 0;  ///< log(scale_factor)
 
   ScalePyramid() = default;
   ScalePyramid(double scale_factor, int levels);
   int levels() const { return static_cast<int>(scale.size()); }
   /// Level at which a point first seen at `max_distance` (the distance at which it would appear at
-  /// level 0) is expected when seen from `distance` (ORB-SLAM's PredictScale), clamped to the pyramid.
+  /// level 0) is expected when seen from `distance` (ORB-SLAM's PredictScale), clamped to the
+  /// pyramid.
   int predictLevel(double max_distance, double distance) const;
 };
 
 /// Keypoints and their descriptors.
 struct OrbFeatures {
-  std::vector<cv::KeyPoint> keypoints;  ///< level-0 pixels of the input image; octave = level, angle in deg
-  cv::Mat descriptors;                  ///< CV_8U, one row of 32 bytes (256 bits) per keypoint
+  std::vector<cv::KeyPoint>
+      keypoints;        ///< level-0 pixels of the input image; octave = level, angle in deg
+  cv::Mat descriptors;  ///< CV_8U, one row of 32 bytes (256 bits) per keypoint
 };
 
 class OrbExtractor {
@@ -50,7 +52,8 @@ class OrbExtractor {
   ScalePyramid pyramid_;
   std::vector<int> features_per_level_;
   std::vector<int> umax_;  ///< half-width of the orientation disk at each row offset
-  std::vector<std::array<int8_t, 4>> pattern_;  ///< 256 point pairs (x1, y1, x2, y2) of the BRIEF tests
+  std::vector<std::array<int8_t, 4>>
+      pattern_;  ///< 256 point pairs (x1, y1, x2, y2) of the BRIEF tests
 };
 
 /// Hamming distance of two 32-byte descriptors.

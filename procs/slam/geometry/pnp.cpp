@@ -10,15 +10,17 @@ namespace slamaware {
 
 namespace {
 
-int countInliers(const SE3& T, const std::vector<Eigen::Vector3d>& pw, const std::vector<Eigen::Vector2d>& px,
-                 const std::vector<double>& sigma2, double fx, double fy, double cx, double cy, double chi2,
+int countInliers(const SE3& T, const std::vector<Eigen::Vector3d>& pw,
+                 const std::vector<Eigen::Vector2d>& px, const std::vector<double>& sigma2,
+                 double fx, double fy, double cx, double cy, double chi2,
                  std::vector<bool>* inliers) {
   int n = 0;
   inliers->assign(pw.size(), false);
   for (size_t i = 0; i < pw.size(); ++i) {
     const Eigen::Vector3d pc = T * pw[i];
     if (pc.z() <= 0) continue;
-    const Eigen::Vector2d r(fx * pc.x() / pc.z() + cx - px[i].x(), fy * pc.y() / pc.z() + cy - px[i].y());
+    const Eigen::Vector2d r(fx * pc.x() / pc.z() + cx - px[i].x(),
+                            fy * pc.y() / pc.z() + cy - px[i].y());
     if (r.squaredNorm() / sigma2[i] < chi2) {
       (*inliers)[i] = true;
       ++n;
@@ -29,12 +31,14 @@ int countInliers(const SE3& T, const std::vector<Eigen::Vector3d>& pw, const std
 
 }  // namespace
 
-PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& pw, const std::vector<Eigen::Vector2d>& px,
-                         const std::vector<double>& sigma2, double fx, double fy, double cx, double cy,
-                         const PnpOptions& opt, uint64_t seed) {
+PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& pw,
+                         const std::vector<Eigen::Vector2d>& px, const std::vector<double>& sigma2,
+                         double fx, double fy, double cx, double cy, const PnpOptions& opt,
+                         uint64_t seed) {
   PnpResult result;
   const int n = static_cast<int>(pw.size());
-  if (n < 4 || static_cast<int>(px.size()) != n || static_cast<int>(sigma2.size()) != n) return result;
+  if (n < 4 || static_cast<int>(px.size()) != n || static_cast<int>(sigma2.size()) != n)
+    return result;
   const cv::Matx33d K(fx, 0, cx, 0, fy, cy, 0, 0, 1);
   std::mt19937_64 rng(seed);
   std::vector<int> idx(n);
@@ -70,7 +74,8 @@ PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& pw, const std::vect
       // Iterations for 99% confidence of one all-inlier sample at this inlier ratio.
       const double w = double(count) / n;
       const double denom = std::log(std::max(1e-12, 1.0 - std::pow(w, 4)));
-      if (denom < 0) needed = std::min(opt.iterations, static_cast<int>(std::ceil(std::log(0.01) / denom)) + 1);
+      if (denom < 0)
+        needed = std::min(opt.iterations, static_cast<int>(std::ceil(std::log(0.01) / denom)) + 1);
     }
   }
   if (best < opt.min_inliers) return result;
@@ -83,7 +88,8 @@ PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& pw, const std::vect
   po.chi2 = opt.chi2;
   const int refined = optimizePose(&T, obs, fx, fy, cx, cy, po);
   if (refined >= best) best_T = T;
-  result.num_inliers = countInliers(best_T, pw, px, sigma2, fx, fy, cx, cy, opt.chi2, &result.inliers);
+  result.num_inliers =
+      countInliers(best_T, pw, px, sigma2, fx, fy, cx, cy, opt.chi2, &result.inliers);
   result.T_camera_world = best_T;
   result.ok = result.num_inliers >= opt.min_inliers;
   return result;

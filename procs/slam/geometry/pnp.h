@@ -10,8 +10,8 @@
 namespace slamaware {
 
 struct PnpOptions {
-  int iterations = 200;       ///< at most; fewer when the inlier ratio allows (99% confidence)
-  double chi2 = 5.991;        ///< inlier threshold on the squared error / sigma^2
+  int iterations = 200;  ///< at most; fewer when the inlier ratio allows (99% confidence)
+  double chi2 = 5.991;   ///< inlier threshold on the squared error / sigma^2
   int min_inliers = 12;
 };
 
@@ -24,8 +24,9 @@ struct PnpResult {
 
 /// p_world[i] is seen at the undistorted pixel px[i] with position variance sigma2[i] (px^2) by
 /// a pinhole camera (fx, fy, cx, cy). Deterministic for a given seed.
-PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_world, const std::vector<Eigen::Vector2d>& px,
-                         const std::vector<double>& sigma2, double fx, double fy, double cx, double cy,
-                         const PnpOptions& options, uint64_t seed);
+PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_world,
+                         const std::vector<Eigen::Vector2d>& px, const std::vector<double>& sigma2,
+                         double fx, double fy, double cx, double cy, const PnpOptions& options,
+                         uint64_t seed);
 
 }  // namespace slamaware

@@ -5,8 +5,8 @@
 
 namespace slamaware {
 
-bool triangulateDlt(const SE3& T1, const SE3& T2, const Eigen::Vector3d& ray1, const Eigen::Vector3d& ray2,
-                    Eigen::Vector3d* p_world) {
+bool triangulateDlt(const SE3& T1, const SE3& T2, const Eigen::Vector3d& ray1,
+                    const Eigen::Vector3d& ray2, Eigen::Vector3d* p_world) {
   const Eigen::Matrix<double, 3, 4> P1 = T1.matrix().topRows<3>(), P2 = T2.matrix().topRows<3>();
   Eigen::Matrix4d A;
   A.row(0) = ray1.x() * P1.row(2) - P1.row(0);

@@ -26,9 +26,11 @@ Eigen::Matrix3d normalize(const Points& in, Points* out) {
   Eigen::Vector2d dev = Eigen::Vector2d::Zero();
   for (const auto& p : in) dev += (p - mean).cwiseAbs();
   dev /= std::max<size_t>(1, in.size());
-  const double sx = dev.x() > 1e-12 ? 1.0 / dev.x() : 1.0, sy = dev.y() > 1e-12 ? 1.0 / dev.y() : 1.0;
+  const double sx = dev.x() > 1e-12 ? 1.0 / dev.x() : 1.0,
+               sy = dev.y() > 1e-12 ? 1.0 / dev.y() : 1.0;
   out->resize(in.size());
-  for (size_t i = 0; i < in.size(); ++i) (*out)[i] = {(in[i].x() - mean.x()) * sx, (in[i].y() - mean.y()) * sy};
+  for (size_t i = 0; i < in.size(); ++i)
+    (*out)[i] = {(in[i].x() - mean.x()) * sx, (in[i].y() - mean.y()) * sy};
   Eigen::Matrix3d T;
   T << sx, 0, -mean.x() * sx, 0, sy, -mean.y() * sy, 0, 0, 1;
   return T;
@@ -78,10 +80,16 @@ double scoreHomography(const Eigen::Matrix3d& H21, const Points& p1, const Point
     bool in = true;
     const Eigen::Vector3d a = H21 * p1[i].homogeneous();
     const double e2 = (a.hnormalized() - p2[i]).squaredNorm() * inv_s2;
-    if (!(e2 <= th)) in = false; else score += th - e2;
+    if (!(e2 <= th))
+      in = false;
+    else
+      score += th - e2;
     const Eigen::Vector3d b = H12 * p2[i].homogeneous();
     const double e1 = (b.hnormalized() - p1[i]).squaredNorm() * inv_s2;
-    if (!(e1 <= th)) in = false; else score += th - e1;
+    if (!(e1 <= th))
+      in = false;
+    else
+      score += th - e1;
     (*inliers)[i] = in;
   }
   return score;
@@ -89,8 +97,8 @@ double scoreHomography(const Eigen::Matrix3d& H21, const Points& p1, const Point
 
 // Epipolar distance score (ORB-SLAM's CheckFundamental): chi-square threshold of 1 dof for the
 // inlier test, scored against the 2-dof threshold so that H and F scores are comparable.
-double scoreFundamental(const Eigen::Matrix3d& F21, const Points& p1, const Points& p2, double sigma,
-                        std::vector<bool>* inliers) {
+double scoreFundamental(const Eigen::Matrix3d& F21, const Points& p1, const Points& p2,
+                        double sigma, std::vector<bool>* inliers) {
   const double th = 3.841, th_score = 5.991, inv_s2 = 1.0 / (sigma * sigma);
   double score = 0;
   inliers->assign(p1.size(), false);
@@ -99,11 +107,17 @@ double scoreFundamental(const Eigen::Matrix3d& F21, const Points& p1, const Poin
     const Eigen::Vector3d l2 = F21 * p1[i].homogeneous();
     const double d2 = l2.dot(p2[i].homogeneous());
     const double e2 = d2 * d2 / (l2.x() * l2.x() + l2.y() * l2.y()) * inv_s2;
-    if (!(e2 <= th)) in = false; else score += th_score - e2;
+    if (!(e2 <= th))
+      in = false;
+    else
+      score += th_score - e2;
     const Eigen::Vector3d l1 = F21.transpose() * p2[i].homogeneous();
     const double d1 = l1.dot(p1[i].homogeneous());
     const double e1 = d1 * d1 / (l1.x() * l1.x() + l1.y() * l1.y()) * inv_s2;
-    if (!(e1 <= th)) in = false; else score += th_score - e1;
+    if (!(e1 <= th))
+      in = false;
+    else
+      score += th_score - e1;
     (*inliers)[i] = in;
   }
   return score;
@@ -119,24 +133,28 @@ struct Hypothesis {
 
 // Triangulates the inliers for a candidate (R, t) and counts points in front of both cameras
 // with reprojection errors under max_error_px (ORB-SLAM's CheckRT, which uses 2 sigma).
-Hypothesis checkPose(const SE3& T_cur_ref, const Points& p1, const Points& p2, const std::vector<bool>& inliers,
-                     const Eigen::Matrix3d& K, double max_error_px) {
+Hypothesis checkPose(const SE3& T_cur_ref, const Points& p1, const Points& p2,
+                     const std::vector<bool>& inliers, const Eigen::Matrix3d& K,
+                     double max_error_px) {
   Hypothesis h;
   h.T_cur_ref = T_cur_ref;
   h.points.assign(p1.size(), Eigen::Vector3d::Zero());
   h.flags.assign(p1.size(), false);
   const double th2 = max_error_px * max_error_px;
   const Eigen::Matrix3d Kinv = K.inverse();
-  const Eigen::Vector3d o1 = Eigen::Vector3d::Zero(), o2 = -T_cur_ref.linear().transpose() * T_cur_ref.translation();
+  const Eigen::Vector3d o1 = Eigen::Vector3d::Zero(),
+                        o2 = -T_cur_ref.linear().transpose() * T_cur_ref.translation();
   std::vector<double> parallax;
   for (size_t i = 0; i < p1.size(); ++i) {
     if (!inliers[i]) continue;
     Eigen::Vector3d p;
-    if (!triangulateDlt(SE3::Identity(), T_cur_ref, Kinv * p1[i].homogeneous(), Kinv * p2[i].homogeneous(), &p))
+    if (!triangulateDlt(SE3::Identity(), T_cur_ref, Kinv * p1[i].homogeneous(),
+                        Kinv * p2[i].homogeneous(), &p))
       continue;
     const Eigen::Vector3d q = T_cur_ref * p;
     if (p.z() <= 0 || q.z() <= 0) continue;
-    const double e1 = ((K * p).hnormalized() - p1[i]).squaredNorm(), e2 = ((K * q).hnormalized() - p2[i]).squaredNorm();
+    const double e1 = ((K * p).hnormalized() - p1[i]).squaredNorm(),
+                 e2 = ((K * q).hnormalized() - p2[i]).squaredNorm();
     if (e1 > th2 || e2 > th2) continue;
     const double c = parallaxCos(p, o1, o2);
     ++h.good;
@@ -156,8 +174,8 @@ Hypothesis checkPose(const SE3& T_cur_ref, const Points& p1, const Points& p2, c
 
 // Correspondences whose two rays meet in front of both cameras under (R, t): the depths from the
 // 2x2 least-squares system d1 R x1 - d2 x2 = -t must both be positive.
-int countInFront(const SE3& T, const std::vector<Eigen::Vector3d>& rays1, const std::vector<Eigen::Vector3d>& rays2,
-                 const std::vector<int>& idx) {
+int countInFront(const SE3& T, const std::vector<Eigen::Vector3d>& rays1,
+                 const std::vector<Eigen::Vector3d>& rays2, const std::vector<int>& idx) {
   const Eigen::Matrix3d& R = T.linear();
   const Eigen::Vector3d& t = T.translation();
   int n = 0;
@@ -211,7 +229,9 @@ SE3 refinePose(const SE3& T0, const Points& p1, const Points& p2, const std::vec
   for (size_t i = 0; i < p1.size(); ++i) {
     if (!inliers[i]) continue;
     Eigen::Vector3d p;
-    if (!triangulateDlt(SE3::Identity(), T0, Kinv * p1[i].homogeneous(), Kinv * p2[i].homogeneous(), &p)) continue;
+    if (!triangulateDlt(SE3::Identity(), T0, Kinv * p1[i].homogeneous(), Kinv * p2[i].homogeneous(),
+                        &p))
+      continue;
     if (p.z() <= 0 || (T0 * p).z() <= 0) continue;
     pts[i] = p;
     front[i] = true;
@@ -230,7 +250,8 @@ SE3 refinePose(const SE3& T0, const Points& p1, const Points& p2, const std::vec
   for (size_t i = 0; i < p1.size(); ++i) {
     if (!inliers[i]) continue;
     const int k = static_cast<int>(ba.points.size());
-    ba.points.push_back({front[i] ? pts[i] : Eigen::Vector3d(Kinv * p1[i].homogeneous() * median_depth), false});
+    ba.points.push_back(
+        {front[i] ? pts[i] : Eigen::Vector3d(Kinv * p1[i].homogeneous() * median_depth), false});
     ba.observations.push_back({0, k, p1[i], 1.0});
     ba.observations.push_back({1, k, p2[i], 1.0});
   }
@@ -254,8 +275,8 @@ SE3 refinePose(const SE3& T0, const Points& p1, const Points& p2, const std::vec
   return T;
 }
 
-bool neckerTwin(const Hypothesis& h, const Points& p1, const Points& p2, const Eigen::Matrix3d& K, uint64_t seed,
-                SE3* twin) {
+bool neckerTwin(const Hypothesis& h, const Points& p1, const Points& p2, const Eigen::Matrix3d& K,
+                uint64_t seed, SE3* twin) {
   std::vector<double> depths;
   for (size_t i = 0; i < p1.size(); ++i)
     if (h.points[i].z() > 0) depths.push_back(h.points[i].z());
@@ -275,8 +296,8 @@ bool neckerTwin(const Hypothesis& h, const Points& p1, const Points& p2, const E
   PnpOptions options;
   options.chi2 = 5.991 * 4;
   options.min_inliers = static_cast<int>(pw.size() / 2);
-  const PnpResult r = solvePnpRansac(pw, px, std::vector<double>(pw.size(), 1.0), K(0, 0), K(1, 1), K(0, 2),
-                                     K(1, 2), options, seed);
+  const PnpResult r = solvePnpRansac(pw, px, std::vector<double>(pw.size(), 1.0), K(0, 0), K(1, 1),
+                                     K(0, 2), K(1, 2), options, seed);
   if (!r.ok || r.T_camera_world.translation().norm() < 1e-12) return false;
   *twin = r.T_camera_world;
   twin->translation().normalize();
@@ -293,8 +314,8 @@ void fillResult(const Hypothesis& h, TwoViewResult* r) {
 
 }  // namespace
 
-TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur, const Eigen::Matrix3d& K,
-                                 const InitOptions& opt, uint64_t seed) {
+TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
+                                 const Eigen::Matrix3d& K, const InitOptions& opt, uint64_t seed) {
   TwoViewResult r;
   const int n = static_cast<int>(std::min(px_ref.size(), px_cur.size()));
   if (n < 8) {
@@ -363,7 +384,8 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur, con
     cv::Mat Kcv, mask, Ecv;
     cv::eigen2cv(K, Kcv);
     try {
-      Ecv = cv::findEssentialMat(a, b, Kcv, cv::RANSAC, 0.999, std::sqrt(3.841) * opt.sigma_px, mask);
+      Ecv =
+          cv::findEssentialMat(a, b, Kcv, cv::RANSAC, 0.999, std::sqrt(3.841) * opt.sigma_px, mask);
     } catch (const cv::Exception&) {
       Ecv.release();
     }
@@ -421,9 +443,11 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur, con
   }
   if (f_inliers.size() >= 8) {
     for (int it = 0; it < opt.ransac_iterations; ++it) {
-      const Eigen::Matrix3d F = T2.transpose() * computeF21(n1, n2, sampleIndices(f_inliers, 8)) * T1;
+      const Eigen::Matrix3d F =
+          T2.transpose() * computeF21(n1, n2, sampleIndices(f_inliers, 8)) * T1;
       if (!F.allFinite()) continue;
-      for (const SE3& T : decomposeEssential(K.transpose() * F * K)) epipolar_candidates.push_back(T);
+      for (const SE3& T : decomposeEssential(K.transpose() * F * K))
+        epipolar_candidates.push_back(T);
     }
   }
   candidates.insert(candidates.end(), epipolar_candidates.begin(), epipolar_candidates.end());
@@ -451,10 +475,12 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur, con
   std::vector<std::pair<double, size_t>> ranked;
   for (size_t k = 0; k < candidates.size(); ++k) {
     if (in_front[k] < 0.97 * most) continue;
-    const Eigen::Matrix3d F = Kinv.transpose() * skew(candidates[k].translation()) * candidates[k].linear() * Kinv;
+    const Eigen::Matrix3d F =
+        Kinv.transpose() * skew(candidates[k].translation()) * candidates[k].linear() * Kinv;
     ranked.push_back({scoreFundamental(F, px_ref, px_cur, opt.sigma_px, &tmp), k});
   }
-  std::stable_sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& x, const auto& y) { return x.first > y.first; });
   std::vector<SE3> distinct;
   for (const auto& [score, k] : ranked) {
     if (distinct.size() >= 5) break;
@@ -492,15 +518,18 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur, con
   for (size_t k = 0; k < refined.size(); ++k) {
     if (k == best || samePose(refined[k].T, refined[best].T)) continue;
     // Another pose explaining the points about as well: the two views cannot tell them apart.
-    if (refined[k].h.good >= 0.95 * refined[best].h.good && refined[k].rms < 1.03 * refined[best].rms) {
-      r.reason = std::string("ambiguous ") + (use_h ? "homography" : "essential-matrix") + " decomposition";
+    if (refined[k].h.good >= 0.95 * refined[best].h.good &&
+        refined[k].rms < 1.03 * refined[best].rms) {
+      r.reason = std::string("ambiguous ") + (use_h ? "homography" : "essential-matrix") +
+                 " decomposition";
       return r;
     }
   }
   const Hypothesis& h = refined[best].h;
   fillResult(h, &r);
   if (h.good < min_good) {
-    r.reason = "only " + std::to_string(h.good) + " of " + std::to_string(r.num_inliers) + " inliers triangulated";
+    r.reason = "only " + std::to_string(h.good) + " of " + std::to_string(r.num_inliers) +
+               " inliers triangulated";
     return r;
   }
   if (r.num_triangulated < opt.min_triangulated) {

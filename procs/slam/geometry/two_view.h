@@ -18,20 +18,22 @@ namespace slamaware {
 
 struct TwoViewResult {
   bool ok = false;
-  char model = '?';                        ///< 'H' (homography) or 'F' (fundamental matrix)
-  SE3 T_cur_ref = SE3::Identity();         ///< p_cur = T_cur_ref * p_ref; |t| is arbitrary (unit)
-  std::vector<Eigen::Vector3d> p_ref;      ///< triangulated point per match, reference camera frame
-  std::vector<bool> triangulated;          ///< per match: a good point (in front, small error, parallax)
-  int num_inliers = 0;                     ///< inliers of the chosen model
+  char model = '?';                    ///< 'H' (homography) or 'F' (fundamental matrix)
+  SE3 T_cur_ref = SE3::Identity();     ///< p_cur = T_cur_ref * p_ref; |t| is arbitrary (unit)
+  std::vector<Eigen::Vector3d> p_ref;  ///< triangulated point per match, reference camera frame
+  std::vector<bool> triangulated;  ///< per match: a good point (in front, small error, parallax)
+  int num_inliers = 0;             ///< inliers of the chosen model
   int num_triangulated = 0;
-  double parallax_deg = 0;                 ///< median parallax of the triangulated points
-  double score_ratio = 0;                  ///< R_H
-  std::string reason;                      ///< why it failed
+  double parallax_deg = 0;  ///< median parallax of the triangulated points
+  double score_ratio = 0;   ///< R_H
+  std::string reason;       ///< why it failed
 };
 
 /// Reconstructs the relative pose and structure of matched undistorted pixels px_ref[i] <->
 /// px_cur[i] of a pinhole camera K. Deterministic for a given seed.
-TwoViewResult reconstructTwoView(const std::vector<Eigen::Vector2d>& px_ref, const std::vector<Eigen::Vector2d>& px_cur,
-                                 const Eigen::Matrix3d& K, const InitOptions& options, uint64_t seed);
+TwoViewResult reconstructTwoView(const std::vector<Eigen::Vector2d>& px_ref,
+                                 const std::vector<Eigen::Vector2d>& px_cur,
+                                 const Eigen::Matrix3d& K, const InitOptions& options,
+                                 uint64_t seed);
 
 }  // namespace slamaware

@@ -14,7 +14,8 @@ namespace {
 constexpr int kInitMatchDistance = 64;  // bits: looser than tracking, views may be far apart
 }
 
-std::shared_ptr<Map> Initializer::tryInitialize(Frame& frame, int map_id, IdSource& ids, std::string* why) {
+std::shared_ptr<Map> Initializer::tryInitialize(Frame& frame, int map_id, IdSource& ids,
+                                                std::string* why) {
   const int min_features = options_.init.min_matches;
   if (frame.size() < min_features) {
     *why = "only " + std::to_string(frame.size()) + " features";
@@ -31,8 +32,8 @@ std::shared_ptr<Map> Initializer::tryInitialize(Frame& frame, int map_id, IdSour
   const Frame& ref = *reference_;
   std::vector<int> all(ref.size());
   for (int i = 0; i < ref.size(); ++i) all[i] = i;
-  const Matches matches =
-      matchBruteForce(*ref.features, all, *frame.features, options_.init.match_ratio, kInitMatchDistance, true);
+  const Matches matches = matchBruteForce(*ref.features, all, *frame.features,
+                                          options_.init.match_ratio, kInitMatchDistance, true);
   if (static_cast<int>(matches.size()) < options_.init.min_matches) {
     *why = "only " + std::to_string(matches.size()) + " matches to the reference; new reference";
     reference_ = frame;
@@ -45,7 +46,8 @@ std::shared_ptr<Map> Initializer::tryInitialize(Frame& frame, int map_id, IdSour
     p_cur.push_back(frame.features->px[j]);
   }
   const uint64_t seed = options_.seed * 1000003ull + static_cast<uint64_t>(frame.id);
-  const TwoViewResult tv = reconstructTwoView(p_ref, p_cur, frame.features->intrinsics->K(), options_.init, seed);
+  const TwoViewResult tv =
+      reconstructTwoView(p_ref, p_cur, frame.features->intrinsics->K(), options_.init, seed);
   ++attempts_;
   if (!tv.ok) {
     *why = std::string("two-view (") + tv.model + "): " + tv.reason;
@@ -56,8 +58,9 @@ std::shared_ptr<Map> Initializer::tryInitialize(Frame& frame, int map_id, IdSour
   return map;
 }
 
-std::shared_ptr<Map> Initializer::buildMap(const Frame& reference, Frame& frame, const TwoViewResult& tv,
-                                           const Matches& matches, int map_id, IdSource& ids, std::string* why) {
+std::shared_ptr<Map> Initializer::buildMap(const Frame& reference, Frame& frame,
+                                           const TwoViewResult& tv, const Matches& matches,
+                                           int map_id, IdSource& ids, std::string* why) {
   auto map = std::make_shared<Map>(map_id);
   std::unique_lock<std::shared_mutex> lock(map->mutex);
   Frame ref = reference;
@@ -100,7 +103,8 @@ std::shared_ptr<Map> Initializer::buildMap(const Frame& reference, Frame& frame,
     int cam = 0;
     for (const auto& [kf_id, obs] : p->observations) {
       const int level = obs.keyframe->features->level(obs.feature);
-      ba.observations.push_back({cam++, index, obs.keyframe->features->px[obs.feature], in.pyramid.inv_sigma2[level]});
+      ba.observations.push_back(
+          {cam++, index, obs.keyframe->features->px[obs.feature], in.pyramid.inv_sigma2[level]});
     }
   }
   BaOptions bo;
@@ -137,9 +141,10 @@ std::shared_ptr<Map> Initializer::buildMap(const Frame& reference, Frame& frame,
   frame.points = kf1->points;
   frame.outlier.assign(frame.size(), false);
   frame.reference = kf1;
-  *why = std::string("map ") + std::to_string(map_id) + " from frames " + std::to_string(reference.seq) + " and " +
-         std::to_string(frame.seq) + " (" + tv.model + ", " + std::to_string(map->points.size()) +
-         " points, parallax " + std::to_string(tv.parallax_deg).substr(0, 4) + " deg)";
+  *why = std::string("map ") + std::to_string(map_id) + " from frames " +
+         std::to_string(reference.seq) + " and " + std::to_string(frame.seq) + " (" + tv.model +
+         ", " + std::to_string(map->points.size()) + " points, parallax " +
+         std::to_string(tv.parallax_deg).substr(0, 4) + " deg)";
   return map;
 }
 

@@ -27,9 +27,10 @@ class Initializer {
   std::shared_ptr<Map> tryInitialize(Frame& frame, int map_id, IdSource& ids, std::string* why);
 
  private:
-  std::shared_ptr<Map> buildMap(const Frame& reference, Frame& frame, const struct TwoViewResult& tv,
-                                const std::vector<std::pair<int, int>>& matches, int map_id, IdSource& ids,
-                                std::string* why);
+  std::shared_ptr<Map> buildMap(const Frame& reference, Frame& frame,
+                                const struct TwoViewResult& tv,
+                                const std::vector<std::pair<int, int>>& matches, int map_id,
+                                IdSource& ids, std::string* why);
 
   SlamOptions options_;
   std::optional<Frame> reference_;

@@ -8,7 +8,12 @@
 namespace slamaware {
 
 Intrinsics::Intrinsics(const CameraModel& cam, const ScalePyramid& pyr)
-    : fx(cam.fx()), fy(cam.fy()), cx(cam.cx()), cy(cam.cy()), max_x(cam.width() - 1), max_y(cam.height() - 1),
+    : fx(cam.fx()),
+      fy(cam.fy()),
+      cx(cam.cx()),
+      cy(cam.cy()),
+      max_x(cam.width() - 1),
+      max_y(cam.height() - 1),
       pyramid(pyr) {}
 
 Eigen::Matrix3d Intrinsics::K() const {
@@ -18,10 +23,13 @@ Eigen::Matrix3d Intrinsics::K() const {
 }
 
 FrameFeatures::FrameFeatures(OrbFeatures orb, std::shared_ptr<const Intrinsics> intr)
-    : keypoints(std::move(orb.keypoints)), descriptors(std::move(orb.descriptors)), intrinsics(std::move(intr)) {
+    : keypoints(std::move(orb.keypoints)),
+      descriptors(std::move(orb.descriptors)),
+      intrinsics(std::move(intr)) {
   const Intrinsics& in = *intrinsics;
   px.resize(keypoints.size());
-  for (size_t i = 0; i < keypoints.size(); ++i) px[i] = Eigen::Vector2d(keypoints[i].pt.x, keypoints[i].pt.y);
+  for (size_t i = 0; i < keypoints.size(); ++i)
+    px[i] = Eigen::Vector2d(keypoints[i].pt.x, keypoints[i].pt.y);
   grid_cols_ = std::max(1, static_cast<int>(std::ceil((in.max_x - in.min_x + 1) / kCellPx)));
   grid_rows_ = std::max(1, static_cast<int>(std::ceil((in.max_y - in.min_y + 1) / kCellPx)));
   grid_.assign(static_cast<size_t>(grid_cols_) * grid_rows_, {});
@@ -33,13 +41,16 @@ FrameFeatures::FrameFeatures(OrbFeatures orb, std::shared_ptr<const Intrinsics> 
   }
 }
 
-std::vector<int> FrameFeatures::inArea(double x, double y, double r, int min_level, int max_level) const {
+std::vector<int> FrameFeatures::inArea(double x, double y, double r, int min_level,
+                                       int max_level) const {
   std::vector<int> out;
   const Intrinsics& in = *intrinsics;
   const int c0 = std::max(0, static_cast<int>(std::floor((x - r - in.min_x) / kCellPx)));
-  const int c1 = std::min(grid_cols_ - 1, static_cast<int>(std::floor((x + r - in.min_x) / kCellPx)));
+  const int c1 =
+      std::min(grid_cols_ - 1, static_cast<int>(std::floor((x + r - in.min_x) / kCellPx)));
   const int r0 = std::max(0, static_cast<int>(std::floor((y - r - in.min_y) / kCellPx)));
-  const int r1 = std::min(grid_rows_ - 1, static_cast<int>(std::floor((y + r - in.min_y) / kCellPx)));
+  const int r1 =
+      std::min(grid_rows_ - 1, static_cast<int>(std::floor((y + r - in.min_y) / kCellPx)));
   if (c0 > c1 || r0 > r1) return out;
   for (int row = r0; row <= r1; ++row) {
     for (int col = c0; col <= c1; ++col) {

@@ -32,7 +32,9 @@ struct Intrinsics {
     return {fx * p_camera.x() / p_camera.z() + cx, fy * p_camera.y() / p_camera.z() + cy};
   }
   /// Ray (x, y, 1) through an undistorted pixel.
-  Eigen::Vector3d ray(const Eigen::Vector2d& px) const { return {(px.x() - cx) / fx, (px.y() - cy) / fy, 1.0}; }
+  Eigen::Vector3d ray(const Eigen::Vector2d& px) const {
+    return {(px.x() - cx) / fx, (px.y() - cy) / fy, 1.0};
+  }
   bool inBounds(const Eigen::Vector2d& px) const {
     return px.x() >= min_x && px.x() < max_x && px.y() >= min_y && px.y() < max_y;
   }
@@ -48,7 +50,8 @@ class FrameFeatures {
   const uint8_t* descriptor(int i) const { return descriptors.ptr<uint8_t>(i); }
   /// Indices of features within r px (square window) of (x, y) whose level is in [min_level,
   /// max_level] (-1: any), in a fixed order.
-  std::vector<int> inArea(double x, double y, double r, int min_level = -1, int max_level = -1) const;
+  std::vector<int> inArea(double x, double y, double r, int min_level = -1,
+                          int max_level = -1) const;
 
   std::vector<cv::KeyPoint> keypoints;  ///< as detected, level-0 px, octave = level
   std::vector<Eigen::Vector2d> px;      ///< the keypoints' positions as vectors
@@ -63,12 +66,12 @@ class FrameFeatures {
 
 /// The frame being tracked.
 struct Frame {
-  int64_t id = -1;      ///< sequential number of frames handled by SLAM
-  int64_t utime = 0;    ///< µs, capture time
-  int32_t seq = -1;     ///< the camera's frame number
+  int64_t id = -1;    ///< sequential number of frames handled by SLAM
+  int64_t utime = 0;  ///< µs, capture time
+  int32_t seq = -1;   ///< the camera's frame number
   std::shared_ptr<const FrameFeatures> features;
-  cv::Mat grey;         ///< 8-bit grey image (undistorted)
-  cv::Mat bgr;          ///< 8-bit colour image, same geometry as grey
+  cv::Mat grey;  ///< 8-bit grey image (undistorted)
+  cv::Mat bgr;   ///< 8-bit colour image, same geometry as grey
   SE3 T_camera_world = SE3::Identity();
   bool has_pose = false;
   std::vector<std::shared_ptr<MapPoint>> points;  ///< matched map point per feature (null: none)
@@ -80,7 +83,9 @@ struct Frame {
   void resetMatches();
   /// Matched features that are not outliers.
   int countInliers() const;
-  Eigen::Vector3d center() const { return -(T_camera_world.linear().transpose() * T_camera_world.translation()); }
+  Eigen::Vector3d center() const {
+    return -(T_camera_world.linear().transpose() * T_camera_world.translation());
+  }
 };
 
 }  // namespace slamaware

@@ -119,7 +119,8 @@ void KeyFrame::sortConnections() {
   ordered_.clear();
   for (const auto& [kf_id, c] : connections_) ordered_.push_back(c);
   // Heaviest first; equal weights by id (connections_ is ordered by id and the sort is stable).
-  std::stable_sort(ordered_.begin(), ordered_.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::stable_sort(ordered_.begin(), ordered_.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
 }
 
 cv::Mat KeyFrame::makeThumbnail(const cv::Mat& grey) {

@@ -28,7 +28,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   const int32_t seq;
   const std::shared_ptr<const FrameFeatures> features;
   const cv::Mat grey, bgr;
-  const cv::Mat thumbnail;  ///< small blurred zero-mean image for relocalisation candidates (PTAM's SBI)
+  const cv::Mat
+      thumbnail;  ///< small blurred zero-mean image for relocalisation candidates (PTAM's SBI)
 
   SE3 T_camera_world;
   std::vector<std::shared_ptr<MapPoint>> points;  ///< map point per feature (null: none)
@@ -36,7 +37,9 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
 
   int size() const { return features->size(); }
   SE3 T_world_camera() const { return T_camera_world.inverse(); }
-  Eigen::Vector3d center() const { return -(T_camera_world.linear().transpose() * T_camera_world.translation()); }
+  Eigen::Vector3d center() const {
+    return -(T_camera_world.linear().transpose() * T_camera_world.translation());
+  }
 
   /// Map points (not bad) seen by at least min_observations keyframes.
   int trackedPoints(int min_observations) const;
@@ -46,7 +49,9 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   bool depthRange(double* min_depth, double* mean_depth) const;
 
   /// Covisibility: keyframes sharing map points, by weight (shared points), heaviest first.
-  const std::vector<std::pair<int, std::shared_ptr<KeyFrame>>>& covisible() const { return ordered_; }
+  const std::vector<std::pair<int, std::shared_ptr<KeyFrame>>>& covisible() const {
+    return ordered_;
+  }
   std::vector<std::shared_ptr<KeyFrame>> bestCovisible(int n) const;
   int weight(int64_t keyframe_id) const;
   /// Recomputes this keyframe's edges from its points' observations and mirrors them into the
@@ -63,7 +68,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
 
  private:
   void sortConnections();
-  std::map<int64_t, std::pair<int, std::shared_ptr<KeyFrame>>> connections_;  ///< by id: weight, keyframe
+  std::map<int64_t, std::pair<int, std::shared_ptr<KeyFrame>>>
+      connections_;  ///< by id: weight, keyframe
   std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> ordered_;
 };
 

@@ -8,7 +8,8 @@
 
 namespace slamaware {
 
-MapPoint::MapPoint(int64_t id_, int map_id_, const Eigen::Vector3d& p, const std::shared_ptr<KeyFrame>& ref)
+MapPoint::MapPoint(int64_t id_, int map_id_, const Eigen::Vector3d& p,
+                   const std::shared_ptr<KeyFrame>& ref)
     : id(id_), map_id(map_id_), p_world(p), reference(ref), first_keyframe_id(ref ? ref->id : -1) {}
 
 int MapPoint::featureIn(int64_t keyframe_id) const {
@@ -35,7 +36,8 @@ void MapPoint::computeDistinctiveDescriptor() {
   const size_t n = descs.size();
   std::vector<int> dist(n * n, 0);
   for (size_t i = 0; i < n; ++i)
-    for (size_t j = i + 1; j < n; ++j) dist[i * n + j] = dist[j * n + i] = descriptorDistance(descs[i], descs[j]);
+    for (size_t j = i + 1; j < n; ++j)
+      dist[i * n + j] = dist[j * n + i] = descriptorDistance(descs[i], descs[j]);
   size_t best = 0;
   int best_median = 1 << 30;
   std::vector<int> row(n);
@@ -54,9 +56,11 @@ void MapPoint::computeDistinctiveDescriptor() {
 void MapPoint::updateNormalAndDepth() {
   if (observations.empty()) return;
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  for (const auto& [kf_id, obs] : observations) n += (p_world - obs.keyframe->center()).normalized();
+  for (const auto& [kf_id, obs] : observations)
+    n += (p_world - obs.keyframe->center()).normalized();
   normal = n.normalized();
-  std::shared_ptr<KeyFrame> ref = reference && !reference->bad ? reference : observations.begin()->second.keyframe;
+  std::shared_ptr<KeyFrame> ref =
+      reference && !reference->bad ? reference : observations.begin()->second.keyframe;
   const int feature = featureIn(ref->id);
   if (feature < 0) return;
   const ScalePyramid& pyr = ref->features->intrinsics->pyramid;

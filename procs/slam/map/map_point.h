@@ -23,25 +23,26 @@ class MapPoint {
     int feature = -1;  ///< index of the keyframe's feature
   };
 
-  MapPoint(int64_t id, int map_id, const Eigen::Vector3d& p_world, const std::shared_ptr<KeyFrame>& reference);
+  MapPoint(int64_t id, int map_id, const Eigen::Vector3d& p_world,
+           const std::shared_ptr<KeyFrame>& reference);
 
   const int64_t id;
   const int map_id;
   Eigen::Vector3d p_world;
   std::map<int64_t, Observation> observations;  ///< by keyframe id (a fixed order)
-  std::array<uint8_t, 32> descriptor{};         ///< the observation's descriptor closest to all others
+  std::array<uint8_t, 32> descriptor{};  ///< the observation's descriptor closest to all others
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< mean viewing direction (unit), world frame
-  double min_distance = 0, max_distance = 0;    ///< map units, range where ORB's scales can see it
-  std::shared_ptr<KeyFrame> reference;          ///< the keyframe that created it
+  double min_distance = 0, max_distance = 0;  ///< map units, range where ORB's scales can see it
+  std::shared_ptr<KeyFrame> reference;        ///< the keyframe that created it
   int64_t first_keyframe_id;
   bool bad = false;
-  std::shared_ptr<MapPoint> replaced_by;        ///< set when fused into another point
+  std::shared_ptr<MapPoint> replaced_by;  ///< set when fused into another point
 
   std::atomic<int> visible{1};  ///< frames where it was predicted in view
   std::atomic<int> found{1};    ///< frames where it was matched
   // Tracking's bookkeeping (only the tracking thread touches these).
-  int64_t local_map_frame = -1;   ///< frame for which it was added to the local map
-  int64_t last_seen_frame = -1;   ///< frame in which it was matched
+  int64_t local_map_frame = -1;  ///< frame for which it was added to the local map
+  int64_t last_seen_frame = -1;  ///< frame in which it was matched
 
   int numObservations() const { return static_cast<int>(observations.size()); }
   bool observedBy(int64_t keyframe_id) const { return observations.count(keyframe_id) > 0; }

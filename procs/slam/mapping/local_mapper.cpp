@@ -196,13 +196,16 @@ void LocalMapper::createNewPoints(Map& map, const std::shared_ptr<KeyFrame>& kf)
     for (const auto& kf2 : kf->bestCovisible(options_.mapping.triangulation_neighbors)) {
       const Eigen::Vector3d c2 = kf2->center();
       const double median_depth2 = kf2->medianDepth();
-      if (median_depth2 <= 0 || (c2 - c1).norm() / median_depth2 < 0.01) continue;  // baseline too short
+      if (median_depth2 <= 0 || (c2 - c1).norm() / median_depth2 < 0.01)
+        continue;  // baseline too short
       const SE3 T2 = kf2->T_camera_world;
       const Eigen::Matrix3d R2wc = T2.linear().transpose();
-      const Matches matches = searchForTriangulation(*kf, *kf2, fundamentalFromPoses(T1, T2, K), &used);
+      const Matches matches =
+          searchForTriangulation(*kf, *kf2, fundamentalFromPoses(T1, T2, K), &used);
       for (const auto& [i, j] : matches) {
         if (kf2->points[j]) continue;
-        const Eigen::Vector3d ray1 = in.ray(kf->features->px[i]), ray2 = in.ray(kf2->features->px[j]);
+        const Eigen::Vector3d ray1 = in.ray(kf->features->px[i]),
+                              ray2 = in.ray(kf2->features->px[j]);
         const double cos_rays = (R1wc * ray1).normalized().dot((R2wc * ray2).normalized());
         if (cos_rays <= 0 || cos_rays > cos_min_parallax) continue;
         Eigen::Vector3d p;
@@ -211,12 +214,14 @@ void LocalMapper::createNewPoints(Map& map, const std::shared_ptr<KeyFrame>& kf)
         if (q1.z() <= 0 || q2.z() <= 0) continue;
         const int l1 = kf->features->level(i), l2 = kf2->features->level(j);
         if ((in.project(q1) - kf->features->px[i]).squaredNorm() > 5.991 * pyr.sigma2[l1]) continue;
-        if ((in.project(q2) - kf2->features->px[j]).squaredNorm() > 5.991 * pyr.sigma2[l2]) continue;
+        if ((in.project(q2) - kf2->features->px[j]).squaredNorm() > 5.991 * pyr.sigma2[l2])
+          continue;
         // Scale consistency: the distance ratio must agree with the pyramid levels.
         const double d1 = (p - c1).norm(), d2 = (p - c2).norm();
         if (d1 <= 0 || d2 <= 0) continue;
         const double ratio_dist = d2 / d1, ratio_octave = pyr.scale[l1] / pyr.scale[l2];
-        if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
+        if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor)
+          continue;
         used[i] = true;
         created.push_back({p, i, kf2, j});
       }
@@ -269,7 +274,8 @@ void LocalMapper::fuseNeighbors(Map& map, const std::shared_ptr<KeyFrame>& kf) {
   kf->updateConnections(options_.mapping.min_covisibility_weight);
 }
 
-void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, MappingEvents* events) {
+void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
+                                        MappingEvents* events) {
   BaProblem ba;
   std::vector<std::shared_ptr<KeyFrame>> cams;
   std::vector<std::shared_ptr<MapPoint>> pts;
@@ -293,7 +299,8 @@ void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame
       ba.cameras.push_back({k->T_camera_world, fixed || k->id == map.first_keyframe_id});
     };
     addCamera(kf, false);
-    for (const auto& n : kf->bestCovisible(options_.mapping.ba_local_keyframes - 1)) addCamera(n, false);
+    for (const auto& n : kf->bestCovisible(options_.mapping.ba_local_keyframes - 1))
+      addCamera(n, false);
     const size_t local_count = cams.size();
     for (size_t c = 0; c < local_count; ++c) {
       for (const auto& p : cams[c]->points) {
@@ -315,7 +322,8 @@ void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame
         auto it = cam_index.find(kf_id);
         if (it == cam_index.end()) continue;
         const int level = obs.keyframe->features->level(obs.feature);
-        ba.observations.push_back({it->second, static_cast<int>(k), obs.keyframe->features->px[obs.feature],
+        ba.observations.push_back({it->second, static_cast<int>(k),
+                                   obs.keyframe->features->px[obs.feature],
                                    in.pyramid.inv_sigma2[level]});
         refs.push_back({obs.keyframe, pts[k]});
       }
@@ -362,11 +370,13 @@ void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame
   }
 }
 
-void LocalMapper::cullKeyFrames(Map& map, const std::shared_ptr<KeyFrame>& kf, MappingEvents* events) {
+void LocalMapper::cullKeyFrames(Map& map, const std::shared_ptr<KeyFrame>& kf,
+                                MappingEvents* events) {
   if (kf->bad) return;
   const int needed = 3;
   const double redundancy = options_.mapping.keyframe_redundancy;
-  for (const auto& [w, n] : std::vector<std::pair<int, std::shared_ptr<KeyFrame>>>(kf->covisible())) {
+  for (const auto& [w, n] :
+       std::vector<std::pair<int, std::shared_ptr<KeyFrame>>>(kf->covisible())) {
     if (n->bad || n->id == map.first_keyframe_id || n == kf) continue;
     int total = 0, redundant = 0;
     for (int i = 0; i < n->size(); ++i) {

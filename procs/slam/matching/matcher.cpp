@@ -18,7 +18,8 @@ constexpr int kRotationBins = 30;
 int rotationBin(float angle_a, float angle_b) {
   float rot = angle_b - angle_a;
   if (rot < 0) rot += 360.f;
-  return std::clamp(static_cast<int>(std::lround(rot * kRotationBins / 360.f)), 0, kRotationBins) % kRotationBins;
+  return std::clamp(static_cast<int>(std::lround(rot * kRotationBins / 360.f)), 0, kRotationBins) %
+         kRotationBins;
 }
 
 // The three largest bins (a bin counts only if it has at least a tenth of the largest).
@@ -33,28 +34,34 @@ std::vector<bool> dominantBins(const std::vector<int>& counts) {
   return keep;
 }
 
-bool usableMatch(const std::shared_ptr<MapPoint>& p) { return p && !p->bad && p->numObservations() > 0; }
+bool usableMatch(const std::shared_ptr<MapPoint>& p) {
+  return p && !p->bad && p->numObservations() > 0;
+}
 
 }  // namespace
 
 void filterByRotation(const FrameFeatures& a, const FrameFeatures& b, Matches* matches) {
   std::vector<int> counts(kRotationBins, 0);
-  for (const auto& [i, j] : *matches) ++counts[rotationBin(a.keypoints[i].angle, b.keypoints[j].angle)];
+  for (const auto& [i, j] : *matches)
+    ++counts[rotationBin(a.keypoints[i].angle, b.keypoints[j].angle)];
   const std::vector<bool> keep = dominantBins(counts);
   Matches out;
   for (const auto& m : *matches)
-    if (keep[rotationBin(a.keypoints[m.first].angle, b.keypoints[m.second].angle)]) out.push_back(m);
+    if (keep[rotationBin(a.keypoints[m.first].angle, b.keypoints[m.second].angle)])
+      out.push_back(m);
   *matches = std::move(out);
 }
 
-Matches matchBruteForce(const FrameFeatures& a, const std::vector<int>& a_indices, const FrameFeatures& b,
-                        double ratio, int max_distance, bool check_rotation) {
+Matches matchBruteForce(const FrameFeatures& a, const std::vector<int>& a_indices,
+                        const FrameFeatures& b, double ratio, int max_distance,
+                        bool check_rotation) {
   const int nb = b.size();
   std::vector<int> best_for_b(nb, -1), best_dist_b(nb, std::numeric_limits<int>::max());
   std::vector<std::pair<int, int>> candidate(a_indices.size(), {-1, 0});
   for (size_t k = 0; k < a_indices.size(); ++k) {
     const uint8_t* da = a.descriptor(a_indices[k]);
-    int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(), best_j = -1;
+    int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(),
+        best_j = -1;
     for (int j = 0; j < nb; ++j) {
       const int d = descriptorDistance(da, b.descriptor(j));
       if (d < best) {
@@ -81,8 +88,8 @@ Matches matchBruteForce(const FrameFeatures& a, const std::vector<int>& a_indice
   return matches;
 }
 
-bool projectMapPoint(const MapPoint& p, const SE3& T, const Eigen::Vector3d& center, const Intrinsics& in,
-                     Projection* out) {
+bool projectMapPoint(const MapPoint& p, const SE3& T, const Eigen::Vector3d& center,
+                     const Intrinsics& in, Projection* out) {
   const Eigen::Vector3d pc = T * p.p_world;
   if (pc.z() <= 0) return false;
   out->px = in.project(pc);
@@ -134,7 +141,8 @@ int searchByProjection(Frame& frame, const Frame& previous, double radius_px) {
 }
 
 int searchLocalPoints(Frame& frame, const std::vector<std::shared_ptr<MapPoint>>& points,
-                      const std::vector<Projection>& projections, double radius_factor, double ratio) {
+                      const std::vector<Projection>& projections, double radius_factor,
+                      double ratio) {
   const FrameFeatures& f = *frame.features;
   const ScalePyramid& pyr = f.intrinsics->pyramid;
   int added = 0;
@@ -225,7 +233,8 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
   std::vector<int> free2;
   for (int j = 0; j < f2.size(); ++j)
     if (!kf2.points[j]) free2.push_back(j);
-  std::vector<int> best_for_2(f2.size(), -1), best_dist_2(f2.size(), std::numeric_limits<int>::max());
+  std::vector<int> best_for_2(f2.size(), -1),
+      best_dist_2(f2.size(), std::numeric_limits<int>::max());
   std::vector<int> match_of_1(f1.size(), -1);
   for (int i = 0; i < f1.size(); ++i) {
     if (kf1.points[i] || (skip1 && (*skip1)[i])) continue;
@@ -259,8 +268,8 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
   return matches;
 }
 
-int fuse(Map& map, const std::shared_ptr<KeyFrame>& kf, const std::vector<std::shared_ptr<MapPoint>>& points,
-         double radius_px) {
+int fuse(Map& map, const std::shared_ptr<KeyFrame>& kf,
+         const std::vector<std::shared_ptr<MapPoint>>& points, double radius_px) {
   const FrameFeatures& f = *kf->features;
   const Intrinsics& in = *f.intrinsics;
   const Eigen::Vector3d center = kf->center();

@@ -27,10 +27,11 @@ using Matches = std::vector<std::pair<int, int>>;  ///< (feature in a, feature i
 /// three most populated of 30 bins: a frame pair has one dominant in-plane rotation.
 void filterByRotation(const FrameFeatures& a, const FrameFeatures& b, Matches* matches);
 
-/// For each feature a_indices[k] of `a`, the nearest feature of `b` if its distance is <= max_distance
-/// and below `ratio` x the second nearest; a feature of b keeps only its best match.
-Matches matchBruteForce(const FrameFeatures& a, const std::vector<int>& a_indices, const FrameFeatures& b,
-                        double ratio, int max_distance, bool check_rotation);
+/// For each feature a_indices[k] of `a`, the nearest feature of `b` if its distance is <=
+/// max_distance and below `ratio` x the second nearest; a feature of b keeps only its best match.
+Matches matchBruteForce(const FrameFeatures& a, const std::vector<int>& a_indices,
+                        const FrameFeatures& b, double ratio, int max_distance,
+                        bool check_rotation);
 
 /// A map point's expected appearance in a camera: pixel, distance, pyramid level, viewing cosine.
 struct Projection {
@@ -41,8 +42,9 @@ struct Projection {
 };
 /// Projects a map point into a camera with pose T_camera_world; false when it is behind, outside
 /// the image, outside its scale-invariance range or seen from more than 60 degrees off its normal.
-bool projectMapPoint(const MapPoint& p, const SE3& T_camera_world, const Eigen::Vector3d& camera_center,
-                     const Intrinsics& intrinsics, Projection* out);
+bool projectMapPoint(const MapPoint& p, const SE3& T_camera_world,
+                     const Eigen::Vector3d& camera_center, const Intrinsics& intrinsics,
+                     Projection* out);
 
 /// Motion-model search: projects the previous frame's matched points with frame.T_camera_world and
 /// matches them in a window of radius_px x scale around the projection. Returns matches added.
@@ -51,7 +53,8 @@ int searchByProjection(Frame& frame, const Frame& previous, double radius_px);
 /// Local-map search: matches points (with their projections, from projectMapPoint) into unmatched
 /// features of the frame, window = radius_factor x (2.5 or 4 px by viewing angle) x scale.
 int searchLocalPoints(Frame& frame, const std::vector<std::shared_ptr<MapPoint>>& points,
-                      const std::vector<Projection>& projections, double radius_factor, double ratio);
+                      const std::vector<Projection>& projections, double radius_factor,
+                      double ratio);
 
 /// Projects a keyframe's points (those not already matched in the frame) into the frame and
 /// matches them within radius_px x scale (relocalisation refinement). Returns matches added.
@@ -66,10 +69,11 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
 /// Projects points into kf and merges each with the point already at the matched feature (the one
 /// with more observations survives) or adds the observation. Needs the exclusive lock.
 /// Returns the number of points fused or added.
-int fuse(Map& map, const std::shared_ptr<KeyFrame>& kf, const std::vector<std::shared_ptr<MapPoint>>& points,
-         double radius_px);
+int fuse(Map& map, const std::shared_ptr<KeyFrame>& kf,
+         const std::vector<std::shared_ptr<MapPoint>>& points, double radius_px);
 
 /// Fundamental matrix mapping pixels of camera 1 to epipolar lines in camera 2 (pinhole K).
-Eigen::Matrix3d fundamentalFromPoses(const SE3& T1_camera_world, const SE3& T2_camera_world, const Eigen::Matrix3d& K);
+Eigen::Matrix3d fundamentalFromPoses(const SE3& T1_camera_world, const SE3& T2_camera_world,
+                                     const Eigen::Matrix3d& K);
 
 }  // namespace slamaware

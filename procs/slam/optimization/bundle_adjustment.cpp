@@ -11,7 +11,8 @@ namespace {
 // Residual of one observation: sqrt(information) * (projection - pixel). Camera parameters are an
 // Eigen quaternion (x, y, z, w) and a translation of T_camera_world.
 struct ReprojectionError {
-  ReprojectionError(const Eigen::Vector2d& px, double sqrt_info, double fx, double fy, double cx, double cy)
+  ReprojectionError(const Eigen::Vector2d& px, double sqrt_info, double fx, double fy, double cx,
+                    double cy)
       : px_(px), s_(sqrt_info), fx_(fx), fy_(fy), cx_(cx), cy_(cy) {}
 
   template <class T>
@@ -57,7 +58,8 @@ double rms(const BaProblem& problem) {
 }  // namespace
 
 double observationChi2(const BaProblem& problem, const BaObservation& o, bool* in_front) {
-  const Eigen::Vector3d pc = problem.cameras[o.camera].T_camera_world * problem.points[o.point].p_world;
+  const Eigen::Vector3d pc =
+      problem.cameras[o.camera].T_camera_world * problem.points[o.point].p_world;
   *in_front = pc.z() > 0;
   if (!*in_front) return 1e9;
   const Eigen::Vector2d r(problem.fx * pc.x() / pc.z() + problem.cx - o.px.x(),
@@ -87,10 +89,12 @@ BaSummary bundleAdjust(BaProblem* problem, const BaOptions& options) {
   std::vector<bool> camera_used(nc, false), point_used(np, false);
   for (const auto& o : problem->observations) {
     if (!o.enabled) continue;
-    auto* cost = new ceres::AutoDiffCostFunction<ReprojectionError, 2, 4, 3, 3>(
-        new ReprojectionError(o.px, std::sqrt(o.inv_sigma2), problem->fx, problem->fy, problem->cx, problem->cy));
-    ceres_problem.AddResidualBlock(cost, options.robust ? &huber : nullptr, q[o.camera].coeffs().data(),
-                                   t[o.camera].data(), p[o.point].data());
+    auto* cost =
+        new ceres::AutoDiffCostFunction<ReprojectionError, 2, 4, 3, 3>(new ReprojectionError(
+            o.px, std::sqrt(o.inv_sigma2), problem->fx, problem->fy, problem->cx, problem->cy));
+    ceres_problem.AddResidualBlock(cost, options.robust ? &huber : nullptr,
+                                   q[o.camera].coeffs().data(), t[o.camera].data(),
+                                   p[o.point].data());
     camera_used[o.camera] = true;
     point_used[o.point] = true;
   }
@@ -104,12 +108,14 @@ BaSummary bundleAdjust(BaProblem* problem, const BaOptions& options) {
     }
   }
   for (size_t i = 0; i < np; ++i)
-    if (point_used[i] && problem->points[i].fixed) ceres_problem.SetParameterBlockConstant(p[i].data());
+    if (point_used[i] && problem->points[i].fixed)
+      ceres_problem.SetParameterBlockConstant(p[i].data());
 
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::SPARSE_SCHUR;
   solver.max_num_iterations = options.iterations;
-  solver.num_threads = 1;  // one thread: results do not depend on scheduling, and mapping shares 2 cores
+  solver.num_threads =
+      1;  // one thread: results do not depend on scheduling, and mapping shares 2 cores
   solver.minimizer_progress_to_stdout = false;
   solver.logging_type = ceres::SILENT;
   AbortCallback callback(options.abort);

@@ -20,11 +20,11 @@ struct BaPoint {
 };
 
 struct BaObservation {
-  int camera = 0;            ///< index into BaProblem::cameras
-  int point = 0;             ///< index into BaProblem::points
-  Eigen::Vector2d px;        ///< undistorted pixel
-  double inv_sigma2 = 1.0;   ///< 1 / variance of the pixel (pyramid level)
-  bool enabled = true;       ///< false: left out (an outlier found earlier)
+  int camera = 0;           ///< index into BaProblem::cameras
+  int point = 0;            ///< index into BaProblem::points
+  Eigen::Vector2d px;       ///< undistorted pixel
+  double inv_sigma2 = 1.0;  ///< 1 / variance of the pixel (pyramid level)
+  bool enabled = true;      ///< false: left out (an outlier found earlier)
 };
 
 struct BaProblem {
@@ -36,17 +36,17 @@ struct BaProblem {
 
 struct BaOptions {
   int iterations = 10;
-  bool robust = true;                      ///< Huber loss on the normalised error
-  double huber_chi2 = 5.991;               ///< Huber threshold (squared), 2 dof 95%
-  const std::atomic<bool>* abort = nullptr; ///< stops between iterations when it becomes true
+  bool robust = true;                        ///< Huber loss on the normalised error
+  double huber_chi2 = 5.991;                 ///< Huber threshold (squared), 2 dof 95%
+  const std::atomic<bool>* abort = nullptr;  ///< stops between iterations when it becomes true
 };
 
 struct BaSummary {
-  double initial_rms_px = 0;   ///< RMS of the normalised reprojection error before
-  double final_rms_px = 0;     ///< and after (enabled observations)
+  double initial_rms_px = 0;  ///< RMS of the normalised reprojection error before
+  double final_rms_px = 0;    ///< and after (enabled observations)
   int iterations = 0;
   bool aborted = false;
-  bool usable = false;         ///< the solver ran and returned finite estimates
+  bool usable = false;  ///< the solver ran and returned finite estimates
 };
 
 /// Optimises the free cameras and points of `problem` in place.

@@ -16,8 +16,8 @@ struct Accumulated {
 // Robust cost, normal equations and gradient at pose T over the observations not marked outlier.
 // The pose is perturbed on the left (T <- exp(xi) T, xi = (rho, phi)), so for p_c = T p_w the
 // Jacobian of p_c is [I, -[p_c]x].
-Accumulated accumulate(const SE3& T, const std::vector<PoseObservation>& obs, double fx, double fy, double cx,
-                       double cy, bool robust, double delta, bool with_jacobians) {
+Accumulated accumulate(const SE3& T, const std::vector<PoseObservation>& obs, double fx, double fy,
+                       double cx, double cy, bool robust, double delta, bool with_jacobians) {
   Accumulated a;
   for (const auto& o : obs) {
     if (o.outlier) continue;
@@ -53,8 +53,8 @@ Accumulated accumulate(const SE3& T, const std::vector<PoseObservation>& obs, do
 
 }  // namespace
 
-int optimizePose(SE3* T, std::vector<PoseObservation>& obs, double fx, double fy, double cx, double cy,
-                 const PoseOptimizerOptions& opt) {
+int optimizePose(SE3* T, std::vector<PoseObservation>& obs, double fx, double fy, double cx,
+                 double cy, const PoseOptimizerOptions& opt) {
   const double delta = std::sqrt(opt.chi2);
   int inliers = 0;
   for (int round = 0; round < opt.rounds; ++round) {
@@ -86,7 +86,8 @@ int optimizePose(SE3* T, std::vector<PoseObservation>& obs, double fx, double fy
         o.outlier = true;
         continue;
       }
-      const Eigen::Vector2d r(fx * pc.x() / pc.z() + cx - o.px.x(), fy * pc.y() / pc.z() + cy - o.px.y());
+      const Eigen::Vector2d r(fx * pc.x() / pc.z() + cx - o.px.x(),
+                              fy * pc.y() / pc.z() + cy - o.px.y());
       o.outlier = r.squaredNorm() * o.inv_sigma2 > opt.chi2;
       inliers += !o.outlier;
     }

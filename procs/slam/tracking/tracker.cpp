@@ -14,7 +14,8 @@ namespace slamaware {
 
 namespace {
 
-constexpr int kMinPoseInliers = 10;  // fewer inliers after a pose optimisation: the pose is not trusted
+constexpr int kMinPoseInliers =
+    10;  // fewer inliers after a pose optimisation: the pose is not trusted
 
 // Collects the frame's matched points as pose-optimisation observations.
 struct FrameObservations {
@@ -28,7 +29,8 @@ FrameObservations gather(const Frame& frame) {
   for (int i = 0; i < frame.size(); ++i) {
     const auto& p = frame.points[i];
     if (!p || p->bad) continue;
-    g.obs.push_back({p->p_world, frame.features->px[i], pyr.inv_sigma2[frame.features->level(i)], false});
+    g.obs.push_back(
+        {p->p_world, frame.features->px[i], pyr.inv_sigma2[frame.features->level(i)], false});
     g.feature.push_back(i);
   }
   return g;
@@ -36,7 +38,8 @@ FrameObservations gather(const Frame& frame) {
 
 }  // namespace
 
-Tracker::Tracker(const SlamOptions& options, IdSource& ids) : options_(options), ids_(ids), initializer_(options) {}
+Tracker::Tracker(const SlamOptions& options, IdSource& ids)
+    : options_(options), ids_(ids), initializer_(options) {}
 
 void Tracker::reset() {
   state_ = State::kNoMap;
@@ -49,7 +52,8 @@ void Tracker::reset() {
 }
 
 uint64_t Tracker::rngSeed(const Frame& frame, int salt) const {
-  return options_.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(frame.id) * 131 + static_cast<uint64_t>(salt);
+  return options_.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(frame.id) * 131 +
+         static_cast<uint64_t>(salt);
 }
 
 int Tracker::optimizeFramePose(Frame& frame, bool drop_outliers) {
@@ -107,8 +111,9 @@ bool Tracker::trackReferenceKeyFrame(Frame& frame) {
   std::vector<int> with_points;
   for (int i = 0; i < kf->size(); ++i)
     if (kf->points[i] && !kf->points[i]->bad) with_points.push_back(i);
-  const Matches matches = matchBruteForce(*kf->features, with_points, *frame.features,
-                                          options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
+  const Matches matches =
+      matchBruteForce(*kf->features, with_points, *frame.features,
+                      options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
   if (matches.size() < 15) return false;
   frame.resetMatches();
   std::vector<Eigen::Vector3d> pw;
@@ -127,7 +132,8 @@ bool Tracker::trackReferenceKeyFrame(Frame& frame) {
   po.iterations = options_.reloc.pnp_iterations;
   po.chi2 = options_.reloc.pnp_threshold_px;
   po.min_inliers = options_.reloc.min_pnp_inliers;
-  const PnpResult pnp = solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, 1));
+  const PnpResult pnp =
+      solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, 1));
   if (pnp.ok)
     frame.T_camera_world = pnp.T_camera_world;
   else if (last_frame_)
@@ -167,7 +173,8 @@ bool Tracker::trackLocalMap(Frame& frame, bool just_relocalized, int* inliers_ou
       !counts.count(reference_kf_->id) && reference_kf_ != frame.reference)
     ranked.push_back({0, reference_kf_});
   if (ranked.empty()) return false;
-  std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<std::shared_ptr<KeyFrame>> local;
   std::set<int64_t> included;
   for (const auto& [w, kf] : ranked) {
@@ -176,7 +183,8 @@ bool Tracker::trackLocalMap(Frame& frame, bool just_relocalized, int* inliers_ou
   }
   if (ranked.front().first > 0) frame.reference = ranked.front().second;
   const size_t direct = local.size();
-  for (size_t k = 0; k < direct && static_cast<int>(local.size()) < options_.tracking.max_local_keyframes; ++k) {
+  for (size_t k = 0;
+       k < direct && static_cast<int>(local.size()) < options_.tracking.max_local_keyframes; ++k) {
     for (const auto& nb : local[k]->bestCovisible(10)) {
       if (included.insert(nb->id).second) {
         local.push_back(nb);
@@ -214,7 +222,8 @@ bool Tracker::trackLocalMap(Frame& frame, bool just_relocalized, int* inliers_ou
   for (int i = 0; i < frame.size(); ++i)
     if (frame.points[i]) ++frame.points[i]->found;
   *inliers_out = inliers;
-  const int needed = just_relocalized ? options_.tracking.min_inliers_relocalized : options_.tracking.min_inliers;
+  const int needed =
+      just_relocalized ? options_.tracking.min_inliers_relocalized : options_.tracking.min_inliers;
   return inliers >= needed;
 }
 
@@ -222,8 +231,9 @@ bool Tracker::relocalizeAgainst(Frame& frame, const std::shared_ptr<KeyFrame>& k
   std::vector<int> with_points;
   for (int i = 0; i < kf->size(); ++i)
     if (kf->points[i] && !kf->points[i]->bad) with_points.push_back(i);
-  const Matches matches = matchBruteForce(*kf->features, with_points, *frame.features,
-                                          options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
+  const Matches matches =
+      matchBruteForce(*kf->features, with_points, *frame.features,
+                      options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
   if (static_cast<int>(matches.size()) < options_.reloc.min_matches) return false;
   std::vector<Eigen::Vector3d> pw;
   std::vector<Eigen::Vector2d> px;
@@ -238,7 +248,8 @@ bool Tracker::relocalizeAgainst(Frame& frame, const std::shared_ptr<KeyFrame>& k
   po.iterations = options_.reloc.pnp_iterations;
   po.chi2 = options_.reloc.pnp_threshold_px;
   po.min_inliers = options_.reloc.min_pnp_inliers;
-  const PnpResult pnp = solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, 2));
+  const PnpResult pnp =
+      solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, 2));
   if (!pnp.ok) return false;
   frame.resetMatches();
   for (size_t k = 0; k < matches.size(); ++k)
@@ -275,7 +286,8 @@ bool Tracker::relocalize(Frame& frame, std::shared_ptr<KeyFrame>* matched) {
   }
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-  if (static_cast<int>(candidates.size()) > options_.reloc.candidates) candidates.resize(options_.reloc.candidates);
+  if (static_cast<int>(candidates.size()) > options_.reloc.candidates)
+    candidates.resize(options_.reloc.candidates);
   for (const auto& c : candidates) {
     std::shared_lock<std::shared_mutex> lock(c.map->mutex);
     if (c.kf->bad) continue;
@@ -299,7 +311,8 @@ bool Tracker::needNewKeyFrame(const Frame& frame, int inliers, bool mapper_idle)
   const bool weak = inliers < o.weak_tracking_ratio * ref_points;
   const bool fewer = inliers < o.keyframe_ratio * ref_points;
   const double depth = reference_kf_->medianDepth();
-  const bool moved = depth > 0 && (frame.center() - last_keyframe_center_).norm() >= o.min_keyframe_baseline * depth;
+  const bool moved = depth > 0 && (frame.center() - last_keyframe_center_).norm() >=
+                                      o.min_keyframe_baseline * depth;
   const bool waited = frame.utime - last_keyframe_utime_ >= o.max_keyframe_interval_s * 1e6;
   return weak || (fewer && mapper_idle && (moved || waited));
 }
@@ -338,7 +351,8 @@ TrackResult Tracker::initialize(Frame& frame, bool after_loss) {
   const auto& kf0 = r.new_keyframes.front();
   const double dt = (frame.utime - kf0->utime) * 1e-6;
   velocity_valid_ = dt > 0 && dt <= options_.tracking.max_velocity_age_s;
-  if (velocity_valid_) velocity_per_s_ = logSE3(frame.T_camera_world * kf0->T_camera_world.inverse()) / dt;
+  if (velocity_valid_)
+    velocity_per_s_ = logSE3(frame.T_camera_world * kf0->T_camera_world.inverse()) / dt;
   frame.has_pose = true;
   last_frame_ = frame;
   r.outcome = TrackOutcome::kNewMap;
@@ -374,7 +388,8 @@ TrackResult Tracker::track(Frame& frame, bool continuous, bool mapper_idle) {
       state_ = State::kLost;
       lost_since_utime_ = frame.utime;
       velocity_valid_ = false;
-      r.event = "lost at seq " + std::to_string(frame.seq) + " (" + std::to_string(inliers) + " inliers)";
+      r.event =
+          "lost at seq " + std::to_string(frame.seq) + " (" + std::to_string(inliers) + " inliers)";
     }
   }
   if (!located && state_ == State::kLost) {
@@ -393,8 +408,9 @@ TrackResult Tracker::track(Frame& frame, bool continuous, bool mapper_idle) {
       last_relocalization_frame_ = frame.id;
       initializer_.reset();
       r.outcome = TrackOutcome::kRelocalized;
-      r.event = "relocalised at seq " + std::to_string(frame.seq) + " in map " + std::to_string(map_->id) +
-                " against keyframe " + std::to_string(kf->id) + " (" + std::to_string(inliers) + " inliers)";
+      r.event = "relocalised at seq " + std::to_string(frame.seq) + " in map " +
+                std::to_string(map_->id) + " against keyframe " + std::to_string(kf->id) + " (" +
+                std::to_string(inliers) + " inliers)";
     } else {
       frame.resetMatches();
       const double lost_s = (frame.utime - lost_since_utime_) * 1e-6;

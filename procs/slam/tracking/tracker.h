@@ -22,23 +22,23 @@ namespace slamaware {
 
 /// What the tracker concluded about one frame.
 enum class TrackOutcome {
-  kNoMap,          ///< no map yet (initialising)
-  kTracked,        ///< located in the current map, continuous with the previous frame
-  kRelocalized,    ///< located again after being lost (possibly in an earlier map)
-  kNewMap,         ///< a new map was initialised with this frame
-  kLost,           ///< not located
+  kNoMap,        ///< no map yet (initialising)
+  kTracked,      ///< located in the current map, continuous with the previous frame
+  kRelocalized,  ///< located again after being lost (possibly in an earlier map)
+  kNewMap,       ///< a new map was initialised with this frame
+  kLost,         ///< not located
 };
 
 struct TrackResult {
   TrackOutcome outcome = TrackOutcome::kNoMap;
   SE3 T_camera_world = SE3::Identity();  ///< valid for tracked / relocalised / new map
-  std::shared_ptr<Map> map;               ///< the map the pose is in (null without a map)
-  int num_tracked = 0;                    ///< map points matched (inliers)
+  std::shared_ptr<Map> map;              ///< the map the pose is in (null without a map)
+  int num_tracked = 0;                   ///< map points matched (inliers)
   int64_t reference_keyframe_id = -1;
   /// Keyframes created with this frame (two when a map was initialised), for local mapping and
   /// the depth filter.
   std::vector<std::shared_ptr<KeyFrame>> new_keyframes;
-  std::string event;                      ///< a sentence for the log when something changed
+  std::string event;  ///< a sentence for the log when something changed
 };
 
 class Tracker {
