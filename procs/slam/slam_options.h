@@ -161,7 +161,7 @@ struct DepthFilterOptions {
   int max_seeds_per_keyframe = 6000;   ///< seeds per keyframe, highest gradients first
   int seed_cell_px = 3;                ///< px, at most one seed per cell of this size
   double min_gradient = 10.0;          ///< grey levels per px, weakest gradient a seed may have
-  int max_keyframes = 4;               ///< seeds live until this many newer keyframes exist
+  int max_keyframes = 3;               ///< seeds live until this many newer keyframes exist
   double convergence_ratio = 200.0;    ///< converged when sigma < inverse-depth range / this
   double pixel_noise = 1.0;            ///< px, matching noise (tau of SVO's computeTau)
   double max_search_px = 400.0;        ///< px, longer epipolar segments are not searched

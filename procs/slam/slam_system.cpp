@@ -127,8 +127,8 @@ void SlamSystem::postDepthWork(const TrackResult& r, const Frame& frame) {
       input->new_keyframes.push_back(k);
     }
   }
-  // A new map's first keyframe is not the frame itself: it is seeded and then updated with this
-  // one.
+  // (A new map brings two keyframes; both are seeded after this frame's updates, so the first is
+  // updated from the next frame on, like every other keyframe.)
   depth_worker_->post([this, input]() {
     const std::vector<int64_t> finished = depth_->process(*input);
     if (finished.empty()) return;
@@ -143,7 +143,7 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
     ++stats_.frames_duplicate;
     SlamOutput again;
     again.has_pose = true;
-    again.pose = last_answer_.pose;
+    again.pose = last_pose_;
     return again;
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -228,7 +228,7 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
   }
   // New keyframes are announced with this frame: in lockstep after mapping has linked them.
   collect(utime, seq, r.new_keyframes, &out);
-  last_answer_ = out;
+  last_pose_ = out.pose;
   return out;
 }
 

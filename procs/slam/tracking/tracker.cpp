@@ -400,12 +400,12 @@ TrackResult Tracker::track(Frame& frame, bool continuous, bool mapper_idle) {
         if (m->id == kf->map_id) map_ = m;
       std::shared_lock<std::shared_mutex> lock(map_->mutex);
       reference_kf_ = kf;
+      last_keyframe_center_ = kf->center();  // the keyframe policy's baseline, in this map
       located = trackLocalMap(frame, true, &inliers);
     }
     if (located) {
       state_ = State::kTracking;
       velocity_valid_ = false;
-      last_relocalization_frame_ = frame.id;
       initializer_.reset();
       r.outcome = TrackOutcome::kRelocalized;
       r.event = "relocalised at seq " + std::to_string(frame.seq) + " in map " +
