@@ -225,6 +225,8 @@ SlamOutput SlamSystem::processFrame(int64_t utime, int32_t seq, const cv::Mat& b
   if (lockstep_) {
     mapper_->waitIdle();
     depth_worker_->waitIdle();
+  } else if (!options_.mapping.threaded) {
+    mapper_->waitIdle();  // no thread: mapping runs here
   }
   // New keyframes are announced with this frame: in lockstep after mapping has linked them.
   collect(utime, seq, r.new_keyframes, &out);

@@ -154,7 +154,7 @@ class SlamSystem {
   bool have_last_ = false;
   int64_t last_utime_ = 0;
   int32_t last_seq_ = -1;
-  PoseOutput last_pose_;         ///< the answer to the last frame processed (for a repeat)
+  PoseOutput last_pose_;   ///< the answer to the last frame processed (for a repeat)
   PoseOutput last_valid_;  ///< the last located pose (state TRACKING or RELOCALIZED)
   bool have_valid_ = false;
   PoseState last_state_ = PoseState::kInitializing;

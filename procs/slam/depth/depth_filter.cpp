@@ -25,14 +25,6 @@ DepthFilter::DepthFilter(const DepthFilterOptions& options, int width, int heigh
   px_error_angle_ = 2.0 * std::atan(options.pixel_noise / (2.0 * fx));
 }
 
-void DepthFilter::clear() {
-  hosts_.clear();
-  frames_ = measurements_ = failures_ = 0;
-  std::lock_guard<std::mutex> lock(store_mutex_);
-  store_.clear();
-  stats_ = DepthFilterStats();
-}
-
 std::vector<Eigen::Vector2i> DepthFilter::selectSeedPixels(const cv::Mat& grey) const {
   const int cell = std::max(1, options_.seed_cell_px);
   const float min_g2 = static_cast<float>(options_.min_gradient * options_.min_gradient);

@@ -88,14 +88,12 @@ class DepthFilter {
   /// Copies of all stored keyframes of a map, by id. Thread-safe.
   std::vector<SemiDenseKeyframe> mapKeyframes(int map_id) const;
   DepthFilterStats stats() const;
-  /// Forgets everything (a new camera).
-  void clear();
-
-  /// Seeds of a keyframe image: the strongest-gradient pixel of each cell, strongest first, at
-  /// most max_seeds_per_keyframe. Exposed for tests.
-  std::vector<Eigen::Vector2i> selectSeedPixels(const cv::Mat& grey) const;
 
  private:
+  /// Seeds of a keyframe image: the strongest-gradient pixel of each cell, strongest first, at
+  /// most max_seeds_per_keyframe.
+  std::vector<Eigen::Vector2i> selectSeedPixels(const cv::Mat& grey) const;
+
   struct Host {
     SemiDenseKeyframe* store = nullptr;
     cv::Mat grey, bgr;

@@ -65,11 +65,6 @@ std::vector<std::shared_ptr<KeyFrame>> KeyFrame::bestCovisible(int n) const {
   return out;
 }
 
-int KeyFrame::weight(int64_t keyframe_id) const {
-  auto it = connections_.find(keyframe_id);
-  return it == connections_.end() ? 0 : it->second.first;
-}
-
 void KeyFrame::updateConnections(int min_weight) {
   std::map<int64_t, std::pair<int, std::shared_ptr<KeyFrame>>> counts;
   for (const auto& p : points) {

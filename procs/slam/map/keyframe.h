@@ -53,7 +53,6 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
     return ordered_;
   }
   std::vector<std::shared_ptr<KeyFrame>> bestCovisible(int n) const;
-  int weight(int64_t keyframe_id) const;
   /// Recomputes this keyframe's edges from its points' observations and mirrors them into the
   /// other keyframes (edges need min_weight shared points; the heaviest edge is always kept).
   void updateConnections(int min_weight);

@@ -42,11 +42,6 @@ bool LocalMapper::idle() const {
   return queue_.empty() && !busy_;
 }
 
-size_t LocalMapper::queued() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return queue_.size();
-}
-
 void LocalMapper::waitIdle() {
   if (!threaded_) {
     while (true) {
@@ -241,7 +236,6 @@ void LocalMapper::createNewPoints(Map& map, const std::shared_ptr<KeyFrame>& kf)
     p->updateNormalAndDepth();
     map.addPoint(p);
     recent_points_.push_back(p);
-    ++points_created_;
   }
 }
 

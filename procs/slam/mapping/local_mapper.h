@@ -43,13 +43,11 @@ class LocalMapper {
   /// to finish it otherwise. Returns when nothing is queued or running.
   void waitIdle();
   bool idle() const;
-  size_t queued() const;
   /// Keyframes moved or culled since the last call.
   MappingEvents takeEvents();
 
   int64_t bundleAdjustments() const { return bundle_adjustments_.load(); }
   int64_t culledKeyFrames() const { return culled_keyframes_.load(); }
-  int64_t pointsCreated() const { return points_created_.load(); }
 
  private:
   using Job = std::pair<std::shared_ptr<Map>, std::shared_ptr<KeyFrame>>;
@@ -73,7 +71,7 @@ class LocalMapper {
   std::atomic<bool> abort_ba_{false};
   std::list<std::shared_ptr<MapPoint>> recent_points_;  ///< points created lately (worker only)
   int recent_map_id_ = -1;
-  std::atomic<int64_t> bundle_adjustments_{0}, culled_keyframes_{0}, points_created_{0};
+  std::atomic<int64_t> bundle_adjustments_{0}, culled_keyframes_{0};
   std::thread thread_;
 };
 

@@ -53,7 +53,6 @@ class Tracker {
   /// Every map created so far (the current one last), for relocalisation and output.
   const std::vector<std::shared_ptr<Map>>& maps() const { return maps_; }
   std::shared_ptr<Map> activeMap() const { return map_; }
-  bool lost() const { return state_ == State::kLost; }
   /// Drops every map and starts over (a new camera).
   void reset();
 
