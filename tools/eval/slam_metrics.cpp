@@ -147,6 +147,7 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
 
   double sq = 0;
   int ate_frames = 0, excluded = 0;
+  nlohmann::json per_map = nlohmann::json::object();
   for (auto it = maps.begin(); it != maps.end();) {
     MapAlignment& m = it->second;
     const auto& est = estimates[it->first];
@@ -156,11 +157,15 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
       continue;
     }
     m.sim = alignUmeyama(est, m.truth, true);
+    double map_sq = 0;
     for (size_t i = 0; i < est.size(); ++i) {
       m.aligned.push_back(m.sim * est[i]);
-      sq += (m.aligned.back() - m.truth[i]).squaredNorm();
+      map_sq += (m.aligned.back() - m.truth[i]).squaredNorm();
       ++ate_frames;
     }
+    sq += map_sq;
+    per_map[std::to_string(it->first)] = {
+        {"frames", est.size()}, {"ate_rmse", round3(std::sqrt(map_sq / est.size()) * 1000) / 1000}};
     ++it;
   }
   const double ate = ate_frames ? std::sqrt(sq / ate_frames) : 0;
@@ -175,6 +180,7 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
     s["ate_rmse"] = round3(ate * 1000) / 1000;
     s["ate_frames"] = ate_frames;
     s["ate_frames_excluded"] = excluded;
+    s["maps_aligned"] = per_map;
     s["gt_path_length_m"] = round3(path);
     s["gt_extent_m"] = round3(extent);
     s["ate_rmse_pct_of_path"] = round3(path > 0 ? 100.0 * ate / path : 0);
