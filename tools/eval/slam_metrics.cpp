@@ -201,6 +201,9 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
   if (!per_kf.empty()) {
     double sum = 0;
     for (double n : per_kf) sum += n;
+    // Over the keyframes whose points were published (the last keyframes of a run, still
+    // being filtered when it ended, have none).
+    s["keyframes_with_points"] = static_cast<int64_t>(per_kf.size());
     s["points_per_keyframe_mean"] = round3(sum / per_kf.size());
     s["points_per_keyframe_median"] = median(per_kf);
   }
