@@ -14,6 +14,7 @@ struct OrbOptions {
   int fast_threshold = 20;     ///< FAST threshold tried first in each cell
   int fast_threshold_min = 7;  ///< FAST threshold used in cells where the first finds nothing
   int cell_size_px = 32;       ///< px, FAST runs per cell so that weak cells still get corners
+  int threads = 2;             ///< pyramid levels are described on this many threads
   uint64_t pattern_seed = 7;   ///< seed of the BRIEF test pattern (fixed: descriptors are data)
 
   template <class V>
@@ -25,6 +26,8 @@ struct OrbOptions {
     v("fast_threshold_min", fast_threshold_min,
       "FAST threshold in cells where the first finds nothing");
     v("cell_size_px", cell_size_px, "px, side of the cells FAST runs in");
+    v("threads", threads,
+      "threads the pyramid levels are shared out to (results do not depend on it)");
     v("pattern_seed", pattern_seed,
       "seed of the BRIEF test pattern (descriptors of different seeds do not match)");
   }

@@ -74,3 +74,17 @@ TEST(OrbExtractor, DescriptorsSurviveAnInPlaneRotation) {
   }
   EXPECT_GT(correct, 0.9 * m.size());
 }
+
+TEST(OrbExtractor, ThreadsDoNotChangeTheFeatures) {
+  const cv::Mat image = texturedImage(3);
+  OrbOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const OrbFeatures a = OrbExtractor(one).extract(image), b = OrbExtractor(two).extract(image);
+  ASSERT_EQ(a.keypoints.size(), b.keypoints.size());
+  for (size_t i = 0; i < a.keypoints.size(); ++i) {
+    EXPECT_EQ(a.keypoints[i].pt, b.keypoints[i].pt);
+    EXPECT_EQ(a.keypoints[i].angle, b.keypoints[i].angle);
+  }
+  EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_HAMMING), 0);
+}

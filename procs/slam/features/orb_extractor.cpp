@@ -7,6 +7,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <thread>
 
 namespace slamaware {
 
@@ -252,46 +253,73 @@ OrbFeatures OrbExtractor::extract(const cv::Mat& grey) const {
     if (size.width < 2 * kBorder + 8 || size.height < 2 * kBorder + 8) break;
     cv::resize(images[l - 1], images[l], size, 0, 0, cv::INTER_LINEAR);
   }
-  std::vector<cv::Mat> descriptors;
+  // Levels are independent: with threads > 1 they are shared out (largest first, each to the
+  // least loaded thread) and the results joined in level order, so the output does not depend
+  // on the threads.
+  std::vector<std::vector<cv::KeyPoint>> level_kps(levels);
+  std::vector<cv::Mat> level_desc(levels);
+  auto runLevels = [&](const std::vector<int>& mine) {
+    for (int l : mine) describeLevel(images[l], l, &level_kps[l], &level_desc[l]);
+  };
+  const int threads = std::max(1, std::min(options_.threads, levels));
+  std::vector<std::vector<int>> share(threads);
+  std::vector<double> load(threads, 0);
   for (int l = 0; l < levels; ++l) {
     if (images[l].empty()) break;
-    std::vector<cv::KeyPoint> kps;
-    detectLevel(images[l], l, &kps);
-    if (kps.empty()) continue;
-    // Descriptors are computed on a smoothed image: BRIEF's single-pixel tests are noise-sensitive.
-    cv::Mat blurred;
-    cv::GaussianBlur(images[l], blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
-    cv::Mat desc(static_cast<int>(kps.size()), kDescriptorBytes, CV_8U);
-    const int step = static_cast<int>(blurred.step1());
-    for (size_t i = 0; i < kps.size(); ++i) {
-      const double a = kps[i].angle * M_PI / 180.0;
-      const float ca = static_cast<float>(std::cos(a)), sa = static_cast<float>(std::sin(a));
-      const uint8_t* center = blurred.ptr<uint8_t>(cvRound(kps[i].pt.y), cvRound(kps[i].pt.x));
-      auto sample = [&](int x, int y) {
-        return center[cvRound(x * sa + y * ca) * step + cvRound(x * ca - y * sa)];
-      };
-      uint8_t* d = desc.ptr<uint8_t>(static_cast<int>(i));
-      for (int byte = 0; byte < kDescriptorBytes; ++byte) {
-        uint8_t value = 0;
-        for (int bit = 0; bit < 8; ++bit) {
-          const auto& p = pattern_[byte * 8 + bit];
-          value |= static_cast<uint8_t>((sample(p[0], p[1]) < sample(p[2], p[3])) << bit);
-        }
-        d[byte] = value;
-      }
-      // Level-0 coordinates of the image this level was made from.
-      kps[i].pt.x = static_cast<float>(kps[i].pt.x * pyramid_.scale[l]);
-      kps[i].pt.y = static_cast<float>(kps[i].pt.y * pyramid_.scale[l]);
-      kps[i].size = static_cast<float>((2 * kPatchRadius + 1) * pyramid_.scale[l]);
-      result.keypoints.push_back(kps[i]);
-    }
-    descriptors.push_back(desc);
+    const int t = static_cast<int>(std::min_element(load.begin(), load.end()) - load.begin());
+    share[t].push_back(l);
+    load[t] += images[l].total();
+  }
+  std::vector<std::thread> helpers;
+  for (int t = 1; t < threads; ++t) helpers.emplace_back(runLevels, share[t]);
+  runLevels(share[0]);
+  for (auto& h : helpers) h.join();
+
+  std::vector<cv::Mat> descriptors;
+  for (int l = 0; l < levels; ++l) {
+    if (level_kps[l].empty()) continue;
+    result.keypoints.insert(result.keypoints.end(), level_kps[l].begin(), level_kps[l].end());
+    descriptors.push_back(level_desc[l]);
   }
   if (!descriptors.empty())
     cv::vconcat(descriptors, result.descriptors);
   else
     result.descriptors = cv::Mat(0, kDescriptorBytes, CV_8U);
   return result;
+}
+
+void OrbExtractor::describeLevel(const cv::Mat& image, int l, std::vector<cv::KeyPoint>* out,
+                                 cv::Mat* out_desc) const {
+  std::vector<cv::KeyPoint>& kps = *out;
+  detectLevel(image, l, &kps);
+  if (kps.empty()) return;
+  // Descriptors are computed on a smoothed image: BRIEF's single-pixel tests are noise-sensitive.
+  cv::Mat blurred;
+  cv::GaussianBlur(image, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+  cv::Mat desc(static_cast<int>(kps.size()), kDescriptorBytes, CV_8U);
+  const int step = static_cast<int>(blurred.step1());
+  for (size_t i = 0; i < kps.size(); ++i) {
+    const double a = kps[i].angle * M_PI / 180.0;
+    const float ca = static_cast<float>(std::cos(a)), sa = static_cast<float>(std::sin(a));
+    const uint8_t* center = blurred.ptr<uint8_t>(cvRound(kps[i].pt.y), cvRound(kps[i].pt.x));
+    auto sample = [&](int x, int y) {
+      return center[cvRound(x * sa + y * ca) * step + cvRound(x * ca - y * sa)];
+    };
+    uint8_t* d = desc.ptr<uint8_t>(static_cast<int>(i));
+    for (int byte = 0; byte < kDescriptorBytes; ++byte) {
+      uint8_t value = 0;
+      for (int bit = 0; bit < 8; ++bit) {
+        const auto& p = pattern_[byte * 8 + bit];
+        value |= static_cast<uint8_t>((sample(p[0], p[1]) < sample(p[2], p[3])) << bit);
+      }
+      d[byte] = value;
+    }
+    // Level-0 coordinates of the image this level was made from.
+    kps[i].pt.x = static_cast<float>(kps[i].pt.x * pyramid_.scale[l]);
+    kps[i].pt.y = static_cast<float>(kps[i].pt.y * pyramid_.scale[l]);
+    kps[i].size = static_cast<float>((2 * kPatchRadius + 1) * pyramid_.scale[l]);
+  }
+  *out_desc = desc;
 }
 
 int descriptorDistance(const uint8_t* a, const uint8_t* b) {

@@ -47,6 +47,9 @@ class OrbExtractor {
 
  private:
   void detectLevel(const cv::Mat& image, int level, std::vector<cv::KeyPoint>* out) const;
+  /// Keypoints (level-0 coordinates) and descriptors of one pyramid level.
+  void describeLevel(const cv::Mat& image, int level, std::vector<cv::KeyPoint>* keypoints,
+                     cv::Mat* descriptors) const;
 
   OrbOptions options_;
   ScalePyramid pyramid_;
