@@ -104,36 +104,43 @@ bool Tracker::trackMotionModel(Frame& frame) {
   return optimizeFramePose(frame, true) >= kMinPoseInliers;
 }
 
-bool Tracker::trackReferenceKeyFrame(Frame& frame) {
-  std::shared_ptr<KeyFrame> kf = reference_kf_;
-  if (!kf || kf->bad) kf = map_->keyframes.empty() ? nullptr : map_->keyframes.rbegin()->second;
-  if (!kf) return false;
+Matches Tracker::matchKeyFrame(const Frame& frame, const KeyFrame& kf) const {
   std::vector<int> with_points;
-  for (int i = 0; i < kf->size(); ++i)
-    if (kf->points[i] && !kf->points[i]->bad) with_points.push_back(i);
-  const Matches matches =
-      matchBruteForce(*kf->features, with_points, *frame.features,
-                      options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
-  if (matches.size() < 15) return false;
-  frame.resetMatches();
+  for (int i = 0; i < kf.size(); ++i)
+    if (kf.points[i] && !kf.points[i]->bad) with_points.push_back(i);
+  return matchBruteForce(*kf.features, with_points, *frame.features,
+                         options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
+}
+
+PnpResult Tracker::pnpFromMatches(const Frame& frame, const KeyFrame& kf, const Matches& matches,
+                                  int salt) const {
   std::vector<Eigen::Vector3d> pw;
   std::vector<Eigen::Vector2d> px;
   std::vector<double> sigma2;
   const Intrinsics& in = *frame.features->intrinsics;
   for (const auto& [i, j] : matches) {
-    frame.points[j] = kf->points[i];
-    pw.push_back(kf->points[i]->p_world);
+    pw.push_back(kf.points[i]->p_world);
     px.push_back(frame.features->px[j]);
     sigma2.push_back(in.pyramid.sigma2[frame.features->level(j)]);
   }
-  // Views far apart (slow frame rates) defeat a local optimisation from the last pose: start from
-  // PnP when it finds a pose.
   PnpOptions po;
   po.iterations = options_.reloc.pnp_iterations;
   po.chi2 = options_.reloc.pnp_threshold_px;
   po.min_inliers = options_.reloc.min_pnp_inliers;
-  const PnpResult pnp =
-      solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, 1));
+  return solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, salt));
+}
+
+bool Tracker::trackReferenceKeyFrame(Frame& frame) {
+  std::shared_ptr<KeyFrame> kf = reference_kf_;
+  if (!kf || kf->bad) kf = map_->keyframes.empty() ? nullptr : map_->keyframes.rbegin()->second;
+  if (!kf) return false;
+  const Matches matches = matchKeyFrame(frame, *kf);
+  if (matches.size() < 15) return false;
+  frame.resetMatches();
+  for (const auto& [i, j] : matches) frame.points[j] = kf->points[i];
+  // Views far apart (slow frame rates) defeat a local optimisation from the last pose: start from
+  // PnP when it finds a pose.
+  const PnpResult pnp = pnpFromMatches(frame, *kf, matches, 1);
   if (pnp.ok)
     frame.T_camera_world = pnp.T_camera_world;
   else if (last_frame_)
@@ -228,28 +235,9 @@ bool Tracker::trackLocalMap(Frame& frame, bool just_relocalized, int* inliers_ou
 }
 
 bool Tracker::relocalizeAgainst(Frame& frame, const std::shared_ptr<KeyFrame>& kf) {
-  std::vector<int> with_points;
-  for (int i = 0; i < kf->size(); ++i)
-    if (kf->points[i] && !kf->points[i]->bad) with_points.push_back(i);
-  const Matches matches =
-      matchBruteForce(*kf->features, with_points, *frame.features,
-                      options_.tracking.reference_match_ratio, kMatchDistanceHigh, true);
+  const Matches matches = matchKeyFrame(frame, *kf);
   if (static_cast<int>(matches.size()) < options_.reloc.min_matches) return false;
-  std::vector<Eigen::Vector3d> pw;
-  std::vector<Eigen::Vector2d> px;
-  std::vector<double> sigma2;
-  const Intrinsics& in = *frame.features->intrinsics;
-  for (const auto& [i, j] : matches) {
-    pw.push_back(kf->points[i]->p_world);
-    px.push_back(frame.features->px[j]);
-    sigma2.push_back(in.pyramid.sigma2[frame.features->level(j)]);
-  }
-  PnpOptions po;
-  po.iterations = options_.reloc.pnp_iterations;
-  po.chi2 = options_.reloc.pnp_threshold_px;
-  po.min_inliers = options_.reloc.min_pnp_inliers;
-  const PnpResult pnp =
-      solvePnpRansac(pw, px, sigma2, in.fx, in.fy, in.cx, in.cy, po, rngSeed(frame, 2));
+  const PnpResult pnp = pnpFromMatches(frame, *kf, matches, 2);
   if (!pnp.ok) return false;
   frame.resetMatches();
   for (size_t k = 0; k < matches.size(); ++k)

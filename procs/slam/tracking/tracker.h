@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "procs/slam/geometry/pnp.h"
 #include "procs/slam/initialization/initializer.h"
 #include "procs/slam/map/frame.h"
 #include "procs/slam/map/map.h"
@@ -62,6 +63,11 @@ class Tracker {
   TrackResult initialize(Frame& frame, bool after_loss);
   bool trackMotionModel(Frame& frame);
   bool trackReferenceKeyFrame(Frame& frame);
+  /// Descriptor matches (keyframe feature, frame feature) of the keyframe's map points.
+  Matches matchKeyFrame(const Frame& frame, const KeyFrame& kf) const;
+  /// PnP RANSAC on those matches (salt varies the random stream per use).
+  PnpResult pnpFromMatches(const Frame& frame, const KeyFrame& kf, const Matches& matches,
+                           int salt) const;
   bool trackLocalMap(Frame& frame, bool just_relocalized, int* inliers);
   bool relocalize(Frame& frame, std::shared_ptr<KeyFrame>* matched_kf);
   bool relocalizeAgainst(Frame& frame, const std::shared_ptr<KeyFrame>& kf);
