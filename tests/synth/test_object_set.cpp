@@ -3,6 +3,7 @@
 // (build/synth-sheets/objects.png). Also the shipped object-set configs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -120,6 +121,10 @@ TEST(SynthObjectSet, ShippedConfigsPromiseTheTrainingSets) {
     EXPECT_GE(s.objects.count, 3) << e.path();
     EXPECT_LE(s.objects.count, 8) << e.path();
     EXPECT_EQ(s.name, e.path().stem().string());
+    // The camera circles the table at 0.7-1.5 m from its centre.
+    const TrajectoryOptions& t = s.trajectory;
+    EXPECT_GE(std::hypot(t.radius_min, t.height_min), 0.7) << e.path();
+    EXPECT_LE(std::hypot(t.radius_max, t.height_max), 1.5) << e.path();
     ++scenes;
   }
   EXPECT_GE(scenes, 8);
