@@ -16,7 +16,8 @@
 using namespace slamaware::synth;
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-bench-synth: median frames/s of the synthetic renderer at 640x480 on one core"};
+  CLI::App app{
+      "slamaware-bench-synth: median frames/s of the synthetic renderer at 640x480 on one core"};
   std::string out;
   int frames = 90;
   int64_t seed = 7;
@@ -60,7 +61,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "slamaware-bench-synth: cannot write %s\n", out.c_str());
     return 1;
   }
-  std::printf("synth_fps %.1f (median of %d frames, 640x480, CPU time of one core; wall clock %.1f)\n", cpu_median, frames,
-              wall_median);
+  std::printf(
+      "synth_fps %.1f (median of %d frames, 640x480, CPU time of one core; wall clock %.1f)\n",
+      cpu_median, frames, wall_median);
   return 0;
 }

@@ -46,7 +46,8 @@ ObjectModel makeObject(const std::string& category, uint64_t instance_seed);
 /// Instance seeds: the top bit says where an instance may appear, so that the instances of the
 /// object sets (training) and of the scenes (testing) can never coincide.
 enum class SeedDomain : uint64_t { kObjectSet = 0, kScene = 1 };
-uint64_t instanceSeed(SeedDomain domain, uint64_t set_seed, const std::string& category, uint64_t index);
+uint64_t instanceSeed(SeedDomain domain, uint64_t set_seed, const std::string& category,
+                      uint64_t index);
 SeedDomain seedDomain(uint64_t instance_seed);
 
 }  // namespace slamaware::synth

@@ -18,8 +18,8 @@ namespace slamaware::synth {
 struct Receiver {
   int material = -1;
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0, z = 0;
-  float ao_radius = 0.02f;    ///< m, reach of the contact darkening
-  float ao_strength = 0.5f;   ///< darkening right next to an occluder
+  float ao_radius = 0.02f;      ///< m, reach of the contact darkening
+  float ao_strength = 0.5f;     ///< darkening right next to an occluder
   float shadow_texel = 0.003f;  ///< m, resolution of the shadow test
 };
 
@@ -44,8 +44,8 @@ LightSetup makeLight(const LightOptions& o, Rng& rng);
 
 /// Adds a room with a table to `scene`. The room is placed so that every wall is at least
 /// `clear_radius` from the table centre. Throws std::invalid_argument for unknown styles.
-Environment buildEnvironment(RenderScene* scene, const RoomOptions& room, const TableOptions& table, Rng& rng,
-                             float clear_radius);
+Environment buildEnvironment(RenderScene* scene, const RoomOptions& room, const TableOptions& table,
+                             Rng& rng, float clear_radius);
 
 /// Bakes a receiver's light maps: shadows cast along the scene light by `occluders` (item indices)
 /// and contact darkening under them. `region` limits the work to [x0, y0, x1, y1] (world), or

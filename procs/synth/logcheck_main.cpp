@@ -16,12 +16,14 @@
 using namespace slamaware;
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-synth-logcheck: is a recorded synthetic scene complete and byte-faithful?"};
+  CLI::App app{
+      "slamaware-synth-logcheck: is a recorded synthetic scene complete and byte-faithful?"};
   std::string log, sequence, camera = "CAMERA", camera_info = "CAMERA_INFO";
   int frames = -1;
   app.add_option("log", log, "LCM log")->required()->check(CLI::ExistingFile);
   app.add_option("--frames", frames, "expected number of frames")->required();
-  app.add_option("--sequence", sequence, "the sequence folder that was streamed (compares the JPEG bytes)");
+  app.add_option("--sequence", sequence,
+                 "the sequence folder that was streamed (compares the JPEG bytes)");
   app.add_option("--camera", camera, "frame channel");
   app.add_option("--camera-info", camera_info, "intrinsics channel");
   CLI11_PARSE(app, argc, argv);
@@ -39,27 +41,34 @@ int main(int argc, char** argv) {
     for (const LogRecord& r : LogReader::readAll(log)) {
       if (r.channel == camera_info) {
         camera_info_t info;
-        if (info.decode(r.data.data(), 0, static_cast<int>(r.data.size())) < 0) return fail("undecodable CAMERA_INFO");
-        if (compare && (info.width != seq.info().camera.width() || std::fabs(info.fx - seq.info().camera.fx()) > 1e-9))
+        if (info.decode(r.data.data(), 0, static_cast<int>(r.data.size())) < 0)
+          return fail("undecodable CAMERA_INFO");
+        if (compare && (info.width != seq.info().camera.width() ||
+                        std::fabs(info.fx - seq.info().camera.fx()) > 1e-9))
           return fail("CAMERA_INFO does not match sequence.yaml");
         ++infos;
         continue;
       }
       if (r.channel != camera) continue;
       image_t img;
-      if (img.decode(r.data.data(), 0, static_cast<int>(r.data.size())) < 0) return fail("undecodable CAMERA message");
-      if (img.seq != next) return fail("expected seq " + std::to_string(next) + ", got " + std::to_string(img.seq));
+      if (img.decode(r.data.data(), 0, static_cast<int>(r.data.size())) < 0)
+        return fail("undecodable CAMERA message");
+      if (img.seq != next)
+        return fail("expected seq " + std::to_string(next) + ", got " + std::to_string(img.seq));
       if (img.utime != static_cast<int64_t>(std::llround(next * 1e6 / fps)))
-        return fail("frame " + std::to_string(next) + ": utime " + std::to_string(img.utime) + " is not index / fps");
+        return fail("frame " + std::to_string(next) + ": utime " + std::to_string(img.utime) +
+                    " is not index / fps");
       if (compare) {
         std::ifstream in(seq.framePath(static_cast<size_t>(next)), std::ios::binary);
         const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
         if (img.pixel_format != image_t::PIXEL_FORMAT_JPEG || img.data != bytes)
-          return fail("frame " + std::to_string(next) + " differs from " + seq.framePath(static_cast<size_t>(next)));
+          return fail("frame " + std::to_string(next) + " differs from " +
+                      seq.framePath(static_cast<size_t>(next)));
       }
       ++next;
     }
-    if (next != frames) return fail("found " + std::to_string(next) + " frames, expected " + std::to_string(frames));
+    if (next != frames)
+      return fail("found " + std::to_string(next) + " frames, expected " + std::to_string(frames));
     if (infos == 0) return fail("no CAMERA_INFO");
     std::printf("logcheck: %s: %d frames in order, %d CAMERA_INFO%s\n", log.c_str(), next, infos,
                 compare ? ", frames identical to the sequence" : "");

@@ -38,7 +38,8 @@ void addFace(Mesh& m, const Eigen::Vector3f& p0, const Eigen::Vector3f& a, const
 void Mesh::append(const Mesh& other) {
   const uint32_t base = static_cast<uint32_t>(vertices.size());
   vertices.insert(vertices.end(), other.vertices.begin(), other.vertices.end());
-  for (const auto& t : other.triangles) triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  for (const auto& t : other.triangles)
+    triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
 }
 
 void Mesh::transform(const Eigen::Affine3f& T) {
@@ -79,14 +80,16 @@ void Mesh::planarUv(const Eigen::Vector3f& du, float u0, const Eigen::Vector3f& 
   for (auto& v : vertices) v.uv = {du.dot(v.p) + u0, dv.dot(v.p) + v0};
 }
 
-Mesh gridMesh(int rows, int cols, const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector2f>& uvs,
-              bool seam) {
+Mesh gridMesh(int rows, int cols, const std::vector<Eigen::Vector3f>& points,
+              const std::vector<Eigen::Vector2f>& uvs, bool seam) {
   return gridMeshWithBreaks(rows, cols, points, uvs, seam, {});
 }
 
 Mesh gridMeshWithBreaks(int rows, int cols, const std::vector<Eigen::Vector3f>& points,
-                        const std::vector<Eigen::Vector2f>& uvs, bool seam, const std::vector<bool>& row_break) {
-  if (rows < 2 || cols < 2 || points.size() != static_cast<size_t>(rows) * cols || uvs.size() != points.size())
+                        const std::vector<Eigen::Vector2f>& uvs, bool seam,
+                        const std::vector<bool>& row_break) {
+  if (rows < 2 || cols < 2 || points.size() != static_cast<size_t>(rows) * cols ||
+      uvs.size() != points.size())
     throw std::invalid_argument("gridMesh: sizes do not match");
   Mesh m;
   m.vertices.resize(points.size());
@@ -131,11 +134,13 @@ Mesh gridMeshWithBreaks(int rows, int cols, const std::vector<Eigen::Vector3f>& 
 
 Mesh lathe(const std::vector<ProfilePoint>& profile, int segments, float u_repeat,
            const std::function<float(float, float)>& radial) {
-  if (profile.size() < 2 || segments < 3) throw std::invalid_argument("lathe: need 2 profile points, 3 segments");
+  if (profile.size() < 2 || segments < 3)
+    throw std::invalid_argument("lathe: need 2 profile points, 3 segments");
   const size_t n = profile.size();
   std::vector<float> arc(n, 0.f);
   for (size_t i = 1; i < n; ++i)
-    arc[i] = arc[i - 1] + std::hypot(profile[i].r - profile[i - 1].r, profile[i].z - profile[i - 1].z);
+    arc[i] =
+        arc[i - 1] + std::hypot(profile[i].r - profile[i - 1].r, profile[i].z - profile[i - 1].z);
   const float total = arc.back() > 0 ? arc.back() : 1.f;
   // Rows: a profile point, twice at an inner crease (the two copies get the two sides' normals).
   struct Row {
@@ -164,14 +169,16 @@ Mesh lathe(const std::vector<ProfilePoint>& profile, int segments, float u_repea
       const float phi = kTwoPi * s;
       const float rr = pp.r * (radial ? radial(phi, t) : 1.f);
       pts[static_cast<size_t>(r) * C + c] =
-          c == segments ? pts[static_cast<size_t>(r) * C] : Eigen::Vector3f(rr * std::cos(phi), rr * std::sin(phi), pp.z);
+          c == segments ? pts[static_cast<size_t>(r) * C]
+                        : Eigen::Vector3f(rr * std::cos(phi), rr * std::sin(phi), pp.z);
       uvs[static_cast<size_t>(r) * C + c] = {s * u_repeat, 1.f - v};
     }
   }
   return gridMeshWithBreaks(R, C, pts, uvs, true, breaks);
 }
 
-Mesh parametricSphere(const std::function<Eigen::Vector3f(float, float)>& fn, int segments, int rings, float u_repeat) {
+Mesh parametricSphere(const std::function<Eigen::Vector3f(float, float)>& fn, int segments,
+                      int rings, float u_repeat) {
   const int R = rings + 1, C = segments + 1;
   std::vector<Eigen::Vector3f> pts(static_cast<size_t>(R) * C);
   std::vector<Eigen::Vector2f> uvs(pts.size());
@@ -179,7 +186,8 @@ Mesh parametricSphere(const std::function<Eigen::Vector3f(float, float)>& fn, in
     const float t = static_cast<float>(r) / static_cast<float>(rings);
     for (int c = 0; c < C; ++c) {
       const float s = static_cast<float>(c) / static_cast<float>(segments);
-      pts[static_cast<size_t>(r) * C + c] = c == segments ? pts[static_cast<size_t>(r) * C] : fn(s, t);
+      pts[static_cast<size_t>(r) * C + c] =
+          c == segments ? pts[static_cast<size_t>(r) * C] : fn(s, t);
       uvs[static_cast<size_t>(r) * C + c] = {s * u_repeat, 1.f - t};
     }
   }
@@ -188,8 +196,8 @@ Mesh parametricSphere(const std::function<Eigen::Vector3f(float, float)>& fn, in
   return m;
 }
 
-Mesh sweep(const std::vector<Eigen::Vector3f>& curve, const std::function<float(float)>& radius, int sides, bool caps,
-           float ratio, const Eigen::Vector3f& up_hint) {
+Mesh sweep(const std::vector<Eigen::Vector3f>& curve, const std::function<float(float)>& radius,
+           int sides, bool caps, float ratio, const Eigen::Vector3f& up_hint) {
   const int n = static_cast<int>(curve.size());
   if (n < 2 || sides < 3) throw std::invalid_argument("sweep: need 2 curve points, 3 sides");
   std::vector<Eigen::Vector3f> T(n), N(n), B(n);
@@ -220,8 +228,9 @@ Mesh sweep(const std::vector<Eigen::Vector3f>& curve, const std::function<float(
       const float s = static_cast<float>(c) / static_cast<float>(sides);
       const float th = kTwoPi * s;
       pts[static_cast<size_t>(i) * C + c] =
-          c == sides ? pts[static_cast<size_t>(i) * C]
-                     : Eigen::Vector3f(curve[i] + r * (std::cos(th) * N[i] + ratio * std::sin(th) * B[i]));
+          c == sides
+              ? pts[static_cast<size_t>(i) * C]
+              : Eigen::Vector3f(curve[i] + r * (std::cos(th) * N[i] + ratio * std::sin(th) * B[i]));
       uvs[static_cast<size_t>(i) * C + c] = {s, t};
     }
   }
@@ -281,7 +290,8 @@ Mesh box(const Eigen::Vector3f& size) {
   const Eigen::Vector3f h = size / 2.f;
   const BoxAtlas a = boxAtlasLayout(size);
   Mesh m;
-  const Eigen::Vector3f X = Eigen::Vector3f::UnitX(), Y = Eigen::Vector3f::UnitY(), Z = Eigen::Vector3f::UnitZ();
+  const Eigen::Vector3f X = Eigen::Vector3f::UnitX(), Y = Eigen::Vector3f::UnitY(),
+                        Z = Eigen::Vector3f::UnitZ();
   // Sides: u runs around the box (front -> right -> back -> left), v downwards.
   addFace(m, {-h.x(), -h.y(), h.z()}, X * size.x(), -Z * size.z(), -Y, a.front);
   addFace(m, {h.x(), -h.y(), h.z()}, Y * size.y(), -Z * size.z(), X, a.right);
@@ -300,8 +310,8 @@ Mesh superquadric(const Eigen::Vector3f& half, float e_h, float e_v, int segment
         const float phi = kTwoPi * s - 3.14159265f;  // seam at the back
         const float eta = 3.14159265f * (t - 0.5f);
         const float ce = spow(std::cos(eta), e_v), se = spow(std::sin(eta), e_v);
-        return Eigen::Vector3f(half.x() * ce * spow(std::cos(phi), e_h), half.y() * ce * spow(std::sin(phi), e_h),
-                               half.z() * se);
+        return Eigen::Vector3f(half.x() * ce * spow(std::cos(phi), e_h),
+                               half.y() * ce * spow(std::sin(phi), e_h), half.z() * se);
       },
       segments, rings);
 }
@@ -369,21 +379,22 @@ Mesh extrude(const std::vector<Eigen::Vector2f>& poly, float z0, float z1, float
     const float len = d.norm();
     if (len <= 0) continue;
     const Eigen::Vector3f out(d.y() / len, -d.x() / len, 0.f);
-    addFace(m, {a.x(), a.y(), z0}, Eigen::Vector3f(d.x(), d.y(), 0.f), Eigen::Vector3f(0, 0, z1 - z0), out,
-            {u / perimeter, 1.f, (u + len) / perimeter, 0.f});
+    addFace(m, {a.x(), a.y(), z0}, Eigen::Vector3f(d.x(), d.y(), 0.f),
+            Eigen::Vector3f(0, 0, z1 - z0), out, {u / perimeter, 1.f, (u + len) / perimeter, 0.f});
     u += len;
   }
   return m;
 }
 
-Mesh quad(const Eigen::Vector3f& origin, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float u_max, float v_max,
-          int nx, int ny) {
+Mesh quad(const Eigen::Vector3f& origin, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+          float u_max, float v_max, int nx, int ny) {
   const int R = ny + 1, C = nx + 1;
   std::vector<Eigen::Vector3f> pts(static_cast<size_t>(R) * C);
   std::vector<Eigen::Vector2f> uvs(pts.size());
   for (int r = 0; r < R; ++r)
     for (int c = 0; c < C; ++c) {
-      const float s = static_cast<float>(c) / static_cast<float>(nx), t = static_cast<float>(r) / static_cast<float>(ny);
+      const float s = static_cast<float>(c) / static_cast<float>(nx),
+                  t = static_cast<float>(r) / static_cast<float>(ny);
       pts[static_cast<size_t>(r) * C + c] = origin + s * a + t * b;
       uvs[static_cast<size_t>(r) * C + c] = {s * u_max, t * v_max};
     }

@@ -13,10 +13,10 @@
 namespace slamaware::synth {
 
 struct Vertex {
-  Eigen::Vector3f p = Eigen::Vector3f::Zero();   ///< position, m
-  Eigen::Vector3f n = Eigen::Vector3f::UnitZ();  ///< unit normal
-  Eigen::Vector2f uv = Eigen::Vector2f::Zero();  ///< texture coordinates
-  Eigen::Vector2f uv2 = Eigen::Vector2f::Zero(); ///< light-map coordinates (receivers only)
+  Eigen::Vector3f p = Eigen::Vector3f::Zero();    ///< position, m
+  Eigen::Vector3f n = Eigen::Vector3f::UnitZ();   ///< unit normal
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();   ///< texture coordinates
+  Eigen::Vector2f uv2 = Eigen::Vector2f::Zero();  ///< light-map coordinates (receivers only)
 };
 
 struct Mesh {
@@ -31,7 +31,8 @@ struct Mesh {
   double signedVolume() const;
   /// Reverses every triangle and normal.
   void flip();
-  /// Sets uv = (a + b * p) per vertex from a planar projection: u = du.dot(p) + u0, v = dv.dot(p) + v0.
+  /// Sets uv = (a + b * p) per vertex from a planar projection: u = du.dot(p) + u0, v = dv.dot(p) +
+  /// v0.
   void planarUv(const Eigen::Vector3f& du, float u0, const Eigen::Vector3f& dv, float v0);
 };
 
@@ -58,17 +59,19 @@ Mesh gridMesh(int rows, int cols, const std::vector<Eigen::Vector3f>& points,
 /// gridMesh without quads between row r and r + 1 where row_break[r] (a crease: the two rows are
 /// copies of the same points with different normals).
 Mesh gridMeshWithBreaks(int rows, int cols, const std::vector<Eigen::Vector3f>& points,
-                        const std::vector<Eigen::Vector2f>& uvs, bool seam, const std::vector<bool>& row_break);
+                        const std::vector<Eigen::Vector2f>& uvs, bool seam,
+                        const std::vector<bool>& row_break);
 
 /// A closed surface from a function of (s, t) in [0, 1]^2: t from the bottom pole (0) to the top
 /// pole (1), s once around. Oriented outwards (flipped if its volume comes out negative).
-Mesh parametricSphere(const std::function<Eigen::Vector3f(float s, float t)>& fn, int segments, int rings,
-                      float u_repeat = 1.f);
+Mesh parametricSphere(const std::function<Eigen::Vector3f(float s, float t)>& fn, int segments,
+                      int rings, float u_repeat = 1.f);
 
 /// A tube along a curve with a circular (or elliptical: radius x ratio across) section whose radius
 /// may vary along it; closed with flat caps when `caps`. u around, v along (0..1).
-Mesh sweep(const std::vector<Eigen::Vector3f>& curve, const std::function<float(float t)>& radius, int sides,
-           bool caps, float ratio = 1.f, const Eigen::Vector3f& up_hint = Eigen::Vector3f::UnitZ());
+Mesh sweep(const std::vector<Eigen::Vector3f>& curve, const std::function<float(float t)>& radius,
+           int sides, bool caps, float ratio = 1.f,
+           const Eigen::Vector3f& up_hint = Eigen::Vector3f::UnitZ());
 
 /// A box centred at the origin with flat faces. Texture: an atlas with the faces laid out as
 /// columns [front(-y) | right(+x) | back(+y) | left(-x)] over rows [sides | top | bottom] in
@@ -83,18 +86,20 @@ BoxAtlas boxAtlasLayout(const Eigen::Vector3f& size);
 
 /// Superquadric ("rounded box"): half sizes a, exponents e_round (0.1 boxy .. 1 ellipsoidal) for
 /// the horizontal section and the vertical profile. Texture: u around, v bottom-to-top.
-Mesh superquadric(const Eigen::Vector3f& half, float e_horizontal, float e_vertical, int segments, int rings);
+Mesh superquadric(const Eigen::Vector3f& half, float e_horizontal, float e_vertical, int segments,
+                  int rings);
 
 /// A prism: a simple polygon (counter-clockwise, x-y plane) extruded from z0 to z1. Caps use the
 /// polygon's x, y (scaled by uv_scale) as texture coordinates; sides u along the outline.
 Mesh extrude(const std::vector<Eigen::Vector2f>& polygon, float z0, float z1, float uv_scale = 1.f);
 
 /// Triangulates a simple polygon (counter-clockwise) by ear clipping.
-std::vector<std::array<uint32_t, 3>> triangulatePolygon(const std::vector<Eigen::Vector2f>& polygon);
+std::vector<std::array<uint32_t, 3>> triangulatePolygon(
+    const std::vector<Eigen::Vector2f>& polygon);
 
 /// A flat rectangle (two triangles) with corner `origin`, edge vectors `a` (u) and `b` (v), facing
 /// a x b, with uv from (0, 0) to (u_max, v_max); subdivided into nx x ny quads.
-Mesh quad(const Eigen::Vector3f& origin, const Eigen::Vector3f& a, const Eigen::Vector3f& b, float u_max = 1,
-          float v_max = 1, int nx = 1, int ny = 1);
+Mesh quad(const Eigen::Vector3f& origin, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+          float u_max = 1, float v_max = 1, int nx = 1, int ny = 1);
 
 }  // namespace slamaware::synth

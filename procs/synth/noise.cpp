@@ -16,9 +16,9 @@ inline float fade(float t) { return t * t * t * (t * (t * 6.f - 15.f) + 10.f); }
 
 // One of 16 unit gradients on the circle.
 inline float grad(uint32_t h, float dx, float dy) {
-  static const float kCos[16] = {1.f,        0.9238795f,  0.7071068f,  0.3826834f, 0.f,        -0.3826834f,
-                                 -0.7071068f, -0.9238795f, -1.f,        -0.9238795f, -0.7071068f, -0.3826834f,
-                                 0.f,        0.3826834f,  0.7071068f,  0.9238795f};
+  static const float kCos[16] = {
+      1.f,  0.9238795f,  0.7071068f,  0.3826834f,  0.f, -0.3826834f, -0.7071068f, -0.9238795f,
+      -1.f, -0.9238795f, -0.7071068f, -0.3826834f, 0.f, 0.3826834f,  0.7071068f,  0.9238795f};
   const uint32_t k = h & 15u;
   return kCos[k] * dx + kCos[(k + 4u) & 15u] * dy;
 }
@@ -38,7 +38,9 @@ uint32_t hash32(int x, int y, uint32_t seed) {
   return h;
 }
 
-float hash01(int x, int y, uint32_t seed) { return static_cast<float>(hash32(x, y, seed) >> 8) * (1.f / 16777216.f); }
+float hash01(int x, int y, uint32_t seed) {
+  return static_cast<float>(hash32(x, y, seed) >> 8) * (1.f / 16777216.f);
+}
 
 namespace {
 // A cheap lattice hash: only a few bits pick a gradient.
@@ -54,7 +56,8 @@ float gradientNoise(float x, float y, uint32_t seed, int period_x) {
   const float fx = std::floor(x), fy = std::floor(y);
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
   const float dx = x - fx, dy = y - fy;
-  const int x0 = period_x > 0 ? wrapIndex(ix, period_x) : ix, x1 = period_x > 0 ? wrapIndex(ix + 1, period_x) : ix + 1;
+  const int x0 = period_x > 0 ? wrapIndex(ix, period_x) : ix,
+            x1 = period_x > 0 ? wrapIndex(ix + 1, period_x) : ix + 1;
   const uint32_t s = seed * 0xCB1AB31Fu;
   const float n00 = grad(latticeHash(x0, iy, s), dx, dy);
   const float n10 = grad(latticeHash(x1, iy, s), dx - 1.f, dy);
@@ -83,7 +86,8 @@ float ridged(float x, float y, uint32_t seed, int octaves, int period_x) {
   float sum = 0.f, amp = 1.f, norm = 0.f, f = 1.f;
   int period = period_x;
   for (int o = 0; o < octaves; ++o) {
-    const float n = 1.f - std::fabs(gradientNoise(x * f, y * f, seed + 7919u * static_cast<uint32_t>(o), period));
+    const float n = 1.f - std::fabs(gradientNoise(x * f, y * f,
+                                                  seed + 7919u * static_cast<uint32_t>(o), period));
     sum += amp * n * n;
     norm += amp;
     amp *= 0.5f;

@@ -37,11 +37,14 @@ void rasterize(const float* xs, const float* ys, const Viewport& vp, Fn&& fn) {
     std::swap(Y[1], Y[2]);
   }
   const int64_t minX = std::max<int64_t>(vp.x0, -floorDiv(-std::min({X[0], X[1], X[2]}), kSub));
-  const int64_t maxX = std::min<int64_t>(vp.x0 + vp.w - 1, floorDiv(std::max({X[0], X[1], X[2]}), kSub));
+  const int64_t maxX =
+      std::min<int64_t>(vp.x0 + vp.w - 1, floorDiv(std::max({X[0], X[1], X[2]}), kSub));
   const int64_t minY = std::max<int64_t>(vp.y0, -floorDiv(-std::min({Y[0], Y[1], Y[2]}), kSub));
-  const int64_t maxY = std::min<int64_t>(vp.y0 + vp.h - 1, floorDiv(std::max({Y[0], Y[1], Y[2]}), kSub));
+  const int64_t maxY =
+      std::min<int64_t>(vp.y0 + vp.h - 1, floorDiv(std::max({Y[0], Y[1], Y[2]}), kSub));
   if (minX > maxX || minY > maxY) return;
-  // Edge a->b: E(p) = (bx - ax)(py - ay) - (by - ay)(px - ax) > 0 inside; = 0 counts on top-left edges.
+  // Edge a->b: E(p) = (bx - ax)(py - ay) - (by - ay)(px - ax) > 0 inside; = 0 counts on top-left
+  // edges.
   int64_t A[3], B[3], C[3];
   for (int e = 0; e < 3; ++e) {
     const int a = e, b = (e + 1) % 3;
@@ -56,7 +59,8 @@ void rasterize(const float* xs, const float* ys, const Viewport& vp, Fn&& fn) {
     int64_t e1 = A[1] * minX * kSub + B[1] * y * kSub + C[1];
     int64_t e2 = A[2] * minX * kSub + B[2] * y * kSub + C[2];
     const int64_t s0 = A[0] * kSub, s1 = A[1] * kSub, s2 = A[2] * kSub;
-    size_t index = static_cast<size_t>(y - vp.y0) * static_cast<size_t>(vp.w) + static_cast<size_t>(minX - vp.x0);
+    size_t index = static_cast<size_t>(y - vp.y0) * static_cast<size_t>(vp.w) +
+                   static_cast<size_t>(minX - vp.x0);
     bool seen = false;
     for (int64_t x = minX; x <= maxX; ++x, ++index, e0 += s0, e1 += s1, e2 += s2) {
       if ((e0 | e1 | e2) >= 0) {
@@ -87,7 +91,8 @@ int clipNear(const Eigen::Vector3f* P, float near, Eigen::Vector3f* out) {
 
 // Projects a clipped polygon and rasterises it as a fan.
 template <class Fn>
-void rasterPolygon(const Eigen::Vector3f* poly, int n, const Intrinsics& K, const Viewport& vp, Fn&& fn) {
+void rasterPolygon(const Eigen::Vector3f* poly, int n, const Intrinsics& K, const Viewport& vp,
+                   Fn&& fn) {
   float xs[4], ys[4];
   for (int i = 0; i < n; ++i) {
     const float iz = 1.f / poly[i].z();
@@ -120,18 +125,33 @@ void toPixelAffine(const Eigen::Vector3f& c, const Intrinsics& K, float out[3]) 
 
 }  // namespace
 
+void RenderScene::freezePrefix(size_t n) {
+  frozen_items_ = 0;
+  const std::vector<RenderItem> rest(items.begin() + static_cast<long>(n), items.end());
+  items.resize(n);
+  finalize();
+  frozen_items_ = n;
+  frozen_vertices_ = vertices_.size();
+  frozen_triangles_ = triangles_.size();
+  items.insert(items.end(), rest.begin(), rest.end());
+  finalize();
+}
+
 void RenderScene::finalize() {
-  vertices_.clear();
-  triangles_.clear();
+  // The frozen prefix (background only) comes first in the full order too, so re-using it gives
+  // the same arrays as flattening everything again.
+  const size_t first = frozen_items_ > 0 && items.size() >= frozen_items_ ? frozen_items_ : 0;
+  vertices_.resize(first ? frozen_vertices_ : 0);
+  triangles_.resize(first ? frozen_triangles_ : 0);
   int max_object = -1;
   for (const auto& it : items) max_object = std::max(max_object, it.object);
   object_ranges_.assign(static_cast<size_t>(max_object + 1), Range{});
   // Background first, then objects in id order, so that each object's triangles are contiguous.
   std::vector<size_t> order;
-  for (size_t i = 0; i < items.size(); ++i)
+  for (size_t i = first; i < items.size(); ++i)
     if (items[i].object < 0) order.push_back(i);
   for (int o = 0; o <= max_object; ++o)
-    for (size_t i = 0; i < items.size(); ++i)
+    for (size_t i = first; i < items.size(); ++i)
       if (items[i].object == o) order.push_back(i);
   for (size_t i : order) {
     const RenderItem& it = items[i];
@@ -140,12 +160,16 @@ void RenderScene::finalize() {
     if (it.object >= 0 && object_ranges_[it.object].begin == object_ranges_[it.object].end)
       object_ranges_[it.object].begin = static_cast<uint32_t>(triangles_.size());
     for (const auto& t : it.mesh.triangles)
-      triangles_.push_back({{t[0] + base, t[1] + base, t[2] + base}, it.material, it.object, static_cast<int32_t>(i)});
+      triangles_.push_back({{t[0] + base, t[1] + base, t[2] + base},
+                            it.material,
+                            it.object,
+                            static_cast<int32_t>(i)});
     if (it.object >= 0) object_ranges_[it.object].end = static_cast<uint32_t>(triangles_.size());
   }
 }
 
-void Rasterizer::transformVertices(const RenderScene& scene, const Eigen::Isometry3d& T_world_camera) {
+void Rasterizer::transformVertices(const RenderScene& scene,
+                                   const Eigen::Isometry3d& T_world_camera) {
   const Eigen::Isometry3d T_cw = T_world_camera.inverse();
   const Eigen::Matrix3f R = T_cw.linear().cast<float>();
   const Eigen::Vector3f t = T_cw.translation().cast<float>();
@@ -154,8 +178,9 @@ void Rasterizer::transformVertices(const RenderScene& scene, const Eigen::Isomet
   for (size_t i = 0; i < V.size(); ++i) cam_[i] = R * V[i].p + t;
 }
 
-void Rasterizer::render(const RenderScene& scene, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-                        const Viewport& vp, FrameBuffers* out, bool shade_colour) {
+void Rasterizer::render(const RenderScene& scene, const Intrinsics& K,
+                        const Eigen::Isometry3d& T_world_camera, const Viewport& vp,
+                        FrameBuffers* out, bool shade_colour) {
   const size_t npx = static_cast<size_t>(vp.w) * static_cast<size_t>(vp.h);
   out->vp = vp;
   out->inv_z.assign(npx, 0.f);
@@ -215,7 +240,8 @@ void Rasterizer::render(const RenderScene& scene, const Intrinsics& K, const Eig
       S.duw2[k] = v2.uv2[k] - v0.uv2[k];
     }
     const float sign = front ? 1.f : -1.f;
-    const Eigen::Vector3f n0 = sign * (R_cw * v0.n), n1 = sign * (R_cw * v1.n), n2 = sign * (R_cw * v2.n);
+    const Eigen::Vector3f n0 = sign * (R_cw * v0.n), n1 = sign * (R_cw * v1.n),
+                          n2 = sign * (R_cw * v2.n);
     S.flat = v0.n == v1.n && v0.n == v2.n;
     for (int k = 0; k < 3; ++k) {
       S.n0[k] = n0[k];
@@ -233,7 +259,7 @@ void Rasterizer::render(const RenderScene& scene, const Intrinsics& K, const Eig
     setups_.push_back(S);
   }
 
-  shade(scene, K, T_world_camera, vp, out, shade_colour);
+  shade(K, vp, out, shade_colour);
 }
 
 namespace {
@@ -246,8 +272,8 @@ struct CamLight {
 constexpr float kInv255 = 1.f / 255.f;
 
 // Ambient and direct factors (tint included) and the mirrored light direction for a unit normal.
-inline void lightTermsScalar(const float n[3], const Material& m, const CamLight& L, float amb[3], float dif[3],
-                             float refl[3]) {
+inline void lightTermsScalar(const float n[3], const Material& m, const CamLight& L, float amb[3],
+                             float dif[3], float refl[3]) {
   const float ndl = n[0] * L.l[0] + n[1] * L.l[1] + n[2] * L.l[2];
   const float hemi = 0.5f + 0.5f * (n[0] * L.up[0] + n[1] * L.up[1] + n[2] * L.up[2]);
   const float d = ndl > 0.f ? ndl : 0.f;
@@ -265,7 +291,8 @@ inline float power2k(float s, int k) {
 
 }  // namespace
 
-void Rasterizer::lightTerms(const float n[3], const Material& m, float amb[3], float dif[3], float refl[3]) const {
+void Rasterizer::lightTerms(const float n[3], const Material& m, float amb[3], float dif[3],
+                            float refl[3]) const {
   CamLight L;
   for (int k = 0; k < 3; ++k) {
     L.l[k] = l_cam_[k];
@@ -296,7 +323,8 @@ struct ShadeTarget {
 
 }  // namespace
 
-void Rasterizer::shadePixel(const Setup& S, float x, float y, size_t index, const void* target_ptr, bool colour) const {
+void Rasterizer::shadePixel(const Setup& S, float x, float y, size_t index, const void* target_ptr,
+                            bool colour) const {
   const ShadeTarget& T = *static_cast<const ShadeTarget*>(target_ptr);
   const float iz = S.iz[0] * x + S.iz[1] * y + S.iz[2];
   const float z = 1.f / iz;
@@ -313,8 +341,9 @@ void Rasterizer::shadePixel(const Setup& S, float x, float y, size_t index, cons
     // d(b/z / (1/z))/dx = (q_x - b iz_x) z
     const float db1x = (S.q1[0] - b1 * S.iz[0]) * z, db1y = (S.q1[1] - b1 * S.iz[1]) * z;
     const float db2x = (S.q2[0] - b2 * S.iz[0]) * z, db2y = (S.q2[1] - b2 * S.iz[1]) * z;
-    const uint32_t t = mat.texture->sample(u, v, S.duv1[0] * db1x + S.duv2[0] * db2x, S.duv1[1] * db1x + S.duv2[1] * db2x,
-                                           S.duv1[0] * db1y + S.duv2[0] * db2y, S.duv1[1] * db1y + S.duv2[1] * db2y);
+    const uint32_t t = mat.texture->sample(
+        u, v, S.duv1[0] * db1x + S.duv2[0] * db2x, S.duv1[1] * db1x + S.duv2[1] * db2x,
+        S.duv1[0] * db1y + S.duv2[0] * db2y, S.duv1[1] * db1y + S.duv2[1] * db2y);
     albedo[0] = kInv255 * static_cast<float>(t & 0xFFu);
     albedo[1] = kInv255 * static_cast<float>((t >> 8) & 0xFFu);
     albedo[2] = kInv255 * static_cast<float>((t >> 16) & 0xFFu);
@@ -370,8 +399,10 @@ inline F8 affine(const float c[3], F8 x, float y) {
 inline F8 log2v(F8 x) {
   const I8 i = _mm256_castps_si256(x);
   const F8 e = _mm256_cvtepi32_ps(_mm256_sub_epi32(_mm256_srli_epi32(i, 23), splati(127)));
-  const F8 m = _mm256_castsi256_ps(_mm256_or_si256(_mm256_and_si256(i, splati(0x7FFFFF)), splati(0x3F800000)));
-  const F8 p = _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(splat(-0.34484843f), m), splat(2.02466578f)), m);
+  const F8 m = _mm256_castsi256_ps(
+      _mm256_or_si256(_mm256_and_si256(i, splati(0x7FFFFF)), splati(0x3F800000)));
+  const F8 p =
+      _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(splat(-0.34484843f), m), splat(2.02466578f)), m);
   return _mm256_sub_ps(_mm256_add_ps(e, p), splat(0.67487759f));
 }
 
@@ -379,9 +410,13 @@ inline I8 lerpTexel8(I8 a, I8 b, I8 w) {
   const I8 M = splati(0x00FF00FF);
   const I8 iw = _mm256_sub_epi32(splati(256), w);
   const I8 rb = _mm256_and_si256(
-      _mm256_srli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(a, M), iw), _mm256_mullo_epi32(_mm256_and_si256(b, M), w)), 8), M);
-  const I8 ga = _mm256_andnot_si256(M, _mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(_mm256_srli_epi32(a, 8), M), iw),
-                                                        _mm256_mullo_epi32(_mm256_and_si256(_mm256_srli_epi32(b, 8), M), w)));
+      _mm256_srli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(a, M), iw),
+                                         _mm256_mullo_epi32(_mm256_and_si256(b, M), w)),
+                        8),
+      M);
+  const I8 ga = _mm256_andnot_si256(
+      M, _mm256_add_epi32(_mm256_mullo_epi32(_mm256_and_si256(_mm256_srli_epi32(a, 8), M), iw),
+                          _mm256_mullo_epi32(_mm256_and_si256(_mm256_srli_epi32(b, 8), M), w)));
   return _mm256_or_si256(rb, ga);
 }
 
@@ -396,21 +431,31 @@ inline I8 fixIndex8(I8 i, I8 n, bool wrap) {
 // Texture::fetch for eight lanes at levels lv.
 inline I8 fetch8(const Texture& t, I8 lv, F8 u, F8 v, I8 mask) {
   lv = _mm256_max_epi32(_mm256_setzero_si256(), imin(lv, splati(t.levels() - 1)));
-  const I8 w = _mm256_i32gather_epi32(t.widths(), lv, 4), h = _mm256_i32gather_epi32(t.heights(), lv, 4);
+  const I8 w = _mm256_i32gather_epi32(t.widths(), lv, 4),
+           h = _mm256_i32gather_epi32(t.heights(), lv, 4);
   const I8 off = _mm256_i32gather_epi32(t.offsets(), lv, 4);
   if (t.wrapU()) u = _mm256_sub_ps(u, _mm256_floor_ps(u));
   if (t.wrapV()) v = _mm256_sub_ps(v, _mm256_floor_ps(v));
   const F8 k = splat(4096.f), s256 = splat(256.f);
   const I8 bias = splati(static_cast<int>(4096.f * 256.f));
   const I8 xi = _mm256_sub_epi32(
-      _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(u, _mm256_cvtepi32_ps(w)), splat(0.5f)), k), s256)), bias);
+      _mm256_cvttps_epi32(_mm256_mul_ps(
+          _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(u, _mm256_cvtepi32_ps(w)), splat(0.5f)), k),
+          s256)),
+      bias);
   const I8 yi = _mm256_sub_epi32(
-      _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(v, _mm256_cvtepi32_ps(h)), splat(0.5f)), k), s256)), bias);
+      _mm256_cvttps_epi32(_mm256_mul_ps(
+          _mm256_add_ps(_mm256_sub_ps(_mm256_mul_ps(v, _mm256_cvtepi32_ps(h)), splat(0.5f)), k),
+          s256)),
+      bias);
   const I8 fx = _mm256_and_si256(xi, splati(255)), fy = _mm256_and_si256(yi, splati(255));
   const I8 xb = _mm256_srai_epi32(xi, 8), yb = _mm256_srai_epi32(yi, 8);
-  const I8 x0 = fixIndex8(xb, w, t.wrapU()), x1 = fixIndex8(_mm256_add_epi32(xb, splati(1)), w, t.wrapU());
-  const I8 y0 = fixIndex8(yb, h, t.wrapV()), y1 = fixIndex8(_mm256_add_epi32(yb, splati(1)), h, t.wrapV());
-  const I8 r0 = _mm256_add_epi32(off, _mm256_mullo_epi32(y0, w)), r1 = _mm256_add_epi32(off, _mm256_mullo_epi32(y1, w));
+  const I8 x0 = fixIndex8(xb, w, t.wrapU()),
+           x1 = fixIndex8(_mm256_add_epi32(xb, splati(1)), w, t.wrapU());
+  const I8 y0 = fixIndex8(yb, h, t.wrapV()),
+           y1 = fixIndex8(_mm256_add_epi32(yb, splati(1)), h, t.wrapV());
+  const I8 r0 = _mm256_add_epi32(off, _mm256_mullo_epi32(y0, w)),
+           r1 = _mm256_add_epi32(off, _mm256_mullo_epi32(y1, w));
   const int* base = reinterpret_cast<const int*>(t.texels());
   const I8 zero = _mm256_setzero_si256();
   const I8 p00 = _mm256_mask_i32gather_epi32(zero, base, _mm256_add_epi32(r0, x0), mask, 4);
@@ -422,19 +467,26 @@ inline I8 fetch8(const Texture& t, I8 lv, F8 u, F8 v, I8 mask) {
 
 // Texture::sample for eight lanes.
 inline I8 sample8(const Texture& t, F8 u, F8 v, F8 dudx, F8 dvdx, F8 dudy, F8 dvdy, I8 mask) {
-  const F8 tw = splat(static_cast<float>(t.widths()[0])), th = splat(static_cast<float>(t.heights()[0]));
-  const F8 ax = _mm256_mul_ps(dudx, tw), ay = _mm256_mul_ps(dvdx, th), bx = _mm256_mul_ps(dudy, tw), by = _mm256_mul_ps(dvdy, th);
-  const F8 rho2 = vmax(_mm256_add_ps(_mm256_mul_ps(ax, ax), _mm256_mul_ps(ay, ay)), _mm256_add_ps(_mm256_mul_ps(bx, bx), _mm256_mul_ps(by, by)));
+  const F8 tw = splat(static_cast<float>(t.widths()[0])),
+           th = splat(static_cast<float>(t.heights()[0]));
+  const F8 ax = _mm256_mul_ps(dudx, tw), ay = _mm256_mul_ps(dvdx, th), bx = _mm256_mul_ps(dudy, tw),
+           by = _mm256_mul_ps(dvdy, th);
+  const F8 rho2 = vmax(_mm256_add_ps(_mm256_mul_ps(ax, ax), _mm256_mul_ps(ay, ay)),
+                       _mm256_add_ps(_mm256_mul_ps(bx, bx), _mm256_mul_ps(by, by)));
   const int levels = t.levels();
   if (levels == 1) return fetch8(t, _mm256_setzero_si256(), u, v, mask);
   // chooseLevels() lane by lane.
-  const I8 small = _mm256_castps_si256(_mm256_cmp_ps(rho2, splat(1.f), _CMP_NGT_UQ));  // !(rho2 > 1)
+  const I8 small =
+      _mm256_castps_si256(_mm256_cmp_ps(rho2, splat(1.f), _CMP_NGT_UQ));  // !(rho2 > 1)
   const F8 lod = _mm256_mul_ps(splat(0.5f), log2v(rho2));
-  const I8 top = _mm256_castps_si256(_mm256_cmp_ps(lod, splat(static_cast<float>(levels - 1)), _CMP_GE_OQ));
+  const I8 top =
+      _mm256_castps_si256(_mm256_cmp_ps(lod, splat(static_cast<float>(levels - 1)), _CMP_GE_OQ));
   const I8 l0 = _mm256_cvttps_epi32(lod);
-  const F8 tt = _mm256_mul_ps(_mm256_sub_ps(_mm256_sub_ps(lod, _mm256_cvtepi32_ps(l0)), splat(0.25f)), splat(2.f));
+  const F8 tt = _mm256_mul_ps(
+      _mm256_sub_ps(_mm256_sub_ps(lod, _mm256_cvtepi32_ps(l0)), splat(0.25f)), splat(2.f));
   I8 wmid = _mm256_cvttps_epi32(_mm256_mul_ps(tt, splat(256.f)));
-  wmid = iselect(wmid, _mm256_setzero_si256(), _mm256_castps_si256(_mm256_cmp_ps(tt, splat(0.f), _CMP_LE_OQ)));
+  wmid = iselect(wmid, _mm256_setzero_si256(),
+                 _mm256_castps_si256(_mm256_cmp_ps(tt, splat(0.f), _CMP_LE_OQ)));
   wmid = iselect(wmid, splati(256), _mm256_castps_si256(_mm256_cmp_ps(tt, splat(1.f), _CMP_GE_OQ)));
   const I8 last = splati(levels - 1);
   const I8 flat_level = iselect(_mm256_setzero_si256(), last, _mm256_andnot_si256(small, top));
@@ -442,8 +494,10 @@ inline I8 sample8(const Texture& t, F8 u, F8 v, F8 dudx, F8 dvdx, F8 dudy, F8 dv
   const I8 first = iselect(l0, flat_level, single);
   const I8 second = iselect(_mm256_add_epi32(l0, splati(1)), flat_level, single);
   const I8 weight = iselect(wmid, _mm256_setzero_si256(), single);
-  const int w0 = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(mask, _mm256_cmpeq_epi32(weight, _mm256_setzero_si256()))));
-  const int w256 = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_and_si256(mask, _mm256_cmpeq_epi32(weight, splati(256)))));
+  const int w0 = _mm256_movemask_ps(_mm256_castsi256_ps(
+      _mm256_and_si256(mask, _mm256_cmpeq_epi32(weight, _mm256_setzero_si256()))));
+  const int w256 = _mm256_movemask_ps(
+      _mm256_castsi256_ps(_mm256_and_si256(mask, _mm256_cmpeq_epi32(weight, splati(256)))));
   const int active = _mm256_movemask_ps(_mm256_castsi256_ps(mask));
   if (w0 == active) return fetch8(t, first, u, v, mask);
   if (w256 == active) return fetch8(t, second, u, v, mask);
@@ -452,7 +506,8 @@ inline I8 sample8(const Texture& t, F8 u, F8 v, F8 dudx, F8 dvdx, F8 dudy, F8 dv
 
 }  // namespace
 
-void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n, const void* target_ptr) const {
+void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n,
+                            const void* target_ptr) const {
   const ShadeTarget& T = *static_cast<const ShadeTarget*>(target_ptr);
   const I8 lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const I8 mask = _mm256_cmpgt_epi32(splati(n), lane);
@@ -460,28 +515,40 @@ void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n,
   const F8 iz = affine(S.iz, xv, y);
   const F8 z = _mm256_div_ps(splat(1.f), iz);
   _mm256_maskstore_ps(T.depth + index, mask, z);
-  for (int k = 0; k < n; ++k) T.object[index + static_cast<size_t>(k)] = static_cast<int16_t>(S.object);
+  for (int k = 0; k < n; ++k)
+    T.object[index + static_cast<size_t>(k)] = static_cast<int16_t>(S.object);
   const F8 b1 = _mm256_mul_ps(affine(S.q1, xv, y), z);
   const F8 b2 = _mm256_mul_ps(affine(S.q2, xv, y), z);
   const Material& mat = *S.mat;
   auto interp = [&](float a0, float d1, float d2) {
-    return _mm256_add_ps(_mm256_add_ps(splat(a0), _mm256_mul_ps(b1, splat(d1))), _mm256_mul_ps(b2, splat(d2)));
+    return _mm256_add_ps(_mm256_add_ps(splat(a0), _mm256_mul_ps(b1, splat(d1))),
+                         _mm256_mul_ps(b2, splat(d2)));
   };
   F8 alb[3] = {splat(1.f), splat(1.f), splat(1.f)};
   if (mat.texture) {
     const F8 u = interp(S.uv0[0], S.duv1[0], S.duv2[0]);
     const F8 v = interp(S.uv0[1], S.duv1[1], S.duv2[1]);
-    const F8 db1x = _mm256_mul_ps(_mm256_sub_ps(splat(S.q1[0]), _mm256_mul_ps(b1, splat(S.iz[0]))), z);
-    const F8 db1y = _mm256_mul_ps(_mm256_sub_ps(splat(S.q1[1]), _mm256_mul_ps(b1, splat(S.iz[1]))), z);
-    const F8 db2x = _mm256_mul_ps(_mm256_sub_ps(splat(S.q2[0]), _mm256_mul_ps(b2, splat(S.iz[0]))), z);
-    const F8 db2y = _mm256_mul_ps(_mm256_sub_ps(splat(S.q2[1]), _mm256_mul_ps(b2, splat(S.iz[1]))), z);
-    auto deriv = [&](float d1, float d2, F8 a, F8 b) { return _mm256_add_ps(_mm256_mul_ps(splat(d1), a), _mm256_mul_ps(splat(d2), b)); };
-    const I8 t = sample8(*mat.texture, u, v, deriv(S.duv1[0], S.duv2[0], db1x, db2x), deriv(S.duv1[1], S.duv2[1], db1x, db2x),
-                         deriv(S.duv1[0], S.duv2[0], db1y, db2y), deriv(S.duv1[1], S.duv2[1], db1y, db2y), mask);
+    const F8 db1x =
+        _mm256_mul_ps(_mm256_sub_ps(splat(S.q1[0]), _mm256_mul_ps(b1, splat(S.iz[0]))), z);
+    const F8 db1y =
+        _mm256_mul_ps(_mm256_sub_ps(splat(S.q1[1]), _mm256_mul_ps(b1, splat(S.iz[1]))), z);
+    const F8 db2x =
+        _mm256_mul_ps(_mm256_sub_ps(splat(S.q2[0]), _mm256_mul_ps(b2, splat(S.iz[0]))), z);
+    const F8 db2y =
+        _mm256_mul_ps(_mm256_sub_ps(splat(S.q2[1]), _mm256_mul_ps(b2, splat(S.iz[1]))), z);
+    auto deriv = [&](float d1, float d2, F8 a, F8 b) {
+      return _mm256_add_ps(_mm256_mul_ps(splat(d1), a), _mm256_mul_ps(splat(d2), b));
+    };
+    const I8 t =
+        sample8(*mat.texture, u, v, deriv(S.duv1[0], S.duv2[0], db1x, db2x),
+                deriv(S.duv1[1], S.duv2[1], db1x, db2x), deriv(S.duv1[0], S.duv2[0], db1y, db2y),
+                deriv(S.duv1[1], S.duv2[1], db1y, db2y), mask);
     const I8 ff = splati(0xFF);
     alb[0] = _mm256_mul_ps(splat(kInv255), _mm256_cvtepi32_ps(_mm256_and_si256(t, ff)));
-    alb[1] = _mm256_mul_ps(splat(kInv255), _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(t, 8), ff)));
-    alb[2] = _mm256_mul_ps(splat(kInv255), _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(t, 16), ff)));
+    alb[1] = _mm256_mul_ps(splat(kInv255),
+                           _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(t, 8), ff)));
+    alb[2] = _mm256_mul_ps(splat(kInv255),
+                           _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(t, 16), ff)));
   }
   F8 amb[3], dif[3], refl[3];
   if (S.flat) {
@@ -494,25 +561,31 @@ void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n,
     F8 nv[3];
     for (int k = 0; k < 3; ++k) nv[k] = interp(S.n0[k], S.dn1[k], S.dn2[k]);
     const F8 len2 = _mm256_add_ps(
-        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nv[0], nv[0]), _mm256_mul_ps(nv[1], nv[1])), _mm256_mul_ps(nv[2], nv[2])), splat(1e-20f));
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nv[0], nv[0]), _mm256_mul_ps(nv[1], nv[1])),
+                      _mm256_mul_ps(nv[2], nv[2])),
+        splat(1e-20f));
     const F8 inv_len = _mm256_div_ps(splat(1.f), _mm256_sqrt_ps(len2));
     for (int k = 0; k < 3; ++k) nv[k] = _mm256_mul_ps(nv[k], inv_len);
     // lightTermsScalar, lane by lane.
-    const F8 ndl = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nv[0], splat(l_cam_[0])), _mm256_mul_ps(nv[1], splat(l_cam_[1]))),
+    const F8 ndl = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nv[0], splat(l_cam_[0])),
+                                               _mm256_mul_ps(nv[1], splat(l_cam_[1]))),
                                  _mm256_mul_ps(nv[2], splat(l_cam_[2])));
-    const F8 nup = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nv[0], splat(up_cam_[0])), _mm256_mul_ps(nv[1], splat(up_cam_[1]))),
+    const F8 nup = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nv[0], splat(up_cam_[0])),
+                                               _mm256_mul_ps(nv[1], splat(up_cam_[1]))),
                                  _mm256_mul_ps(nv[2], splat(up_cam_[2])));
     const F8 hemi = _mm256_add_ps(splat(0.5f), _mm256_mul_ps(splat(0.5f), nup));
     const F8 lit = _mm256_cmp_ps(ndl, _mm256_setzero_ps(), _CMP_GT_OQ);
     const F8 d = _mm256_blendv_ps(_mm256_setzero_ps(), ndl, lit);
     for (int c = 0; c < 3; ++c) {
       const float g = light_.ground[c], sk = light_.sky[c];
-      amb[c] = _mm256_mul_ps(splat(mat.tint[c]), _mm256_add_ps(splat(g), _mm256_mul_ps(hemi, splat(sk - g))));
+      amb[c] = _mm256_mul_ps(splat(mat.tint[c]),
+                             _mm256_add_ps(splat(g), _mm256_mul_ps(hemi, splat(sk - g))));
       dif[c] = _mm256_mul_ps(splat(mat.tint[c] * light_.sun[c]), d);
     }
     const F8 two_ndl = _mm256_mul_ps(splat(2.f), ndl);
     for (int k = 0; k < 3; ++k)
-      refl[k] = _mm256_blendv_ps(_mm256_setzero_ps(), _mm256_sub_ps(_mm256_mul_ps(two_ndl, nv[k]), splat(l_cam_[k])), lit);
+      refl[k] = _mm256_blendv_ps(
+          _mm256_setzero_ps(), _mm256_sub_ps(_mm256_mul_ps(two_ndl, nv[k]), splat(l_cam_[k])), lit);
   }
   F8 shadow = splat(1.f), ao = splat(1.f);
   if (mat.shadow) {
@@ -526,54 +599,66 @@ void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n,
     px = vmin(vmax(px, _mm256_setzero_ps()), splat(static_cast<float>(W - 1)));
     py = vmin(vmax(py, _mm256_setzero_ps()), splat(static_cast<float>(H - 1)));
     const I8 x0 = _mm256_cvttps_epi32(px), y0 = _mm256_cvttps_epi32(py);
-    const I8 x1 = imin(_mm256_add_epi32(x0, splati(1)), splati(W - 1)), y1 = imin(_mm256_add_epi32(y0, splati(1)), splati(H - 1));
-    const F8 fx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(x0)), fy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(y0));
+    const I8 x1 = imin(_mm256_add_epi32(x0, splati(1)), splati(W - 1)),
+             y1 = imin(_mm256_add_epi32(y0, splati(1)), splati(H - 1));
+    const F8 fx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(x0)),
+             fy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(y0));
     const F8 one = splat(1.f);
-    const F8 w00 = _mm256_mul_ps(_mm256_sub_ps(one, fx), _mm256_sub_ps(one, fy)), w10 = _mm256_mul_ps(fx, _mm256_sub_ps(one, fy));
+    const F8 w00 = _mm256_mul_ps(_mm256_sub_ps(one, fx), _mm256_sub_ps(one, fy)),
+             w10 = _mm256_mul_ps(fx, _mm256_sub_ps(one, fy));
     const F8 w01 = _mm256_mul_ps(_mm256_sub_ps(one, fx), fy), w11 = _mm256_mul_ps(fx, fy);
     const I8 wv = splati(W);
-    const I8 i00 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x0), i10 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x1);
-    const I8 i01 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x0), i11 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x1);
+    const I8 i00 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x0),
+             i10 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x1);
+    const I8 i01 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x0),
+             i11 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x1);
     const F8 maskf = _mm256_castsi256_ps(mask), zf = _mm256_setzero_ps();
     auto bil = [&](const float* d) {
-      const F8 a00 = _mm256_mask_i32gather_ps(zf, d, i00, maskf, 4), a10 = _mm256_mask_i32gather_ps(zf, d, i10, maskf, 4);
-      const F8 a01 = _mm256_mask_i32gather_ps(zf, d, i01, maskf, 4), a11 = _mm256_mask_i32gather_ps(zf, d, i11, maskf, 4);
-      return _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, a00), _mm256_mul_ps(w10, a10)), _mm256_mul_ps(w01, a01)),
-                           _mm256_mul_ps(w11, a11));
+      const F8 a00 = _mm256_mask_i32gather_ps(zf, d, i00, maskf, 4),
+               a10 = _mm256_mask_i32gather_ps(zf, d, i10, maskf, 4);
+      const F8 a01 = _mm256_mask_i32gather_ps(zf, d, i01, maskf, 4),
+               a11 = _mm256_mask_i32gather_ps(zf, d, i11, maskf, 4);
+      return _mm256_add_ps(
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, a00), _mm256_mul_ps(w10, a10)),
+                        _mm256_mul_ps(w01, a01)),
+          _mm256_mul_ps(w11, a11));
     };
     shadow = bil(A.data());
     ao = bil(B.data());
   }
   const F8 rx = _mm256_maskload_ps(T.rx + index, mask), ry = _mm256_maskload_ps(T.ry + index, mask);
   const F8 rz = _mm256_maskload_ps(T.rz + index, mask);
-  F8 sp = _mm256_sub_ps(_mm256_setzero_ps(),
-                        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(refl[0], rx), _mm256_mul_ps(refl[1], ry)), _mm256_mul_ps(refl[2], rz)));
-  sp = _mm256_blendv_ps(_mm256_setzero_ps(), sp, _mm256_cmp_ps(sp, _mm256_setzero_ps(), _CMP_GT_OQ));
+  F8 sp = _mm256_sub_ps(
+      _mm256_setzero_ps(),
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(refl[0], rx), _mm256_mul_ps(refl[1], ry)),
+                    _mm256_mul_ps(refl[2], rz)));
+  sp =
+      _mm256_blendv_ps(_mm256_setzero_ps(), sp, _mm256_cmp_ps(sp, _mm256_setzero_ps(), _CMP_GT_OQ));
   for (int i = 0; i < mat.shininess_log2 && i < 7; ++i) sp = _mm256_mul_ps(sp, sp);
   const F8 spec = _mm256_mul_ps(_mm256_mul_ps(splat(mat.specular), sp), shadow);
   float* out[3] = {T.b, T.g, T.r};
   for (int c = 0; c < 3; ++c) {
-    const F8 v = _mm256_add_ps(_mm256_mul_ps(alb[c], _mm256_add_ps(_mm256_mul_ps(amb[c], ao), _mm256_mul_ps(dif[c], shadow))),
+    const F8 v = _mm256_add_ps(_mm256_mul_ps(alb[c], _mm256_add_ps(_mm256_mul_ps(amb[c], ao),
+                                                                   _mm256_mul_ps(dif[c], shadow))),
                                _mm256_mul_ps(spec, splat(light_.sun[c])));
     _mm256_maskstore_ps(out[c] + index, mask, v);
   }
 }
 #endif
 
-void Rasterizer::shade(const RenderScene& scene, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-                       const Viewport& vp, FrameBuffers* out, bool colour) {
-  (void)scene;
-  (void)T_world_camera;
+void Rasterizer::shade(const Intrinsics& K, const Viewport& vp, FrameBuffers* out, bool colour) {
   const size_t npx = static_cast<size_t>(vp.w) * static_cast<size_t>(vp.h);
   out->depth.assign(npx, 0.f);
   out->object.assign(npx, -1);
   if (colour) out->bgr.assign(npx * 3, 0.f);
-  if (rays_.size() != npx * 3 || rays_K_.fx != K.fx || rays_K_.fy != K.fy || rays_K_.cx != K.cx || rays_K_.cy != K.cy ||
-      rays_vp_.x0 != vp.x0 || rays_vp_.y0 != vp.y0 || rays_vp_.w != vp.w || rays_vp_.h != vp.h) {
+  if (rays_.size() != npx * 3 || rays_K_.fx != K.fx || rays_K_.fy != K.fy || rays_K_.cx != K.cx ||
+      rays_K_.cy != K.cy || rays_vp_.x0 != vp.x0 || rays_vp_.y0 != vp.y0 || rays_vp_.w != vp.w ||
+      rays_vp_.h != vp.h) {
     rays_.resize(npx * 3);
     for (int j = 0; j < vp.h; ++j)
       for (int i = 0; i < vp.w; ++i) {
-        const float rx = (static_cast<float>(vp.x0 + i) - K.cx) / K.fx, ry = (static_cast<float>(vp.y0 + j) - K.cy) / K.fy;
+        const float rx = (static_cast<float>(vp.x0 + i) - K.cx) / K.fx,
+                    ry = (static_cast<float>(vp.y0 + j) - K.cy) / K.fy;
         const float inv = 1.f / std::sqrt(rx * rx + ry * ry + 1.f);
         const size_t index = static_cast<size_t>(j) * vp.w + i;
         rays_[index] = rx * inv;
@@ -605,11 +690,14 @@ void Rasterizer::shade(const RenderScene& scene, const Intrinsics& K, const Eige
         const Setup& S = setups_[sidx];
 #if SLAMAWARE_SYNTH_AVX2
         if (colour && vector_) {
-          for (int k = i; k < e; k += 8) shadeSpan8(S, vp.x0 + k, y, row + static_cast<size_t>(k), std::min(8, e - k), &T);
+          for (int k = i; k < e; k += 8)
+            shadeSpan8(S, vp.x0 + k, y, row + static_cast<size_t>(k), std::min(8, e - k), &T);
         } else
 #endif
         {
-          for (int k = i; k < e; ++k) shadePixel(S, static_cast<float>(vp.x0 + k), y, row + static_cast<size_t>(k), &T, colour);
+          for (int k = i; k < e; ++k)
+            shadePixel(S, static_cast<float>(vp.x0 + k), y, row + static_cast<size_t>(k), &T,
+                       colour);
         }
       }
       i = e;
@@ -671,7 +759,6 @@ bool Rasterizer::projectedBounds(const RenderScene& scene, int object, const Int
 }
 
 float HeightMap::at(const Eigen::Vector3f& p) const {
-  const Eigen::Vector3f axis_v = dir.cross(axis_u);
   const Eigen::Vector3f q = p - origin;
   const int x = static_cast<int>(std::floor(q.dot(axis_u) / texel));
   const int y = static_cast<int>(std::floor(q.dot(axis_v) / texel));
@@ -680,22 +767,23 @@ float HeightMap::at(const Eigen::Vector3f& p) const {
 }
 
 float HeightMap::occlusion(const Eigen::Vector3f& p, float radius, float bias) const {
-  const Eigen::Vector3f axis_v = dir.cross(axis_u);
   const float hp = dir.dot(p) + bias;
   int hits = 0;
   for (int j = -1; j <= 1; ++j)
     for (int i = -1; i <= 1; ++i)
-      hits += at(p + radius * (static_cast<float>(i) * axis_u + static_cast<float>(j) * axis_v)) > hp;
+      hits +=
+          at(p + radius * (static_cast<float>(i) * axis_u + static_cast<float>(j) * axis_v)) > hp;
   return static_cast<float>(hits) / 9.f;
 }
 
-HeightMap renderHeightMap(const RenderScene& scene, const std::vector<int>& items, const Eigen::Vector3f& dir_in,
-                          const Eigen::Vector3f& axis_u_in, const Eigen::Vector3f& centre, float half_extent,
-                          float texel) {
+HeightMap renderHeightMap(const RenderScene& scene, const std::vector<int>& items,
+                          const Eigen::Vector3f& dir_in, const Eigen::Vector3f& axis_u_in,
+                          const Eigen::Vector3f& centre, float half_extent, float texel) {
   HeightMap hm;
   hm.dir = dir_in.normalized();
   hm.axis_u = (axis_u_in - axis_u_in.dot(hm.dir) * hm.dir).normalized();
-  const Eigen::Vector3f axis_v = hm.dir.cross(hm.axis_u);
+  hm.axis_v = hm.dir.cross(hm.axis_u);
+  const Eigen::Vector3f axis_v = hm.axis_v;
   hm.texel = texel;
   hm.w = hm.h = std::max(1, static_cast<int>(std::ceil(2.f * half_extent / texel)));
   hm.origin = centre - half_extent * hm.axis_u - half_extent * axis_v;
@@ -718,7 +806,8 @@ HeightMap renderHeightMap(const RenderScene& scene, const std::vector<int>& item
       const float dh1 = hs[1] - hs[0], dh2 = hs[2] - hs[0];
       const float gx = (dh1 * by - dh2 * ay) / det, gy = (dh2 * ax - dh1 * bx) / det;
       rasterize(xs, ys, vp, [&](int x, int y, size_t index) {
-        const float h = hs[0] + gx * (static_cast<float>(x) - xs[0]) + gy * (static_cast<float>(y) - ys[0]);
+        const float h =
+            hs[0] + gx * (static_cast<float>(x) - xs[0]) + gy * (static_cast<float>(y) - ys[0]);
         if (h > hm.height[index]) hm.height[index] = h;
       });
     }

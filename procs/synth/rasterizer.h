@@ -31,9 +31,9 @@ struct Viewport {
 /// What a render produces, per pixel of the viewport (row-major).
 struct FrameBuffers {
   Viewport vp;
-  std::vector<float> bgr;        ///< shaded colour: three planes (B, G, R) of w x h floats (about [0, 1])
-  std::vector<float> depth;      ///< z in the camera frame (m); 0 where nothing was drawn
-  std::vector<int16_t> object;   ///< object id, -1 for background
+  std::vector<float> bgr;  ///< shaded colour: three planes (B, G, R) of w x h floats (about [0, 1])
+  std::vector<float> depth;     ///< z in the camera frame (m); 0 where nothing was drawn
+  std::vector<int16_t> object;  ///< object id, -1 for background
   // Internal: the visibility pass.
   std::vector<float> inv_z;
   std::vector<uint32_t> setup;
@@ -49,8 +49,9 @@ class Rasterizer {
 
   /// Renders `scene` seen from T_world_camera into `out` (resized to the viewport). shade = false
   /// skips the colour (depth and object ids only).
-  void render(const RenderScene& scene, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-              const Viewport& vp, FrameBuffers* out, bool shade = true);
+  void render(const RenderScene& scene, const Intrinsics& K,
+              const Eigen::Isometry3d& T_world_camera, const Viewport& vp, FrameBuffers* out,
+              bool shade = true);
 
   /// Number of pixels the silhouette of one object covers (ignoring everything else), counted
   /// over the viewport `vp` (which may extend beyond the image). Same coverage rule as render().
@@ -69,16 +70,17 @@ class Rasterizer {
     float uw0[2], duw1[2], duw2[2];  // light-map coordinates
     float n0[3], dn1[3], dn2[3];     // camera-frame normals (flat: n0 is the unit normal)
     // Flat triangles: the light terms are constant over the triangle.
-    float amb[3], dif[3], refl[3];   // ambient and direct factors (tint included), reflected light
+    float amb[3], dif[3], refl[3];  // ambient and direct factors (tint included), reflected light
     const Material* mat;
     int32_t object;
     bool flat;
   };
-  void lightTerms(const float n[3], const Material& m, float amb[3], float dif[3], float refl[3]) const;
+  void lightTerms(const float n[3], const Material& m, float amb[3], float dif[3],
+                  float refl[3]) const;
   void transformVertices(const RenderScene& scene, const Eigen::Isometry3d& T_world_camera);
-  void shade(const RenderScene& scene, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-             const Viewport& vp, FrameBuffers* out, bool colour);
-  void shadePixel(const Setup& S, float x, float y, size_t index, const void* target, bool colour) const;
+  void shade(const Intrinsics& K, const Viewport& vp, FrameBuffers* out, bool colour);
+  void shadePixel(const Setup& S, float x, float y, size_t index, const void* target,
+                  bool colour) const;
   void shadeSpan8(const Setup& S, int x, float y, size_t index, int n, const void* target) const;
   std::vector<Eigen::Vector3f> cam_;  // vertices in the camera frame
   std::vector<Setup> setups_;
@@ -99,7 +101,9 @@ class Rasterizer {
 struct HeightMap {
   int w = 0, h = 0;
   float texel = 0.01f;
-  Eigen::Vector3f origin = Eigen::Vector3f::Zero(), dir = Eigen::Vector3f::UnitZ(), axis_u = Eigen::Vector3f::UnitX();
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero(), dir = Eigen::Vector3f::UnitZ(),
+                  axis_u = Eigen::Vector3f::UnitX();
+  Eigen::Vector3f axis_v = Eigen::Vector3f::UnitY();  ///< dir x axis_u
   std::vector<float> height;
   /// Height at a world point's projection (bilinear on the grid, -inf outside).
   float at(const Eigen::Vector3f& p) const;
@@ -107,7 +111,8 @@ struct HeightMap {
   /// dir . p + bias: a soft shadow test.
   float occlusion(const Eigen::Vector3f& p, float radius, float bias) const;
 };
-HeightMap renderHeightMap(const RenderScene& scene, const std::vector<int>& items, const Eigen::Vector3f& dir,
-                          const Eigen::Vector3f& axis_u, const Eigen::Vector3f& centre, float half_extent, float texel);
+HeightMap renderHeightMap(const RenderScene& scene, const std::vector<int>& items,
+                          const Eigen::Vector3f& dir, const Eigen::Vector3f& axis_u,
+                          const Eigen::Vector3f& centre, float half_extent, float texel);
 
 }  // namespace slamaware::synth

@@ -19,7 +19,9 @@ inline uint64_t mix64(uint64_t x) {
 }
 
 /// Hash of two values (order matters).
-inline uint64_t hashCombine(uint64_t a, uint64_t b) { return mix64(a ^ mix64(b + 0x632BE59BD9B4E019ull)); }
+inline uint64_t hashCombine(uint64_t a, uint64_t b) {
+  return mix64(a ^ mix64(b + 0x632BE59BD9B4E019ull));
+}
 
 /// FNV-1a of a string, then mixed.
 inline uint64_t hashString(const std::string& s) {

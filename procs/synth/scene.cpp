@@ -23,7 +23,8 @@ std::vector<std::string> distractorPool(const ObjectOptions& o) {
 
 }  // namespace
 
-SyntheticScene::SyntheticScene(const SceneOptions& options, int64_t seed, int frames) : opt_(options) {
+SyntheticScene::SyntheticScene(const SceneOptions& options, int64_t seed, int frames)
+    : opt_(options) {
   if (seed >= 0) opt_.seed = seed;
   frames_ = frames > 0 ? std::min(frames, opt_.frames) : opt_.frames;
   if (opt_.seed < 0) throw std::invalid_argument("scene: no seed given");
@@ -44,13 +45,15 @@ SyntheticScene::SyntheticScene(const SceneOptions& options, int64_t seed, int fr
   std::vector<int> object_items, floor_occluders = env_.table_items;
   for (size_t i = 0; i < scene_.items.size(); ++i)
     if (scene_.items[i].object >= 0) object_items.push_back(static_cast<int>(i));
-  floor_occluders.insert(floor_occluders.end(), env_.furniture_items.begin(), env_.furniture_items.end());
+  floor_occluders.insert(floor_occluders.end(), env_.furniture_items.begin(),
+                         env_.furniture_items.end());
   floor_occluders.insert(floor_occluders.end(), object_items.begin(), object_items.end());
   bakeReceiver(&scene_, env_.table_top, object_items);
   bakeReceiver(&scene_, env_.floor, floor_occluders);
   scene_.finalize();
-  trajectory_ = std::make_unique<Trajectory>(opt_.trajectory, Eigen::Vector3d(0, 0, env_.table.top_z),
-                                             std::max(1, opt_.frames - 1) / opt_.camera.fps, rng.fork(4));
+  trajectory_ =
+      std::make_unique<Trajectory>(opt_.trajectory, Eigen::Vector3d(0, 0, env_.table.top_z),
+                                   std::max(1, opt_.frames - 1) / opt_.camera.fps, rng.fork(4));
 }
 
 void SyntheticScene::placeObjects(Rng& rng) {
@@ -59,7 +62,8 @@ void SyntheticScene::placeObjects(Rng& rng) {
   rng.shuffle(classes);
   const std::vector<std::string> pool = distractorPool(o);
   std::vector<std::pair<std::string, bool>> wanted;  // category, is distractor
-  for (int i = 0; i < o.count - o.distractors; ++i) wanted.push_back({classes[static_cast<size_t>(i) % classes.size()], false});
+  for (int i = 0; i < o.count - o.distractors; ++i)
+    wanted.push_back({classes[static_cast<size_t>(i) % classes.size()], false});
   for (int i = 0; i < o.distractors; ++i) wanted.push_back({rng.pick(pool), true});
 
   std::map<std::string, uint64_t> seeds_used;  // per category: instance index for the seed
@@ -75,11 +79,13 @@ void SyntheticScene::placeObjects(Rng& rng) {
     bool done = false;
     for (int attempt = 0; attempt < 12 && !done; ++attempt) {
       if (attempt > 0 && distractor) category = rng.pick(pool);
-      const uint64_t iseed = instanceSeed(SeedDomain::kScene, seed_, category, seeds_used[category]++);
+      const uint64_t iseed =
+          instanceSeed(SeedDomain::kScene, seed_, category, seeds_used[category]++);
       ObjectModel model = makeObject(category, iseed);
       const float r = model.footprintRadius();
       for (int k = 0; k < 400 && !done; ++k) {
-        const float x = rng.uniformf(-T.half_x, T.half_x) * spread, y = rng.uniformf(-T.half_y, T.half_y) * spread;
+        const float x = rng.uniformf(-T.half_x, T.half_x) * spread,
+                    y = rng.uniformf(-T.half_y, T.half_y) * spread;
         if (!T.fits(x, y, r, static_cast<float>(o.edge_margin))) continue;
         bool clear = true;
         for (const auto& p : placed)
@@ -115,7 +121,8 @@ void SyntheticScene::placeObjects(Rng& rng) {
 }
 
 CameraModel SyntheticScene::camera() const {
-  return CameraModel(opt_.camera.width, opt_.camera.height, opt_.camera.fx, opt_.camera.fy, opt_.camera.cx, opt_.camera.cy);
+  return CameraModel(opt_.camera.width, opt_.camera.height, opt_.camera.fx, opt_.camera.fy,
+                     opt_.camera.cx, opt_.camera.cy);
 }
 
 Eigen::Isometry3d SyntheticScene::pose(int frame) const { return trajectory_->pose(time(frame)); }
@@ -128,7 +135,8 @@ cv::Mat SyntheticScene::render(int frame, FrameBuffers* fb) {
     motion.enabled = true;
     motion.T_world_camera_open = trajectory_->pose(time(frame) - 0.5 * opt_.sensor.shutter_s);
   }
-  return applySensor(*fb, K_, T, opt_.sensor, motion, hashCombine(seed_, static_cast<uint64_t>(frame) + 0x100000000ull));
+  return applySensor(*fb, K_, T, opt_.sensor, motion,
+                     hashCombine(seed_, static_cast<uint64_t>(frame) + 0x100000000ull));
 }
 
 std::vector<ObjectVisibility> SyntheticScene::visibility(int frame, const FrameBuffers& fb) {
@@ -156,18 +164,23 @@ std::vector<ObjectVisibility> SyntheticScene::visibility(int frame, const FrameB
     Eigen::Vector4f b;
     if (Rasterizer::projectedBounds(scene_, v.id, K_, T, &b)) {
       // The whole silhouette, also where it leaves the image (up to one image size beyond).
-      const int x0 = std::max(-W, static_cast<int>(std::floor(b[0])) - 1), y0 = std::max(-H, static_cast<int>(std::floor(b[1])) - 1);
-      const int x1 = std::min(2 * W, static_cast<int>(std::ceil(b[2])) + 1), y1 = std::min(2 * H, static_cast<int>(std::ceil(b[3])) + 1);
-      v.silhouette_px = raster_.silhouettePixels(scene_, v.id, K_, T, Viewport{x0, y0, x1 - x0 + 1, y1 - y0 + 1});
+      const int x0 = std::max(-W, static_cast<int>(std::floor(b[0])) - 1),
+                y0 = std::max(-H, static_cast<int>(std::floor(b[1])) - 1);
+      const int x1 = std::min(2 * W, static_cast<int>(std::ceil(b[2])) + 1),
+                y1 = std::min(2 * H, static_cast<int>(std::ceil(b[3])) + 1);
+      v.silhouette_px =
+          raster_.silhouettePixels(scene_, v.id, K_, T, Viewport{x0, y0, x1 - x0 + 1, y1 - y0 + 1});
     }
     v.silhouette_px = std::max(v.silhouette_px, v.visible_px);
     v.fraction = static_cast<double>(v.visible_px) / static_cast<double>(v.silhouette_px);
-    v.listed = v.fraction >= kMinVisibleFraction && v.x1 - v.x0 + 1 >= kMinBoxSide && v.y1 - v.y0 + 1 >= kMinBoxSide;
+    v.listed = v.fraction >= kMinVisibleFraction && v.x1 - v.x0 + 1 >= kMinBoxSide &&
+               v.y1 - v.y0 + 1 >= kMinBoxSide;
   }
   return vis;
 }
 
-std::vector<GroundTruthBox> SyntheticScene::boxes(int frame, const std::vector<ObjectVisibility>& vis) const {
+std::vector<GroundTruthBox> SyntheticScene::boxes(int frame,
+                                                  const std::vector<ObjectVisibility>& vis) const {
   std::vector<GroundTruthBox> out;
   for (const auto& v : vis) {
     if (!v.listed) continue;
@@ -208,13 +221,18 @@ SequenceInfo SyntheticScene::sequenceInfo(const std::string& config_name) const 
   info.camera = camera();
   info.classes = paperClasses();
   std::ostringstream notes;
-  notes << "synthetic tabletop scene (rendered, exact ground truth). World frame: metres, z up, origin on the floor "
+  notes << "synthetic tabletop scene (rendered, exact ground truth). World frame: metres, z up, "
+           "origin on the floor "
            "under the table centre, table top at z = "
         << env_.table.top_z
-        << ". groundtruth.txt: T_world_camera (camera x right, y down, z forward) at mid-exposure. boxes.csv: x, y = "
-           "first pixel column / row of the visible pixels, w, h = their extent in pixels; objects at least 30 % "
-           "visible (z-buffer pixels over the silhouette) with a box of at least 20 x 20. objects.csv: axis-aligned "
-           "world box of each object's vertices. depth/: 16-bit PNG, z in millimetres (0 = none). visibility.csv: "
+        << ". groundtruth.txt: T_world_camera (camera x right, y down, z forward) at mid-exposure. "
+           "boxes.csv: x, y = "
+           "first pixel column / row of the visible pixels, w, h = their extent in pixels; objects "
+           "at least 30 % "
+           "visible (z-buffer pixels over the silhouette) with a box of at least 20 x 20. "
+           "objects.csv: axis-aligned "
+           "world box of each object's vertices. depth/: 16-bit PNG, z in millimetres (0 = none). "
+           "visibility.csv: "
            "per frame and object, visible and silhouette pixels.";
   if (!opt_.notes.empty()) notes << " " << opt_.notes;
   info.notes = notes.str();

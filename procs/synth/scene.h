@@ -19,21 +19,21 @@ namespace slamaware::synth {
 /// An object placed in the scene.
 struct SceneObject {
   std::string category;
-  std::string instance;   ///< "<category>_<n>", n counted per category from 1
+  std::string instance;  ///< "<category>_<n>", n counted per category from 1
   uint64_t instance_seed = 0;
-  int id = 0;             ///< object id in the render buffers
+  int id = 0;                     ///< object id in the render buffers
   Eigen::AlignedBox3d world_box;  ///< axis-aligned box of its vertices, world frame
-  double yaw = 0;         ///< rad, rotation about z on the table
+  double yaw = 0;                 ///< rad, rotation about z on the table
 };
 
 /// Visibility of an object in one frame.
 struct ObjectVisibility {
   int id = 0;
-  int64_t visible_px = 0;     ///< pixels where it is the nearest surface
-  int64_t silhouette_px = 0;  ///< pixels it would cover alone (also outside the image)
-  double fraction = 0;        ///< visible / silhouette
+  int64_t visible_px = 0;                ///< pixels where it is the nearest surface
+  int64_t silhouette_px = 0;             ///< pixels it would cover alone (also outside the image)
+  double fraction = 0;                   ///< visible / silhouette
   int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< bounding box of the visible pixels (inclusive)
-  bool listed = false;        ///< passes the boxes.csv rule (>= 30 % visible, box >= 20 x 20)
+  bool listed = false;  ///< passes the boxes.csv rule (>= 30 % visible, box >= 20 x 20)
 };
 
 class SyntheticScene {

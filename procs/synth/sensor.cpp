@@ -38,8 +38,9 @@ void sampleBilinear(const std::vector<float>& img, int w, int h, float x, float 
   }
 }
 
-void motionBlur(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-                const ShutterMotion& motion, std::vector<float>* img) {
+void motionBlur(const FrameBuffers& fb, const Intrinsics& K,
+                const Eigen::Isometry3d& T_world_camera, const ShutterMotion& motion,
+                std::vector<float>* img) {
   const int w = fb.vp.w, h = fb.vp.h;
   const size_t npx = static_cast<size_t>(w) * h;
   const std::vector<float> src = *img;
@@ -65,7 +66,8 @@ void motionBlur(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Isomet
       for (int k = 0; k < n; ++k) {
         const float s = -1.f + 2.f * static_cast<float>(k) / static_cast<float>(n - 1);
         float c[3];
-        sampleBilinear(src, w, h, static_cast<float>(x) + s * dx, static_cast<float>(y) + s * dy, c);
+        sampleBilinear(src, w, h, static_cast<float>(x) + s * dx, static_cast<float>(y) + s * dy,
+                       c);
         for (int j = 0; j < 3; ++j) acc[j] += c[j];
       }
       for (int j = 0; j < 3; ++j) (*img)[j * npx + i] = acc[j] / static_cast<float>(n);
@@ -79,7 +81,8 @@ void gaussianBlur(std::vector<float>* img, int w, int h, double sigma) {
   const int r = std::min(4, static_cast<int>(std::ceil(3.0 * sigma)));
   std::vector<float> k(2 * r + 1);
   float sum = 0;
-  for (int i = -r; i <= r; ++i) sum += k[i + r] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
+  for (int i = -r; i <= r; ++i)
+    sum += k[i + r] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
   for (auto& v : k) v /= sum;
   const size_t npx = static_cast<size_t>(w) * h;
   std::vector<float> tmp(w), pad(static_cast<size_t>(w + 2 * r));
@@ -88,7 +91,8 @@ void gaussianBlur(std::vector<float>* img, int w, int h, double sigma) {
     float* plane = &(*img)[c * npx];
     for (int y = 0; y < h; ++y) {
       const float* row = plane + static_cast<size_t>(y) * w;
-      for (int x = -r; x < w + r; ++x) pad[static_cast<size_t>(x + r)] = row[std::min(std::max(x, 0), w - 1)];
+      for (int x = -r; x < w + r; ++x)
+        pad[static_cast<size_t>(x + r)] = row[std::min(std::max(x, 0), w - 1)];
       float* dst = &rows[static_cast<size_t>(y) * w];
       for (int x = 0; x < w; ++x) {
         float acc = 0;
@@ -110,8 +114,9 @@ void gaussianBlur(std::vector<float>* img, int w, int h, double sigma) {
 
 }  // namespace
 
-cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-                    const SensorOptions& opt, const ShutterMotion& motion, uint64_t noise_seed) {
+cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K,
+                    const Eigen::Isometry3d& T_world_camera, const SensorOptions& opt,
+                    const ShutterMotion& motion, uint64_t noise_seed) {
   const int w = fb.vp.w, h = fb.vp.h;
   std::vector<float> img = fb.bgr;
   if (motion.enabled && opt.shutter_s > 0) motionBlur(fb, K, T_world_camera, motion, &img);
@@ -119,7 +124,8 @@ cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Is
 
   const std::vector<float>& gauss = gaussianTable();
   const float gain = static_cast<float>(opt.gain), vig = static_cast<float>(opt.vignetting);
-  const float read2 = static_cast<float>(opt.read_noise * opt.read_noise), shot = static_cast<float>(opt.shot_noise);
+  const float read2 = static_cast<float>(opt.read_noise * opt.read_noise),
+              shot = static_cast<float>(opt.shot_noise);
   // Vignetting over the full image (the viewport may be a window of it).
   const float cxi = K.cx, cyi = K.cy;
   const float r2max = cxi * cxi + cyi * cyi;
@@ -134,7 +140,8 @@ cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Is
     Rng rng(hashCombine(noise_seed, static_cast<uint64_t>(y + fb.vp.y0)));
     for (size_t i = 0; i < noise_idx.size(); i += 4) {
       const uint64_t bits = rng.next();
-      for (size_t k = 0; k < 4 && i + k < noise_idx.size(); ++k) noise_idx[i + k] = static_cast<uint16_t>(bits >> (16 * k));
+      for (size_t k = 0; k < 4 && i + k < noise_idx.size(); ++k)
+        noise_idx[i + k] = static_cast<uint16_t>(bits >> (16 * k));
     }
     const float dy = static_cast<float>(y + fb.vp.y0) - cyi;
     for (int x = 0; x < w; ++x) {
@@ -149,7 +156,8 @@ cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Is
       const float v = vig_row[static_cast<size_t>(x)];
       for (int c = 0; c < 3; ++c) {
         float dn = src[c][x] * v;
-        if (dn > 216.75f) dn = 216.75f + 38.25f * (1.f - std::exp(-(dn - 216.75f) / 38.25f));  // soft shoulder
+        if (dn > 216.75f)
+          dn = 216.75f + 38.25f * (1.f - std::exp(-(dn - 216.75f) / 38.25f));  // soft shoulder
         dn = std::min(std::max(dn, 0.f), 255.f);
         dn += gauss[noise_idx[static_cast<size_t>(3 * x + c)]] * sigma[static_cast<int>(dn)];
         dn = std::min(std::max(dn, 0.f), 255.f);

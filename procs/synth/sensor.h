@@ -11,13 +11,13 @@
 namespace slamaware::synth {
 
 struct SensorOptions {
-  double gain = 1.0;               ///< multiplies the rendered radiance
-  double read_noise = 1.5;         ///< DN (8-bit units), noise floor sigma
-  double shot_noise = 0.05;        ///< DN: sigma^2 = read^2 + shot * signal(DN)
-  double psf_sigma_px = 0.55;      ///< px, Gaussian blur of the optics
-  double vignetting = 0.22;        ///< relative darkening in the image corners
-  double shutter_s = 0.0;          ///< s, exposure time for motion blur (0: none)
-  int jpeg_quality = 92;           ///< quality of the written / streamed JPEG frames
+  double gain = 1.0;           ///< multiplies the rendered radiance
+  double read_noise = 1.5;     ///< DN (8-bit units), noise floor sigma
+  double shot_noise = 0.05;    ///< DN: sigma^2 = read^2 + shot * signal(DN)
+  double psf_sigma_px = 0.55;  ///< px, Gaussian blur of the optics
+  double vignetting = 0.22;    ///< relative darkening in the image corners
+  double shutter_s = 0.0;      ///< s, exposure time for motion blur (0: none)
+  int jpeg_quality = 92;       ///< quality of the written / streamed JPEG frames
 
   template <class V>
   void visit(V& v) {
@@ -39,7 +39,8 @@ struct ShutterMotion {
 
 /// Turns a full-image render into an 8-bit BGR image. `noise_seed` fixes the noise (a function
 /// of the scene seed and the frame index, so a frame is the same however it is reached).
-cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K, const Eigen::Isometry3d& T_world_camera,
-                    const SensorOptions& options, const ShutterMotion& motion, uint64_t noise_seed);
+cv::Mat applySensor(const FrameBuffers& fb, const Intrinsics& K,
+                    const Eigen::Isometry3d& T_world_camera, const SensorOptions& options,
+                    const ShutterMotion& motion, uint64_t noise_seed);
 
 }  // namespace slamaware::synth

@@ -14,7 +14,8 @@ namespace {
   throw ConfigError(where + ": key '" + key + "': " + what);
 }
 
-void oneOf(const std::string& where, const std::string& key, const std::string& value, const std::vector<std::string>& allowed) {
+void oneOf(const std::string& where, const std::string& key, const std::string& value,
+           const std::vector<std::string>& allowed) {
   if (std::find(allowed.begin(), allowed.end(), value) != allowed.end()) return;
   std::string list;
   for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
@@ -59,7 +60,8 @@ Options load(const std::string& path) {
   Options o;
   OptionList list = optionListOf(o);
   ConfigFile(path).load("", list);
-  if (o.name.empty()) throw ConfigError(path + ": missing key 'name' (every config names its output)");
+  if (o.name.empty())
+    throw ConfigError(path + ": missing key 'name' (every config names its output)");
   if (o.seed < 0) throw ConfigError(path + ": missing key 'seed' (a non-negative integer)");
   return o;
 }
@@ -71,9 +73,12 @@ void validate(const SceneOptions& o, const std::string& where) {
   checkCamera(o.camera, where);
   checkSensor(o.sensor, where);
   checkLight(o.light, where);
-  static const std::vector<std::string> floors{"random", "wood", "parquet", "tiles", "carpet", "concrete", "linoleum"};
-  static const std::vector<std::string> walls{"random", "wallpaper", "brick", "plaster", "panels", "stripes", "tiles"};
-  static const std::vector<std::string> tops{"random", "wood", "laminate", "cloth", "marble", "checker", "stone"};
+  static const std::vector<std::string> floors{"random", "wood",     "parquet", "tiles",
+                                               "carpet", "concrete", "linoleum"};
+  static const std::vector<std::string> walls{"random", "wallpaper", "brick", "plaster",
+                                              "panels", "stripes",   "tiles"};
+  static const std::vector<std::string> tops{"random", "wood",    "laminate", "cloth",
+                                             "marble", "checker", "stone"};
   oneOf(where, "room.floor", o.room.floor, floors);
   oneOf(where, "room.walls", o.room.walls, walls);
   if (o.room.size.size() != 2) fail(where, "room.size", "expected [x, y] in metres");
@@ -84,13 +89,15 @@ void validate(const SceneOptions& o, const std::string& where) {
   range(where, "room.furniture", o.room.furniture, 0, 20);
   oneOf(where, "table.shape", o.table.shape, {"rect", "round"});
   oneOf(where, "table.top", o.table.top, tops);
-  if (o.table.size.empty() || o.table.size.size() > 2) fail(where, "table.size", "expected [length, width] (or [diameter])");
+  if (o.table.size.empty() || o.table.size.size() > 2)
+    fail(where, "table.size", "expected [length, width] (or [diameter])");
   for (double s : o.table.size) range(where, "table.size", s, 0.4, 3.0);
   range(where, "table.height", o.table.height, 0.3, 1.2);
   range(where, "objects.count", o.objects.count, 1, 12);
   range(where, "objects.distractors", o.objects.distractors, 0, o.objects.count);
   for (const auto& c : o.objects.distractor_categories)
-    if (!isCategory(c)) fail(where, "objects.distractor_categories", "unknown category '" + c + "'");
+    if (!isCategory(c))
+      fail(where, "objects.distractor_categories", "unknown category '" + c + "'");
   for (const auto& c : o.objects.classes)
     if (std::find(paperClasses().begin(), paperClasses().end(), c) == paperClasses().end())
       fail(where, "objects.classes", "'" + c + "' is not one of the five paper classes");
@@ -110,7 +117,8 @@ void validate(const SceneOptions& o, const std::string& where) {
   range(where, "trajectory.roll_deg", t.roll_deg, 0, 30);
   const double clear = t.radius_max + 0.45;
   if (o.room.size[0] < 2 * clear || o.room.size[1] < 2 * clear)
-    fail(where, "room.size", "the room must be at least 2 x (trajectory.radius_max + 0.45) m wide in x and y");
+    fail(where, "room.size",
+         "the room must be at least 2 x (trajectory.radius_max + 0.45) m wide in x and y");
 }
 
 void validate(const ObjectSetOptions& o, const std::string& where) {
@@ -119,7 +127,8 @@ void validate(const ObjectSetOptions& o, const std::string& where) {
   range(where, "instances", o.instances, 1, 1000);
   if (o.elevations_deg.empty()) fail(where, "elevations_deg", "expected at least one elevation");
   for (double e : o.elevations_deg) range(where, "elevations_deg", e, 5, 85);
-  if (o.video_ids.size() != o.elevations_deg.size()) fail(where, "video_ids", "expected one video number per elevation");
+  if (o.video_ids.size() != o.elevations_deg.size())
+    fail(where, "video_ids", "expected one video number per elevation");
   range(where, "azimuth_step_deg", o.azimuth_step_deg, 0.5, 360);
   range(where, "distance_min", o.distance_min, 0.3, 3);
   range(where, "distance_max", o.distance_max, o.distance_min, 3);

@@ -29,7 +29,8 @@ struct CameraOptions {
 
 struct RoomOptions {
   std::string floor = "random";  ///< wood, parquet, tiles, carpet, concrete, linoleum or random
-  std::string walls = "random";  ///< wallpaper, brick, plaster, panels, stripes, tiles or random (per wall)
+  std::string walls =
+      "random";  ///< wallpaper, brick, plaster, panels, stripes, tiles or random (per wall)
   std::vector<double> size = {5.0, 4.2};  ///< m, floor extent along x and y
   double height = 2.6;                    ///< m, ceiling height
   int pictures = 6;                       ///< posters, paintings, calendars on the walls
@@ -38,7 +39,8 @@ struct RoomOptions {
   template <class V>
   void visit(V& v) {
     v("floor", floor, "wood, parquet, tiles, carpet, concrete, linoleum or random");
-    v("walls", walls, "wallpaper, brick, plaster, panels, stripes, tiles or random (each wall drawn)");
+    v("walls", walls,
+      "wallpaper, brick, plaster, panels, stripes, tiles or random (each wall drawn)");
     v("size", size, "m, [x, y] extent of the room");
     v("height", height, "m, ceiling height");
     v("pictures", pictures, "posters and paintings on the walls");
@@ -62,20 +64,21 @@ struct TableOptions {
 };
 
 struct ObjectOptions {
-  int count = 5;                ///< objects on the table (3-8)
-  int distractors = 1;          ///< of which from the other 46 categories
+  int count = 5;                                   ///< objects on the table (3-8)
+  int distractors = 1;                             ///< of which from the other 46 categories
   std::vector<std::string> distractor_categories;  ///< allowed distractors (empty: all others)
   std::vector<std::string> classes;                ///< paper classes to draw from (empty: all five)
-  double min_gap = 0.05;        ///< m, free space between objects
-  double edge_margin = 0.05;    ///< m, free space to the table edge
-  double spread = 1.0;          ///< fraction of the table top the objects may use (around the centre)
-  double yaw_deg = -1;          ///< rotation of every object about z (-1: random per object)
+  double min_gap = 0.05;                           ///< m, free space between objects
+  double edge_margin = 0.05;                       ///< m, free space to the table edge
+  double spread = 1.0;  ///< fraction of the table top the objects may use (around the centre)
+  double yaw_deg = -1;  ///< rotation of every object about z (-1: random per object)
 
   template <class V>
   void visit(V& v) {
     v("count", count, "objects on the table (3-8)");
     v("distractors", distractors, "how many of them come from the 46 non-paper categories");
-    v("distractor_categories", distractor_categories, "allowed distractor categories (empty: all 46)");
+    v("distractor_categories", distractor_categories,
+      "allowed distractor categories (empty: all 46)");
     v("classes", classes, "paper classes to draw from (empty: all five)");
     v("min_gap", min_gap, "m, free space between two objects");
     v("edge_margin", edge_margin, "m, free space between an object and the table edge");
@@ -87,12 +90,12 @@ struct ObjectOptions {
 struct TrajectoryOptions {
   double radius_min = 0.75, radius_max = 1.25;  ///< m, horizontal distance to the table centre
   double height_min = 0.35, height_max = 0.7;   ///< m, camera height above the table top
-  double arc_deg = 360;           ///< total angle travelled around the table
-  int direction = 0;              ///< +1 counter-clockwise, -1 clockwise, 0 random
-  double speed_variation = 0.4;   ///< relative variation of the angular speed (< 0.9)
-  double look_jitter = 0.06;      ///< m, slow wander of the look-at point
-  double shake_deg = 0.25;        ///< deg, hand tremor (1-3 Hz)
-  double roll_deg = 3;            ///< deg, slow roll
+  double arc_deg = 360;                         ///< total angle travelled around the table
+  int direction = 0;                            ///< +1 counter-clockwise, -1 clockwise, 0 random
+  double speed_variation = 0.4;                 ///< relative variation of the angular speed (< 0.9)
+  double look_jitter = 0.06;                    ///< m, slow wander of the look-at point
+  double shake_deg = 0.25;                      ///< deg, hand tremor (1-3 Hz)
+  double roll_deg = 3;                          ///< deg, slow roll
 
   template <class V>
   void visit(V& v) {
@@ -110,11 +113,11 @@ struct TrajectoryOptions {
 };
 
 struct LightOptions {
-  double elevation_deg = 0;   ///< of the directional light (0: random 50-75)
-  double azimuth_deg = -1;    ///< (-1: random)
-  double sun = 0.7;           ///< directional light intensity
-  double ambient = 0.5;       ///< hemisphere (ambient) intensity
-  double warmth = 0.0;        ///< -1 cool (daylight) .. +1 warm (tungsten)
+  double elevation_deg = 0;  ///< of the directional light (0: random 50-75)
+  double azimuth_deg = -1;   ///< (-1: random)
+  double sun = 0.7;          ///< directional light intensity
+  double ambient = 0.5;      ///< hemisphere (ambient) intensity
+  double warmth = 0.0;       ///< -1 cool (daylight) .. +1 warm (tungsten)
 
   template <class V>
   void visit(V& v) {
@@ -127,9 +130,9 @@ struct LightOptions {
 };
 
 struct SceneOptions {
-  std::string name;      ///< required: the sequence name
-  int64_t seed = -1;     ///< required: the scene seed (--seed overrides)
-  int frames = 450;      ///< frames of the sequence (its camera path); --frames renders fewer
+  std::string name;         ///< required: the sequence name
+  int64_t seed = -1;        ///< required: the scene seed (--seed overrides)
+  int frames = 450;         ///< frames of the sequence (its camera path); --frames renders fewer
   bool write_depth = true;  ///< depth/ 16-bit PNG in millimetres
   CameraOptions camera;
   RoomOptions room;
@@ -144,7 +147,8 @@ struct SceneOptions {
   void visit(V& v) {
     v("name", name, "sequence name (required)");
     v("seed", seed, "scene seed (required; --seed overrides)");
-    v("frames", frames, "frames of the sequence (the camera path spans them; --frames renders the first N)");
+    v("frames", frames,
+      "frames of the sequence (the camera path spans them; --frames renders the first N)");
     v("write_depth", write_depth, "write depth/ (16-bit PNG, mm)");
     v("notes", notes, "free text copied into sequence.yaml");
     v.section("camera", camera);
@@ -158,16 +162,16 @@ struct SceneOptions {
 };
 
 struct ObjectSetOptions {
-  std::string name;     ///< required
-  int64_t seed = -1;    ///< required (--seed overrides)
+  std::string name;                     ///< required
+  int64_t seed = -1;                    ///< required (--seed overrides)
   std::vector<std::string> categories;  ///< categories (empty or ["all"]: all 51)
-  int instances = 3;    ///< instances per category
+  int instances = 3;                    ///< instances per category
   std::vector<double> elevations_deg = {30, 45, 60};
   std::vector<int> video_ids = {1, 2, 4};  ///< the UW dataset numbers its elevations 1, 2, 4
   double azimuth_step_deg = 5;
   double distance_min = 0.75, distance_max = 1.0;  ///< m, camera to object
-  double crop_margin = 0.12;  ///< of the object's box size, on each side
-  int backgrounds = 6;        ///< different rooms / tables the turntable stands in
+  double crop_margin = 0.12;                       ///< of the object's box size, on each side
+  int backgrounds = 6;  ///< different rooms / tables the turntable stands in
   CameraOptions camera;
   SensorOptions sensor;
   LightOptions light;

@@ -13,7 +13,8 @@ namespace {
 
 class SynthSource : public FrameSource {
  public:
-  SynthSource(const std::string& arg, const std::string& config, int64_t seed, int frames) : arg_(arg) {
+  SynthSource(const std::string& arg, const std::string& config, int64_t seed, int frames)
+      : arg_(arg) {
     const synth::SceneOptions o = synth::loadSceneOptions(config);
     scene_ = std::make_unique<synth::SyntheticScene>(o, seed, frames);
     camera_ = scene_->camera();
@@ -56,7 +57,8 @@ int64_t parseInt(const std::string& arg, const std::string& key, const std::stri
     if (used != value.size() || v < 0) throw std::invalid_argument(value);
     return v;
   } catch (const std::exception&) {
-    throw SourceError("synth:" + arg + ": '" + key + "' must be a non-negative integer, got '" + value + "'");
+    throw SourceError("synth:" + arg + ": '" + key + "' must be a non-negative integer, got '" +
+                      value + "'");
   }
 }
 
@@ -75,12 +77,17 @@ std::unique_ptr<FrameSource> openSynthSource(const std::string& arg) {
   while (std::getline(qs, kv, '&')) {
     if (kv.empty()) continue;
     const size_t eq = kv.find('=');
-    const std::string key = kv.substr(0, eq), value = eq == std::string::npos ? "" : kv.substr(eq + 1);
-    if (key == "seed") seed = parseInt(arg, key, value);
-    else if (key == "frames") frames = parseInt(arg, key, value);
-    else throw SourceError("synth:" + arg + ": unknown option '" + key + "' (known: seed, frames)");
+    const std::string key = kv.substr(0, eq),
+                      value = eq == std::string::npos ? "" : kv.substr(eq + 1);
+    if (key == "seed")
+      seed = parseInt(arg, key, value);
+    else if (key == "frames")
+      frames = parseInt(arg, key, value);
+    else
+      throw SourceError("synth:" + arg + ": unknown option '" + key + "' (known: seed, frames)");
   }
-  if (config.empty()) throw SourceError("synth:" + arg + ": expected synth:CONFIG[?seed=N&frames=M]");
+  if (config.empty())
+    throw SourceError("synth:" + arg + ": expected synth:CONFIG[?seed=N&frames=M]");
   try {
     return std::make_unique<SynthSource>(arg, config, seed, static_cast<int>(frames));
   } catch (const ConfigError& e) {

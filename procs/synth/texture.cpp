@@ -5,7 +5,8 @@
 namespace slamaware::synth {
 
 Texture::Texture(const cv::Mat& bgr, bool wrap_u, bool wrap_v) : wrap_u_(wrap_u), wrap_v_(wrap_v) {
-  if (bgr.empty() || bgr.type() != CV_8UC3) throw std::invalid_argument("Texture: need a non-empty 8-bit BGR image");
+  if (bgr.empty() || bgr.type() != CV_8UC3)
+    throw std::invalid_argument("Texture: need a non-empty 8-bit BGR image");
   int w = bgr.cols, h = bgr.rows;
   w_.push_back(w);
   h_.push_back(h);
@@ -15,8 +16,8 @@ Texture::Texture(const cv::Mat& bgr, bool wrap_u, bool wrap_v) : wrap_u_(wrap_u)
     const uint8_t* row = bgr.ptr<uint8_t>(y);
     for (int x = 0; x < w; ++x)
       px_[static_cast<size_t>(y) * w + x] = static_cast<uint32_t>(row[3 * x]) |
-                                           (static_cast<uint32_t>(row[3 * x + 1]) << 8) |
-                                           (static_cast<uint32_t>(row[3 * x + 2]) << 16);
+                                            (static_cast<uint32_t>(row[3 * x + 1]) << 8) |
+                                            (static_cast<uint32_t>(row[3 * x + 2]) << 16);
   }
   // Mip levels: 2x2 box filter (the last row / column repeats for odd sizes).
   while (w > 1 || h > 1) {
@@ -30,8 +31,10 @@ Texture::Texture(const cv::Mat& bgr, bool wrap_u, bool wrap_v) : wrap_u_(wrap_u)
       const int ya = std::min(2 * y, ph - 1), yb = std::min(2 * y + 1, ph - 1);
       for (int x = 0; x < w; ++x) {
         const int xa = std::min(2 * x, pw - 1), xb = std::min(2 * x + 1, pw - 1);
-        const uint32_t q[4] = {px_[poff + static_cast<size_t>(ya) * pw + xa], px_[poff + static_cast<size_t>(ya) * pw + xb],
-                               px_[poff + static_cast<size_t>(yb) * pw + xa], px_[poff + static_cast<size_t>(yb) * pw + xb]};
+        const uint32_t q[4] = {px_[poff + static_cast<size_t>(ya) * pw + xa],
+                               px_[poff + static_cast<size_t>(ya) * pw + xb],
+                               px_[poff + static_cast<size_t>(yb) * pw + xa],
+                               px_[poff + static_cast<size_t>(yb) * pw + xb]};
         uint32_t out = 0;
         for (int c = 0; c < 3; ++c) {
           uint32_t s = 2;

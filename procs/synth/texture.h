@@ -107,11 +107,15 @@ class Texture {
     if (wrap_v_) v -= std::floor(v);
     // Fixed point with 8 fractional bits; the offset keeps the conversion a floor.
     constexpr float kOffset = 4096.f;
-    const int xi = static_cast<int>((u * static_cast<float>(w) - 0.5f + kOffset) * 256.f) - static_cast<int>(kOffset * 256.f);
-    const int yi = static_cast<int>((v * static_cast<float>(h) - 0.5f + kOffset) * 256.f) - static_cast<int>(kOffset * 256.f);
+    const int xi = static_cast<int>((u * static_cast<float>(w) - 0.5f + kOffset) * 256.f) -
+                   static_cast<int>(kOffset * 256.f);
+    const int yi = static_cast<int>((v * static_cast<float>(h) - 0.5f + kOffset) * 256.f) -
+                   static_cast<int>(kOffset * 256.f);
     const uint32_t fx = static_cast<uint32_t>(xi & 255), fy = static_cast<uint32_t>(yi & 255);
-    const int x0 = fixTexelIndex(xi >> 8, w, wrap_u_), x1 = fixTexelIndex((xi >> 8) + 1, w, wrap_u_);
-    const int y0 = fixTexelIndex(yi >> 8, h, wrap_v_), y1 = fixTexelIndex((yi >> 8) + 1, h, wrap_v_);
+    const int x0 = fixTexelIndex(xi >> 8, w, wrap_u_),
+              x1 = fixTexelIndex((xi >> 8) + 1, w, wrap_u_);
+    const int y0 = fixTexelIndex(yi >> 8, h, wrap_v_),
+              y1 = fixTexelIndex((yi >> 8) + 1, h, wrap_v_);
     const uint32_t* base = &px_[static_cast<size_t>(off_[static_cast<size_t>(level)])];
     const uint32_t* r0 = base + static_cast<size_t>(y0) * static_cast<size_t>(w);
     const uint32_t* r1 = base + static_cast<size_t>(y1) * static_cast<size_t>(w);
@@ -144,16 +148,20 @@ class ScalarMap {
   float& at(int x, int y) { return v_[static_cast<size_t>(y) * w_ + x]; }
   float at(int x, int y) const { return v_[static_cast<size_t>(y) * w_ + x]; }
   /// Bilinear samples of two maps of the same size at (u, v) (one index computation).
-  static void sample2(const ScalarMap& a, const ScalarMap& b, float u, float v, float* va, float* vb) {
+  static void sample2(const ScalarMap& a, const ScalarMap& b, float u, float v, float* va,
+                      float* vb) {
     float x = u * static_cast<float>(a.w_) - 0.5f, y = v * static_cast<float>(a.h_) - 0.5f;
     x = std::min(std::max(x, 0.f), static_cast<float>(a.w_ - 1));
     y = std::min(std::max(y, 0.f), static_cast<float>(a.h_ - 1));
     const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
     const int x1 = std::min(x0 + 1, a.w_ - 1), y1 = std::min(y0 + 1, a.h_ - 1);
     const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-    const size_t i00 = static_cast<size_t>(y0) * a.w_ + x0, i10 = static_cast<size_t>(y0) * a.w_ + x1;
-    const size_t i01 = static_cast<size_t>(y1) * a.w_ + x0, i11 = static_cast<size_t>(y1) * a.w_ + x1;
-    const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy, w11 = fx * fy;
+    const size_t i00 = static_cast<size_t>(y0) * a.w_ + x0,
+                 i10 = static_cast<size_t>(y0) * a.w_ + x1;
+    const size_t i01 = static_cast<size_t>(y1) * a.w_ + x0,
+                 i11 = static_cast<size_t>(y1) * a.w_ + x1;
+    const float w00 = (1.f - fx) * (1.f - fy), w10 = fx * (1.f - fy), w01 = (1.f - fx) * fy,
+                w11 = fx * fy;
     *va = w00 * a.v_[i00] + w10 * a.v_[i10] + w01 * a.v_[i01] + w11 * a.v_[i11];
     *vb = w00 * b.v_[i00] + w10 * b.v_[i10] + w01 * b.v_[i01] + w11 * b.v_[i11];
   }

@@ -19,13 +19,17 @@ std::string pseudoWord(Rng& rng, int syllables, bool upper);
 // ---- Room surfaces: size in metres, `texel` metres per texel --------------------------------
 
 /// Floors: "wood" (planks), "tiles", "carpet", "concrete", "parquet", "linoleum".
-cv::Mat floorTexture(Rng& rng, const std::string& style, float width_m, float height_m, float texel_m);
+cv::Mat floorTexture(Rng& rng, const std::string& style, float width_m, float height_m,
+                     float texel_m);
 /// Walls: "wallpaper", "brick", "plaster", "panels", "stripes", "tiles".
-cv::Mat wallTexture(Rng& rng, const std::string& style, float width_m, float height_m, float texel_m);
+cv::Mat wallTexture(Rng& rng, const std::string& style, float width_m, float height_m,
+                    float texel_m);
 /// Table tops: "wood", "laminate", "cloth", "marble", "checker", "stone".
-cv::Mat tableTexture(Rng& rng, const std::string& style, float width_m, float height_m, float texel_m);
+cv::Mat tableTexture(Rng& rng, const std::string& style, float width_m, float height_m,
+                     float texel_m);
 /// Plain wood (furniture, table edges, legs); grain along x.
-cv::Mat woodTexture(Rng& rng, float width_m, float height_m, float texel_m, cv::Vec3f light, cv::Vec3f dark);
+cv::Mat woodTexture(Rng& rng, float width_m, float height_m, float texel_m, cv::Vec3f light,
+                    cv::Vec3f dark);
 /// A ceiling: off-white with mottling and, sometimes, acoustic tiles.
 cv::Mat ceilingTexture(Rng& rng, float width_m, float height_m, float texel_m);
 
@@ -43,7 +47,8 @@ cv::Mat bookSpinesTexture(Rng& rng, int w, int h, int* books);
 cv::Mat packagingTexture(Rng& rng, int w, int h, float theme_hue, const cv::Rect& front, bool busy);
 /// A wrap-around label (cans, bottles, jars): bands, a brand word repeated around, a logo.
 cv::Mat labelTexture(Rng& rng, int w, int h, float theme_hue);
-/// Glazed ceramic / plastic: a base colour with a pattern ("plain", "bands", "dots", "logo", "floral").
+/// Glazed ceramic / plastic: a base colour with a pattern ("plain", "bands", "dots", "logo",
+/// "floral").
 cv::Mat ceramicTexture(Rng& rng, int w, int h, cv::Vec3f base, const std::string& pattern);
 /// Woven fabric (caps, towels), optionally with a stitched logo.
 cv::Mat fabricTexture(Rng& rng, int w, int h, cv::Vec3f base, bool logo, float period_px = 3.f);
@@ -55,7 +60,8 @@ cv::Mat metalTexture(Rng& rng, int w, int h, cv::Vec3f base, bool brushed);
 /// A noisy plastic with mild mottling (the default for plain parts).
 cv::Mat plasticTexture(Rng& rng, int w, int h, cv::Vec3f base, float noise = 0.04f);
 /// A grid of keys (keyboards, calculators, phones' keypads) with legends.
-cv::Mat keysTexture(Rng& rng, int w, int h, int cols, int rows, cv::Vec3f body, cv::Vec3f key, bool legends);
+cv::Mat keysTexture(Rng& rng, int w, int h, int cols, int rows, cv::Vec3f body, cv::Vec3f key,
+                    bool legends);
 /// A phone or calculator display with icons or digits.
 cv::Mat screenTexture(Rng& rng, int w, int h, bool icons);
 /// Porous sponge foam.

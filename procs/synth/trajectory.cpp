@@ -26,7 +26,8 @@ double Trajectory::eval(const std::vector<Wave>& w, double t) {
   return s;
 }
 
-Trajectory::Trajectory(const TrajectoryOptions& o, const Eigen::Vector3d& centre, double duration_s, Rng rng)
+Trajectory::Trajectory(const TrajectoryOptions& o, const Eigen::Vector3d& centre, double duration_s,
+                       Rng rng)
     : o_(o), centre_(centre) {
   theta0_ = rng.uniform(0, kTwoPi);
   dir_ = o.direction != 0 ? (o.direction > 0 ? 1.0 : -1.0) : (rng.chance(0.5) ? 1.0 : -1.0);
@@ -50,21 +51,25 @@ Trajectory::Trajectory(const TrajectoryOptions& o, const Eigen::Vector3d& centre
 double Trajectory::angle(double t) const {
   double s = t;
   for (const auto& w : speed_)
-    s -= o_.speed_variation * w.amp / (kTwoPi * w.freq_hz) * std::cos(kTwoPi * w.freq_hz * t + w.phase);
+    s -= o_.speed_variation * w.amp / (kTwoPi * w.freq_hz) *
+         std::cos(kTwoPi * w.freq_hz * t + w.phase);
   return k_ * s;
 }
 
 Eigen::Vector3d Trajectory::position(double t) const {
   const double th = theta0_ + dir_ * (angle(t) - angle(0));
-  const double r = 0.5 * (o_.radius_min + o_.radius_max) + 0.5 * (o_.radius_max - o_.radius_min) * eval(radius_, t);
-  const double h = 0.5 * (o_.height_min + o_.height_max) + 0.5 * (o_.height_max - o_.height_min) * eval(height_, t);
+  const double r = 0.5 * (o_.radius_min + o_.radius_max) +
+                   0.5 * (o_.radius_max - o_.radius_min) * eval(radius_, t);
+  const double h = 0.5 * (o_.height_min + o_.height_max) +
+                   0.5 * (o_.height_max - o_.height_min) * eval(height_, t);
   return centre_ + Eigen::Vector3d(r * std::cos(th), r * std::sin(th), h);
 }
 
 Eigen::Isometry3d Trajectory::pose(double t) const {
   const Eigen::Vector3d p = position(t);
   const Eigen::Vector3d target =
-      centre_ + o_.look_jitter * Eigen::Vector3d(eval(look_x_, t), eval(look_y_, t), 0.5 * eval(look_z_, t));
+      centre_ +
+      o_.look_jitter * Eigen::Vector3d(eval(look_x_, t), eval(look_y_, t), 0.5 * eval(look_z_, t));
   const Eigen::Vector3d z = (target - p).normalized();
   const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
   const Eigen::Vector3d y = z.cross(x);
@@ -73,10 +78,12 @@ Eigen::Isometry3d Trajectory::pose(double t) const {
   R.col(1) = y;
   R.col(2) = z;
   const double s = o_.shake_deg * kDeg;
-  const Eigen::Matrix3d jitter = (Eigen::AngleAxisd(o_.roll_deg * kDeg * eval(roll_, t) + s * eval(shake_z_, t), Eigen::Vector3d::UnitZ()) *
-                                  Eigen::AngleAxisd(s * eval(shake_x_, t), Eigen::Vector3d::UnitX()) *
-                                  Eigen::AngleAxisd(s * eval(shake_y_, t), Eigen::Vector3d::UnitY()))
-                                     .toRotationMatrix();
+  const Eigen::Matrix3d jitter =
+      (Eigen::AngleAxisd(o_.roll_deg * kDeg * eval(roll_, t) + s * eval(shake_z_, t),
+                         Eigen::Vector3d::UnitZ()) *
+       Eigen::AngleAxisd(s * eval(shake_x_, t), Eigen::Vector3d::UnitX()) *
+       Eigen::AngleAxisd(s * eval(shake_y_, t), Eigen::Vector3d::UnitY()))
+          .toRotationMatrix();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = R * jitter;
   T.translation() = p;

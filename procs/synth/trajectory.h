@@ -15,7 +15,8 @@ namespace slamaware::synth {
 class Trajectory {
  public:
   /// `centre`: the table-top centre looked at (world); `duration_s`: the sequence length.
-  Trajectory(const TrajectoryOptions& options, const Eigen::Vector3d& centre, double duration_s, Rng rng);
+  Trajectory(const TrajectoryOptions& options, const Eigen::Vector3d& centre, double duration_s,
+             Rng rng);
 
   /// T_world_camera at time t (s); camera frame x right, y down, z forward.
   Eigen::Isometry3d pose(double t) const;
@@ -34,7 +35,8 @@ class Trajectory {
   TrajectoryOptions o_;
   Eigen::Vector3d centre_;
   double theta0_ = 0, dir_ = 1, k_ = 1;
-  std::vector<Wave> speed_, radius_, height_, look_x_, look_y_, look_z_, shake_x_, shake_y_, shake_z_, roll_;
+  std::vector<Wave> speed_, radius_, height_, look_x_, look_y_, look_z_, shake_x_, shake_y_,
+      shake_z_, roll_;
 };
 
 }  // namespace slamaware::synth

@@ -24,7 +24,8 @@ using Clock = std::chrono::steady_clock;
 
 void writeBytes(const fs::path& path, const std::vector<uint8_t>& bytes, WriteStats* st) {
   std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
   if (!out) throw std::runtime_error(path.string() + ": write failed");
   st->files += 1;
   st->bytes += static_cast<int64_t>(bytes.size());
@@ -66,7 +67,8 @@ cv::Mat depthMillimetres(const FrameBuffers& fb) {
 
 }  // namespace
 
-WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir_s, const std::string& config_name, bool progress) {
+WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir_s,
+                            const std::string& config_name, bool progress) {
   const auto t0 = Clock::now();
   WriteStats st;
   const fs::path dir(dir_s);
@@ -86,18 +88,23 @@ WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir_s, con
   std::string vis_csv = "frame,instance,visible_px,silhouette_px,fraction\n";
   FrameBuffers fb;
   std::unique_ptr<ProgressBar> bar;
-  if (progress) bar = std::make_unique<ProgressBar>("render " + scene.options().name, scene.frames());
+  if (progress)
+    bar = std::make_unique<ProgressBar>("render " + scene.options().name, scene.frames());
   for (int i = 0; i < scene.frames(); ++i) {
     const cv::Mat img = scene.render(i, &fb);
-    writeBytes(dir / "rgb" / frameName(i, ".jpg"), encodeJpeg(img, scene.options().sensor.jpeg_quality), &st);
-    if (depth) writeBytes(dir / "depth" / frameName(i, ".png"), encodePng(depthMillimetres(fb), 3), &st);
+    writeBytes(dir / "rgb" / frameName(i, ".jpg"),
+               encodeJpeg(img, scene.options().sensor.jpeg_quality), &st);
+    if (depth)
+      writeBytes(dir / "depth" / frameName(i, ".png"), encodePng(depthMillimetres(fb), 3), &st);
     const auto vis = scene.visibility(i, fb);
     for (const auto& b : scene.boxes(i, vis)) boxes.push_back(b);
     for (const auto& v : vis) {
       if (v.visible_px == 0) continue;
       char buf[160];
-      std::snprintf(buf, sizeof(buf), "%d,%s,%lld,%lld,%.4f\n", i, scene.objects()[static_cast<size_t>(v.id)].instance.c_str(),
-                    static_cast<long long>(v.visible_px), static_cast<long long>(v.silhouette_px), v.fraction);
+      std::snprintf(buf, sizeof(buf), "%d,%s,%lld,%lld,%.4f\n", i,
+                    scene.objects()[static_cast<size_t>(v.id)].instance.c_str(),
+                    static_cast<long long>(v.visible_px), static_cast<long long>(v.silhouette_px),
+                    v.fraction);
       vis_csv += buf;
     }
     poses.push_back({scene.time(i), scene.pose(i)});
@@ -112,7 +119,8 @@ WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir_s, con
   return st;
 }
 
-// ---- Object sets ----------------------------------------------------------------------------------
+// ---- Object sets
+// ----------------------------------------------------------------------------------
 
 namespace {
 
@@ -142,13 +150,15 @@ Backdrop makeBackdrop(uint64_t seed, const ObjectSetOptions& o) {
   occ.insert(occ.end(), b.env.furniture_items.begin(), b.env.furniture_items.end());
   bakeReceiver(&b.scene, b.env.floor, occ);
   b.base_items = b.scene.items.size();
+  b.scene.freezePrefix(b.base_items);
   b.base_materials = b.scene.materials.size();
   return b;
 }
 
 // The turntable: a disc on a short cylinder, its top a light-map receiver; the print on the
 // top turns with the object (`yaw`).
-Receiver addTurntable(Backdrop& b, float radius, float height, float yaw, const TexturePtr& top_tex, const TexturePtr& side_tex) {
+Receiver addTurntable(Backdrop& b, float radius, float height, float yaw, const TexturePtr& top_tex,
+                      const TexturePtr& side_tex) {
   RenderScene& s = b.scene;
   const float z0 = b.env.table.top_z, z1 = z0 + height;
   Material top;
@@ -192,12 +202,14 @@ std::string yamlList(const std::vector<std::string>& v) {
 
 }  // namespace
 
-WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, int64_t seed, bool progress) {
+WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, int64_t seed,
+                          bool progress) {
   const auto t0 = Clock::now();
   WriteStats st;
   const uint64_t set_seed = static_cast<uint64_t>(seed >= 0 ? seed : o.seed);
   std::vector<std::string> cats = o.categories;
-  if (cats.empty() || std::find(cats.begin(), cats.end(), "all") != cats.end()) cats = categoryNames();
+  if (cats.empty() || std::find(cats.begin(), cats.end(), "all") != cats.end())
+    cats = categoryNames();
   const int steps = std::max(1, static_cast<int>(std::lround(360.0 / o.azimuth_step_deg)));
   const int views_per_instance = steps * static_cast<int>(o.elevations_deg.size());
   const fs::path dir(dir_s);
@@ -216,18 +228,24 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
   // Turntable tops: a few printed / plain discs.
   std::vector<TexturePtr> tt_tops, tt_sides;
   for (int i = 0; i < 3; ++i) {
-    const cv::Vec3f c = hsvColor(tt_rng.uniformf(0.f, 360.f), tt_rng.uniformf(0.f, 0.25f), tt_rng.uniformf(0.55f, 0.9f));
+    const cv::Vec3f c = hsvColor(tt_rng.uniformf(0.f, 360.f), tt_rng.uniformf(0.f, 0.25f),
+                                 tt_rng.uniformf(0.55f, 0.9f));
     cv::Mat t = i == 0 ? tableTexture(tt_rng, "laminate", 0.5f, 0.5f, 0.001f)
-                       : (i == 1 ? tableTexture(tt_rng, "wood", 0.5f, 0.5f, 0.001f) : plasticTexture(tt_rng, 512, 512, c, 0.08f));
+                       : (i == 1 ? tableTexture(tt_rng, "wood", 0.5f, 0.5f, 0.001f)
+                                 : plasticTexture(tt_rng, 512, 512, c, 0.08f));
     // Index marks around the edge, as turntables have.
     for (int k = 0; k < 36; ++k) {
       const double a = k * CV_PI / 18;
-      cv::line(t, cv::Point(256 + static_cast<int>(235 * std::cos(a)), 256 + static_cast<int>(235 * std::sin(a))),
-               cv::Point(256 + static_cast<int>(250 * std::cos(a)), 256 + static_cast<int>(250 * std::sin(a))), cv::Scalar(30, 30, 30),
-               k % 9 == 0 ? 3 : 1, cv::LINE_AA);
+      cv::line(t,
+               cv::Point(256 + static_cast<int>(235 * std::cos(a)),
+                         256 + static_cast<int>(235 * std::sin(a))),
+               cv::Point(256 + static_cast<int>(250 * std::cos(a)),
+                         256 + static_cast<int>(250 * std::sin(a))),
+               cv::Scalar(30, 30, 30), k % 9 == 0 ? 3 : 1, cv::LINE_AA);
     }
     tt_tops.push_back(std::make_shared<const Texture>(t, false, false));
-    tt_sides.push_back(std::make_shared<const Texture>(metalTexture(tt_rng, 256, 32, {0.3f, 0.3f, 0.32f}, true), true, false));
+    tt_sides.push_back(std::make_shared<const Texture>(
+        metalTexture(tt_rng, 256, 32, {0.3f, 0.3f, 0.32f}, true), true, false));
   }
 
   int64_t total = static_cast<int64_t>(cats.size()) * o.instances * views_per_instance;
@@ -239,11 +257,13 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
   for (const auto& cat : cats) {
     for (int n = 1; n <= o.instances; ++n) {
       const std::string inst = cat + "_" + std::to_string(n);
-      const uint64_t iseed = instanceSeed(SeedDomain::kObjectSet, set_seed, cat, static_cast<uint64_t>(n));
+      const uint64_t iseed =
+          instanceSeed(SeedDomain::kObjectSet, set_seed, cat, static_cast<uint64_t>(n));
       const ObjectModel model = makeObject(cat, iseed);
       Rng irng(hashCombine(iseed, hashString("views")));
       const size_t bi = static_cast<size_t>(irng.range(0, o.backgrounds - 1));
-      if (!backdrops[bi]) backdrops[bi] = std::make_unique<Backdrop>(makeBackdrop(hashCombine(backdrop_seed, bi), o));
+      if (!backdrops[bi])
+        backdrops[bi] = std::make_unique<Backdrop>(makeBackdrop(hashCombine(backdrop_seed, bi), o));
       Backdrop& bd = *backdrops[bi];
       const float dist = static_cast<float>(irng.uniform(o.distance_min, o.distance_max));
       const double cam_az = irng.uniform(0, 2 * M_PI), yaw0 = irng.uniform(0, 2 * M_PI);
@@ -259,7 +279,8 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
           RenderScene& s = bd.scene;
           s.items.resize(bd.base_items);
           s.materials.resize(bd.base_materials);
-          const Receiver rc = addTurntable(bd, tt_radius, tt_h, static_cast<float>(yaw), tt_tops[tt], tt_sides[tt]);
+          const Receiver rc =
+              addTurntable(bd, tt_radius, tt_h, static_cast<float>(yaw), tt_tops[tt], tt_sides[tt]);
           const float base_z = bd.env.table.top_z + tt_h;
           Eigen::Affine3f pose = Eigen::Affine3f::Identity();
           pose.translate(Eigen::Vector3f(0, 0, base_z));
@@ -278,8 +299,10 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
           const Eigen::AlignedBox3f ob = model.bounds();
           const Eigen::Vector3d target(0, 0, base_z + 0.5 * ob.sizes().z());
           const double wob = 0.004 * std::sin(k * 0.7 + static_cast<double>(e));
-          const Eigen::Vector3d cam = target + dist * Eigen::Vector3d(std::cos(el + wob) * std::cos(cam_az), std::cos(el + wob) * std::sin(cam_az),
-                                                                      std::sin(el + wob));
+          const Eigen::Vector3d cam =
+              target + dist * Eigen::Vector3d(std::cos(el + wob) * std::cos(cam_az),
+                                              std::cos(el + wob) * std::sin(cam_az),
+                                              std::sin(el + wob));
           const Eigen::Vector3d zc = (target - cam).normalized();
           const Eigen::Vector3d xc = zc.cross(Eigen::Vector3d::UnitZ()).normalized();
           Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -288,7 +311,8 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
           T.linear().col(2) = zc;
           T.translation() = cam;
           Eigen::Vector4f pb;
-          if (!Rasterizer::projectedBounds(s, 0, K, T, &pb)) throw std::runtime_error(inst + ": object behind the camera");
+          if (!Rasterizer::projectedBounds(s, 0, K, T, &pb))
+            throw std::runtime_error(inst + ": object behind the camera");
           const float bw = pb[2] - pb[0], bh = pb[3] - pb[1];
           const float m = static_cast<float>(o.crop_margin) * std::max(bw, bh) + 4.f;
           const int x0 = std::clamp(static_cast<int>(std::floor(pb[0] - m)), 0, W - 1);
@@ -297,17 +321,22 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
           const int y1 = std::clamp(static_cast<int>(std::ceil(pb[3] + m)), y0, H - 1);
           const Viewport vp{x0, y0, x1 - x0 + 1, y1 - y0 + 1};
           raster.render(s, K, T, vp, &fb, true);
-          const uint64_t noise_seed = hashCombine(iseed, static_cast<uint64_t>(e * 100000 + static_cast<size_t>(k)));
+          const uint64_t noise_seed =
+              hashCombine(iseed, static_cast<uint64_t>(e * 100000 + static_cast<size_t>(k)));
           const cv::Mat crop = applySensor(fb, K, T, o.sensor, ShutterMotion{}, noise_seed);
           cv::Mat mask(vp.h, vp.w, CV_8UC1);
           for (int y = 0; y < vp.h; ++y)
-            for (int x = 0; x < vp.w; ++x) mask.at<uint8_t>(y, x) = fb.object[static_cast<size_t>(y) * vp.w + x] == 0 ? 255 : 0;
-          const std::string stem = inst + "_" + std::to_string(o.video_ids[e]) + "_" + std::to_string(k + 1);
+            for (int x = 0; x < vp.w; ++x)
+              mask.at<uint8_t>(y, x) = fb.object[static_cast<size_t>(y) * vp.w + x] == 0 ? 255 : 0;
+          const std::string stem =
+              inst + "_" + std::to_string(o.video_ids[e]) + "_" + std::to_string(k + 1);
           writeBytes(idir / (stem + "_crop.png"), encodePng(crop, 6), &st);
           std::vector<uint8_t> mbytes;
-          cv::imencode(".png", mask, mbytes, {cv::IMWRITE_PNG_BILEVEL, 1, cv::IMWRITE_PNG_COMPRESSION, 9});
+          cv::imencode(".png", mask, mbytes,
+                       {cv::IMWRITE_PNG_BILEVEL, 1, cv::IMWRITE_PNG_COMPRESSION, 9});
           writeBytes(idir / (stem + "_maskcrop.png"), mbytes, &st);
-          writeText(idir / (stem + "_loc.txt"), std::to_string(x0) + "," + std::to_string(y0) + "\n", &st);
+          writeText(idir / (stem + "_loc.txt"),
+                    std::to_string(x0) + "," + std::to_string(y0) + "\n", &st);
           if (bar) bar->update(++done);
         }
       }
@@ -319,20 +348,24 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
     e_list += (i ? ", " : "") + std::to_string(static_cast<int>(std::lround(o.elevations_deg[i])));
     v_list += (i ? ", " : "") + std::to_string(o.video_ids[i]);
   }
-  std::string yaml = "name: " + o.name + "\nseed: " + std::to_string(set_seed) + "\ncategories: " + yamlList(cats) +
-                     "\ninstances_per_category: " + std::to_string(o.instances) + "\nelevations_deg: " + e_list + "]\nvideo_ids: " +
-                     v_list + "]\nazimuth_step_deg: " + std::to_string(o.azimuth_step_deg) + "\nviews_per_instance: " +
-                     std::to_string(views_per_instance) +
-                     "\nnotes: turntable views rendered by slamaware-synth; <instance>_<video>_<frame>: video = elevation, frame = "
-                     "azimuth step from 1; crop = object box plus margin; maskcrop = object pixels; loc = crop corner in the "
+  std::string yaml = "name: " + o.name + "\nseed: " + std::to_string(set_seed) +
+                     "\ncategories: " + yamlList(cats) +
+                     "\ninstances_per_category: " + std::to_string(o.instances) +
+                     "\nelevations_deg: " + e_list + "]\nvideo_ids: " + v_list +
+                     "]\nazimuth_step_deg: " + std::to_string(o.azimuth_step_deg) +
+                     "\nviews_per_instance: " + std::to_string(views_per_instance) +
+                     "\nnotes: turntable views rendered by slamaware-synth; "
+                     "<instance>_<video>_<frame>: video = elevation, frame = "
+                     "azimuth step from 1; crop = object box plus margin; maskcrop = object "
+                     "pixels; loc = crop corner in the "
                      "640x480 frame\n";
   writeText(dir / "set.yaml", yaml, &st);
   st.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return st;
 }
 
-cv::Mat contactSheet(const std::vector<cv::Mat>& images, const std::vector<std::string>& captions, int cols, int cell_w,
-                     int cell_h) {
+cv::Mat contactSheet(const std::vector<cv::Mat>& images, const std::vector<std::string>& captions,
+                     int cols, int cell_w, int cell_h) {
   const int n = static_cast<int>(images.size());
   const int rows = std::max(1, (n + cols - 1) / cols);
   const int cap_h = 16;
@@ -341,14 +374,19 @@ cv::Mat contactSheet(const std::vector<cv::Mat>& images, const std::vector<std::
     cv::Mat img = images[static_cast<size_t>(i)];
     if (img.empty()) continue;
     if (img.channels() == 1) cv::cvtColor(img, img, cv::COLOR_GRAY2BGR);
-    const double s = std::min(static_cast<double>(cell_w - 4) / img.cols, static_cast<double>(cell_h - 4) / img.rows);
+    const double s = std::min(static_cast<double>(cell_w - 4) / img.cols,
+                              static_cast<double>(cell_h - 4) / img.rows);
     cv::Mat r;
-    cv::resize(img, r, cv::Size(std::max(1, static_cast<int>(img.cols * s)), std::max(1, static_cast<int>(img.rows * s))), 0, 0,
-               s < 1 ? cv::INTER_AREA : cv::INTER_NEAREST);
-    const int cx = (i % cols) * cell_w + (cell_w - r.cols) / 2, cy = (i / cols) * (cell_h + cap_h) + (cell_h - r.rows) / 2;
+    cv::resize(img, r,
+               cv::Size(std::max(1, static_cast<int>(img.cols * s)),
+                        std::max(1, static_cast<int>(img.rows * s))),
+               0, 0, s < 1 ? cv::INTER_AREA : cv::INTER_NEAREST);
+    const int cx = (i % cols) * cell_w + (cell_w - r.cols) / 2,
+              cy = (i / cols) * (cell_h + cap_h) + (cell_h - r.rows) / 2;
     r.copyTo(sheet(cv::Rect(cx, cy, r.cols, r.rows)));
     if (static_cast<size_t>(i) < captions.size())
-      cv::putText(sheet, captions[static_cast<size_t>(i)], cv::Point((i % cols) * cell_w + 3, (i / cols) * (cell_h + cap_h) + cell_h + 11),
+      cv::putText(sheet, captions[static_cast<size_t>(i)],
+                  cv::Point((i % cols) * cell_w + 3, (i / cols) * (cell_h + cap_h) + cell_h + 11),
                   cv::FONT_HERSHEY_SIMPLEX, 0.38, cv::Scalar(230, 230, 230), 1, cv::LINE_AA);
   }
   return sheet;

@@ -19,17 +19,17 @@ struct WriteStats {
 /// Writes the scene into `dir`: sequence.yaml, rgb/NNNNNN.jpg, depth/NNNNNN.png (if enabled),
 /// groundtruth.txt, boxes.csv, objects.csv, visibility.csv. Frames and depth maps left from an
 /// earlier run in rgb/ and depth/ are removed first. `config_name` is recorded in sequence.yaml.
-WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir, const std::string& config_name,
-                            bool progress = true);
+WriteStats writeSceneFolder(SyntheticScene& scene, const std::string& dir,
+                            const std::string& config_name, bool progress = true);
 
 /// Renders an object set into `dir` (<category>/<category>_<n>/<...>_{crop,maskcrop}.png and
 /// _loc.txt), plus set.yaml describing it. `seed` replaces options.seed when >= 0.
-WriteStats writeObjectSet(const ObjectSetOptions& options, const std::string& dir, int64_t seed = -1,
-                          bool progress = true);
+WriteStats writeObjectSet(const ObjectSetOptions& options, const std::string& dir,
+                          int64_t seed = -1, bool progress = true);
 
 /// Tiles images (any size, scaled to fit cells of cell_w x cell_h) into one image with a caption
 /// under each.
-cv::Mat contactSheet(const std::vector<cv::Mat>& images, const std::vector<std::string>& captions, int cols,
-                     int cell_w, int cell_h);
+cv::Mat contactSheet(const std::vector<cv::Mat>& images, const std::vector<std::string>& captions,
+                     int cols, int cell_w, int cell_h);
 
 }  // namespace slamaware::synth

@@ -27,18 +27,21 @@ inline uint64_t fileHash(const std::string& path) {
 inline std::map<std::string, uint64_t> treeHashes(const std::string& dir) {
   std::map<std::string, uint64_t> out;
   for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
-    if (e.is_regular_file()) out[std::filesystem::relative(e.path(), dir).string()] = fileHash(e.path().string());
+    if (e.is_regular_file())
+      out[std::filesystem::relative(e.path(), dir).string()] = fileHash(e.path().string());
   return out;
 }
 
 /// Nearest intersection (distance along `dir` from `origin`) of a ray with the triangles of an
 /// object in a finalised scene (Moller-Trumbore, in double); -1 when it misses.
-inline double rayHitObject(const RenderScene& s, int object, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+inline double rayHitObject(const RenderScene& s, int object, const Eigen::Vector3d& origin,
+                           const Eigen::Vector3d& dir) {
   const auto range = s.objectRanges()[static_cast<size_t>(object)];
   double best = -1;
   for (uint32_t t = range.begin; t < range.end; ++t) {
     const auto& tri = s.triangles()[t];
-    const Eigen::Vector3d a = s.vertices()[tri.v[0]].p.cast<double>(), b = s.vertices()[tri.v[1]].p.cast<double>(),
+    const Eigen::Vector3d a = s.vertices()[tri.v[0]].p.cast<double>(),
+                          b = s.vertices()[tri.v[1]].p.cast<double>(),
                           c = s.vertices()[tri.v[2]].p.cast<double>();
     const Eigen::Vector3d e1 = b - a, e2 = c - a, p = dir.cross(e2);
     const double det = e1.dot(p);

@@ -28,7 +28,8 @@ Shot photograph(const ObjectModel& model) {
   RenderScene s;
   Material floor;
   Rng rng(5);
-  floor.texture = std::make_shared<const Texture>(plasticTexture(rng, 64, 64, {0.55f, 0.57f, 0.6f}, 0.1f), true, true);
+  floor.texture = std::make_shared<const Texture>(
+      plasticTexture(rng, 64, 64, {0.55f, 0.57f, 0.6f}, 0.1f), true, true);
   Mesh mat = quad({-2.f, -2.f, 0.f}, {4.f, 0, 0}, {0, 4.f, 0}, 8, 8);  // faces +z
   s.add(mat, s.addMaterial(floor));
   for (const auto& part : model.parts) s.add(part.mesh, s.addMaterial(part.material), 0);
@@ -37,8 +38,11 @@ Shot photograph(const ObjectModel& model) {
   const double size = b.sizes().maxCoeff();
   const Eigen::Vector3d target = b.center().cast<double>();
   const double el = 35 * M_PI / 180, az = -100 * M_PI / 180, dist = 2.0 * size + 0.15;
-  const Eigen::Vector3d cam = target + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-  const Eigen::Vector3d z = (target - cam).normalized(), x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d cam =
+      target + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                                      std::sin(el));
+  const Eigen::Vector3d z = (target - cam).normalized(),
+                        x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear().col(0) = x;
   T.linear().col(1) = z.cross(x);
@@ -118,7 +122,8 @@ TEST(SynthCategories, EveryCategoryRendersAndInstancesDiffer) {
   }
   const fs::path dir = fs::path(SLAMAWARE_BIN_DIR).parent_path() / "synth-sheets";
   fs::create_directories(dir);
-  ASSERT_TRUE(cv::imwrite((dir / "categories.png").string(), contactSheet(sheet, captions, 12, 160, 120)));
+  ASSERT_TRUE(
+      cv::imwrite((dir / "categories.png").string(), contactSheet(sheet, captions, 12, 160, 120)));
 }
 
 TEST(SynthCategories, SeedsOfObjectSetsAndScenesNeverMeet) {

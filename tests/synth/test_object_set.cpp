@@ -3,6 +3,7 @@
 // (build/synth-sheets/objects.png). Also the shipped object-set configs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -42,7 +43,8 @@ TEST(SynthObjectSet, EveryInstanceHasThePromisedViewsInTheUwLayout) {
   const ObjectSet set = ObjectSet::open(dir);
   EXPECT_EQ(set.categories(), (std::vector<std::string>{"apple", "cereal_box", "coffee_mug"}));
   const auto inst = set.instances();
-  for (const auto& c : o.categories) EXPECT_EQ(inst.at(c), (std::vector<std::string>{c + "_1", c + "_2"}));
+  for (const auto& c : o.categories)
+    EXPECT_EQ(inst.at(c), (std::vector<std::string>{c + "_1", c + "_2"}));
   std::map<std::string, std::set<std::pair<int, int>>> views;
   std::vector<cv::Mat> sheet;
   std::vector<std::string> captions;
@@ -63,7 +65,8 @@ TEST(SynthObjectSet, EveryInstanceHasThePromisedViewsInTheUwLayout) {
     EXPECT_EQ(mask.at<uint8_t>(0, 0), 0) << "the corner of a crop is background: " << v.crop_path;
     if (v.frame % 4 == 1 && sheet.size() < 72) {
       sheet.push_back(crop);
-      captions.push_back(v.instance + " " + std::to_string(v.video) + "_" + std::to_string(v.frame));
+      captions.push_back(v.instance + " " + std::to_string(v.video) + "_" +
+                         std::to_string(v.frame));
     }
   }
   for (const auto& [name, vs] : views) {
@@ -75,7 +78,8 @@ TEST(SynthObjectSet, EveryInstanceHasThePromisedViewsInTheUwLayout) {
   EXPECT_TRUE(fs::exists(dir + "/set.yaml"));
   const fs::path sheets = fs::path(SLAMAWARE_BIN_DIR).parent_path() / "synth-sheets";
   fs::create_directories(sheets);
-  ASSERT_TRUE(cv::imwrite((sheets / "objects.png").string(), contactSheet(sheet, captions, 9, 128, 128)));
+  ASSERT_TRUE(
+      cv::imwrite((sheets / "objects.png").string(), contactSheet(sheet, captions, 9, 128, 128)));
 }
 
 TEST(SynthObjectSet, SameSeedSameBytes) {
@@ -83,14 +87,17 @@ TEST(SynthObjectSet, SameSeedSameBytes) {
   o.categories = {"soda_can"};
   o.instances = 1;
   o.azimuth_step_deg = 90;
-  const std::string a = test::tempDir("synth_objects_a"), b = test::tempDir("synth_objects_b"), c = test::tempDir("synth_objects_c");
+  const std::string a = test::tempDir("synth_objects_a"), b = test::tempDir("synth_objects_b"),
+                    c = test::tempDir("synth_objects_c");
   writeObjectSet(o, a, -1, false);
   writeObjectSet(o, b, -1, false);
   writeObjectSet(o, c, 78, false);
-  const auto ha = synth_test::treeHashes(a), hb = synth_test::treeHashes(b), hc = synth_test::treeHashes(c);
+  const auto ha = synth_test::treeHashes(a), hb = synth_test::treeHashes(b),
+             hc = synth_test::treeHashes(c);
   EXPECT_EQ(ha.size(), 1u + 3u * 4u * 3u);  // set.yaml + 12 views x (crop, mask, loc)
   EXPECT_EQ(ha, hb);
-  EXPECT_NE(ha.at("soda_can/soda_can_1/soda_can_1_1_1_crop.png"), hc.at("soda_can/soda_can_1/soda_can_1_1_1_crop.png"));
+  EXPECT_NE(ha.at("soda_can/soda_can_1/soda_can_1_1_1_crop.png"),
+            hc.at("soda_can/soda_can_1/soda_can_1_1_1_crop.png"));
 }
 
 TEST(SynthObjectSet, ShippedConfigsPromiseTheTrainingSets) {
@@ -114,6 +121,10 @@ TEST(SynthObjectSet, ShippedConfigsPromiseTheTrainingSets) {
     EXPECT_GE(s.objects.count, 3) << e.path();
     EXPECT_LE(s.objects.count, 8) << e.path();
     EXPECT_EQ(s.name, e.path().stem().string());
+    // The camera circles the table at 0.7-1.5 m from its centre.
+    const TrajectoryOptions& t = s.trajectory;
+    EXPECT_GE(std::hypot(t.radius_min, t.height_min), 0.7) << e.path();
+    EXPECT_LE(std::hypot(t.radius_max, t.height_max), 1.5) << e.path();
     ++scenes;
   }
   EXPECT_GE(scenes, 8);

@@ -50,7 +50,8 @@ TEST(SynthRasterizer, TwoTrianglesOfAQuadCoverEachPixelOnceWithoutGaps) {
     }
   EXPECT_EQ(wrong, 0);
   EXPECT_EQ(covered, 210 * 158);
-  EXPECT_EQ(r.silhouettePixels(s, 0, vga(), identityPose(), Viewport{-100, -100, 840, 680}), 210 * 158);
+  EXPECT_EQ(r.silhouettePixels(s, 0, vga(), identityPose(), Viewport{-100, -100, 840, 680}),
+            210 * 158);
 }
 
 TEST(SynthRasterizer, DepthAndTextureArePerspectiveCorrectOnATiltedPlane) {
@@ -61,7 +62,8 @@ TEST(SynthRasterizer, DepthAndTextureArePerspectiveCorrectOnATiltedPlane) {
   // A plane tilted about the x axis: z grows from 0.8 m at its bottom edge to 2.0 m at its top.
   const Eigen::Vector3f a(-0.5f, 0.3f, 0.8f), b(-0.5f, -0.4f, 2.0f);
   Mesh q = quad(a, {1.0f, 0, 0}, b - a, 1.f, 1.f, 3, 3);
-  if ((q.vertices[1].p - q.vertices[0].p).cross(q.vertices[4].p - q.vertices[0].p).z() > 0) q.flip();
+  if ((q.vertices[1].p - q.vertices[0].p).cross(q.vertices[4].p - q.vertices[0].p).z() > 0)
+    q.flip();
   s.add(q, mi, 0);
   s.finalize();
   Rasterizer r;
@@ -102,11 +104,14 @@ TEST(SynthRasterizer, VectorAndScalarShadingGiveTheSameBits) {
   reference.setVectorised(false);
   for (int frame : {0, 17, 29}) {
     FrameBuffers a, b;
-    fast.render(scene.renderScene(), scene.intrinsics(), scene.pose(frame), Viewport{0, 0, 640, 480}, &a, true);
-    reference.render(scene.renderScene(), scene.intrinsics(), scene.pose(frame), Viewport{0, 0, 640, 480}, &b, true);
+    fast.render(scene.renderScene(), scene.intrinsics(), scene.pose(frame),
+                Viewport{0, 0, 640, 480}, &a, true);
+    reference.render(scene.renderScene(), scene.intrinsics(), scene.pose(frame),
+                     Viewport{0, 0, 640, 480}, &b, true);
     ASSERT_EQ(a.bgr.size(), b.bgr.size());
     size_t differ = 0;
-    for (size_t i = 0; i < a.bgr.size(); ++i) differ += std::memcmp(&a.bgr[i], &b.bgr[i], sizeof(float)) != 0;
+    for (size_t i = 0; i < a.bgr.size(); ++i)
+      differ += std::memcmp(&a.bgr[i], &b.bgr[i], sizeof(float)) != 0;
     EXPECT_EQ(differ, 0u) << "frame " << frame;
     EXPECT_EQ(0, std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * sizeof(float)));
     EXPECT_EQ(a.object, b.object);

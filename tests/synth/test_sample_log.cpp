@@ -18,7 +18,8 @@ TEST(SynthSample, BundledLogIsSmallCompleteAndMatchesTheGenerator) {
   const std::string log = test::sourcePath("logs/sample.lcm");
   ASSERT_TRUE(std::filesystem::exists(log)) << "run `make sample`";
   EXPECT_LE(std::filesystem::file_size(log), 10u * 1024 * 1024);
-  const synth::SceneOptions o = synth::loadSceneOptions(test::sourcePath("config/scenes/sample.yaml"));
+  const synth::SceneOptions o =
+      synth::loadSceneOptions(test::sourcePath("config/scenes/sample.yaml"));
   EXPECT_LE(o.frames, 200);
   synth::SyntheticScene scene(o);
   std::vector<image_t> frames;
@@ -49,6 +50,7 @@ TEST(SynthSample, BundledLogIsSmallCompleteAndMatchesTheGenerator) {
   synth::FrameBuffers fb;
   for (size_t i : {size_t{0}, frames.size() / 2, frames.size() - 1}) {
     const cv::Mat img = scene.render(static_cast<int>(i), &fb);
-    EXPECT_EQ(frames[i].data, encodeJpeg(img, o.sensor.jpeg_quality)) << "frame " << i << ": run `make sample`";
+    EXPECT_EQ(frames[i].data, encodeJpeg(img, o.sensor.jpeg_quality))
+        << "frame " << i << ": run `make sample`";
   }
 }

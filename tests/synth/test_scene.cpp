@@ -47,10 +47,13 @@ std::map<std::pair<int, std::string>, double> readVisibility(const std::string& 
   return out;
 }
 
-bool inside(const GroundTruthBox& b, int w, int h) { return b.x > 1 && b.y > 1 && b.x + b.w < w - 1 && b.y + b.h < h - 1; }
+bool inside(const GroundTruthBox& b, int w, int h) {
+  return b.x > 1 && b.y > 1 && b.x + b.w < w - 1 && b.y + b.h < h - 1;
+}
 
 // Projected extent [x0, y0, x1, y1] of points (world) seen from T_world_camera.
-Eigen::Vector4d projectExtent(const std::vector<Eigen::Vector3d>& pts, const SE3& T_world_camera, const CameraModel& cam) {
+Eigen::Vector4d projectExtent(const std::vector<Eigen::Vector3d>& pts, const SE3& T_world_camera,
+                              const CameraModel& cam) {
   Eigen::Vector4d e(1e9, 1e9, -1e9, -1e9);
   for (const auto& p : pts) {
     const Eigen::Vector2d px = cam.project(T_world_camera.inverse() * p);
@@ -65,12 +68,16 @@ Eigen::Vector4d projectExtent(const std::vector<Eigen::Vector3d>& pts, const SE3
 std::vector<Eigen::Vector3d> boxCorners(const GroundTruthObject& o) {
   std::vector<Eigen::Vector3d> c;
   for (int i = 0; i < 8; ++i)
-    c.push_back(o.center + 0.5 * Eigen::Vector3d((i & 1 ? 1 : -1) * o.size.x(), (i & 2 ? 1 : -1) * o.size.y(), (i & 4 ? 1 : -1) * o.size.z()));
+    c.push_back(o.center + 0.5 * Eigen::Vector3d((i & 1 ? 1 : -1) * o.size.x(),
+                                                 (i & 2 ? 1 : -1) * o.size.y(),
+                                                 (i & 4 ? 1 : -1) * o.size.z()));
   return c;
 }
 
-// A box covers pixel columns [x, x + w - 1]; a projected extent [a, b] covers centres ceil(a)..floor(b).
-void expectBoxMatches(const GroundTruthBox& b, const Eigen::Vector4d& e, double tol, const std::string& what) {
+// A box covers pixel columns [x, x + w - 1]; a projected extent [a, b] covers centres
+// ceil(a)..floor(b).
+void expectBoxMatches(const GroundTruthBox& b, const Eigen::Vector4d& e, double tol,
+                      const std::string& what) {
   EXPECT_NEAR(b.x, e[0], tol) << what;
   EXPECT_NEAR(b.y, e[1], tol) << what;
   EXPECT_NEAR(b.x + b.w - 1, e[2], tol) << what;
@@ -87,7 +94,8 @@ SceneOptions cuboidScene() {
   o.objects.count = 5;
   o.objects.distractors = 4;
   o.objects.classes = {"cereal_box"};
-  o.objects.distractor_categories = {"food_box", "rubber_eraser", "notebook", "binder", "calculator"};
+  o.objects.distractor_categories = {"food_box", "rubber_eraser", "notebook", "binder",
+                                     "calculator"};
   o.objects.yaw_deg = 0;  // axis-aligned cuboids: objects.csv is exactly their shape
   o.sensor.shutter_s = 0;
   return o;
@@ -99,17 +107,21 @@ TEST(SynthScene, SameSeedSameBytesOtherSeedOtherBytes) {
   const std::string cfg = test::sourcePath("config/scenes/kitchen_wood.yaml");
   const std::string base = test::tempDir("synth_determinism");
   auto run = [&](const std::string& out, int seed) {
-    const std::string cmd = test::binPath("slamaware-synth") + " scene --quiet --config " + cfg + " --frames 5 --seed " +
-                            std::to_string(seed) + " --out " + out + " > " + out + ".log 2>&1";
+    const std::string cmd = test::binPath("slamaware-synth") + " scene --quiet --config " + cfg +
+                            " --frames 5 --seed " + std::to_string(seed) + " --out " + out + " > " +
+                            out + ".log 2>&1";
     return std::system(cmd.c_str());
   };
   ASSERT_EQ(run(base + "/a", 501), 0);
   ASSERT_EQ(run(base + "/b", 501), 0);
   ASSERT_EQ(run(base + "/c", 502), 0);
-  const auto a = synth_test::treeHashes(base + "/a"), b = synth_test::treeHashes(base + "/b"), c = synth_test::treeHashes(base + "/c");
-  ASSERT_EQ(a.size(), 1u + 5u + 5u + 4u);  // sequence.yaml, 5 frames, 5 depth maps, 4 ground-truth files
+  const auto a = synth_test::treeHashes(base + "/a"), b = synth_test::treeHashes(base + "/b"),
+             c = synth_test::treeHashes(base + "/c");
+  ASSERT_EQ(a.size(),
+            1u + 5u + 5u + 4u);  // sequence.yaml, 5 frames, 5 depth maps, 4 ground-truth files
   EXPECT_EQ(a, b);
-  for (const auto& f : {"rgb/000000.jpg", "depth/000004.png", "groundtruth.txt", "objects.csv", "boxes.csv"})
+  for (const auto& f :
+       {"rgb/000000.jpg", "depth/000004.png", "groundtruth.txt", "objects.csv", "boxes.csv"})
     EXPECT_NE(a.at(f), c.at(f)) << f;
   // The folder reads back with the common readers.
   const SequenceFolder seq = SequenceFolder::open(base + "/a");
@@ -131,9 +143,11 @@ TEST(SynthScene, ProjectedObjectBoxesMatchTheBoxesOfAxisAlignedCuboids) {
   const auto vis = readVisibility(dir);
   int checked = 0;
   for (const auto& b : seq.boxes()) {
-    if (vis.at({b.frame, b.instance}) < 0.999 || !inside(b, 640, 480)) continue;  // unoccluded, in the image
-    const Eigen::Vector4d e = projectExtent(boxCorners(objects.at(b.instance)), poses[static_cast<size_t>(b.frame)].T_world_camera,
-                                            seq.info().camera);
+    if (vis.at({b.frame, b.instance}) < 0.999 || !inside(b, 640, 480))
+      continue;  // unoccluded, in the image
+    const Eigen::Vector4d e =
+        projectExtent(boxCorners(objects.at(b.instance)),
+                      poses[static_cast<size_t>(b.frame)].T_world_camera, seq.info().camera);
     expectBoxMatches(b, e, 2.0, b.instance + " in frame " + std::to_string(b.frame));
     ++checked;
   }
@@ -164,7 +178,8 @@ TEST(SynthScene, GroundTruthOfASuiteSceneIsGeometricallyExact) {
       for (uint32_t v : rs.triangles()[t].v) bb.extend(rs.vertices()[v].p.cast<double>());
     EXPECT_LT((bb.center() - ob.center).norm(), 1e-5) << name;
     EXPECT_LT((bb.sizes() - ob.size).norm(), 1e-5) << name;
-    EXPECT_NEAR(bb.min().z(), scene.environment().table.top_z, 1e-4) << name << " stands on the table";
+    EXPECT_NEAR(bb.min().z(), scene.environment().table.top_z, 1e-4)
+        << name << " stands on the table";
   }
   // Unoccluded objects: the box of the projected vertices is the box of the visible pixels, and it
   // lies inside the projection of the objects.csv box.
@@ -180,7 +195,8 @@ TEST(SynthScene, GroundTruthOfASuiteSceneIsGeometricallyExact) {
     const auto range = rs.objectRanges()[static_cast<size_t>(ids.at(b.instance))];
     for (uint32_t t = range.begin; t < range.end; ++t)
       for (uint32_t v : rs.triangles()[t].v) verts.push_back(rs.vertices()[v].p.cast<double>());
-    expectBoxMatches(b, projectExtent(verts, T, cam), 2.0, b.instance + " frame " + std::to_string(b.frame));
+    expectBoxMatches(b, projectExtent(verts, T, cam), 2.0,
+                     b.instance + " frame " + std::to_string(b.frame));
     const Eigen::Vector4d e = projectExtent(boxCorners(objects.at(b.instance)), T, cam);
     EXPECT_GE(b.x, e[0] - 2);
     EXPECT_GE(b.y, e[1] - 2);
@@ -204,7 +220,8 @@ TEST(SynthScene, GroundTruthOfASuiteSceneIsGeometricallyExact) {
         if (id < 0) continue;
         bool interior = true;
         for (int dy = -2; dy <= 2; ++dy)
-          for (int dx = -2; dx <= 2; ++dx) interior = interior && fb.object[static_cast<size_t>(y + dy) * 640 + x + dx] == id;
+          for (int dx = -2; dx <= 2; ++dx)
+            interior = interior && fb.object[static_cast<size_t>(y + dy) * 640 + x + dx] == id;
         if (!interior) continue;
         const Eigen::Vector3d ray_cam = cam.unproject(Eigen::Vector2d(x, y));  // (x, y, 1)
         const Eigen::Vector3d origin = T.translation(), dir = T.linear() * ray_cam.normalized();
@@ -214,7 +231,8 @@ TEST(SynthScene, GroundTruthOfASuiteSceneIsGeometricallyExact) {
         EXPECT_NEAR(depth.at<uint16_t>(y, x) / 1000.0, z, 0.001) << x << "," << y;
         const Eigen::Vector3d hit = origin + d * dir;
         const GroundTruthObject& ob = objects.at(scene.objects()[static_cast<size_t>(id)].instance);
-        EXPECT_TRUE(((hit - ob.center).cwiseAbs() - 0.5 * ob.size).maxCoeff() < 1e-3) << "hit outside the objects.csv box";
+        EXPECT_TRUE(((hit - ob.center).cwiseAbs() - 0.5 * ob.size).maxCoeff() < 1e-3)
+            << "hit outside the objects.csv box";
         ++depth_checked;
       }
   }
@@ -233,7 +251,8 @@ TEST(SynthScene, HandHeldPathCirclesTheTableSmoothly) {
     EXPECT_GT(dist, 0.65) << i;
     EXPECT_LT(dist, 1.65) << i;
     Eigen::Vector2d px;
-    EXPECT_TRUE(cam.project(T.inverse() * table, &px) && cam.inImage(px, 40)) << "frame " << i << " looks away from the table";
+    EXPECT_TRUE(cam.project(T.inverse() * table, &px) && cam.inImage(px, 40))
+        << "frame " << i << " looks away from the table";
     if (i == 0) continue;
     const SE3 P = scene.pose(i - 1);
     const double step = (T.translation() - P.translation()).norm();
@@ -324,12 +343,15 @@ TEST(SynthScene, ContactSheetOfASuiteScene) {
   for (int i = 0; i < scene.frames() && frames.size() < 12; i += step) {
     cv::Mat img = scene.render(i, &fb).clone();
     for (const auto& b : scene.boxes(i, scene.visibility(i, fb)))
-      cv::rectangle(img, cv::Rect(static_cast<int>(b.x), static_cast<int>(b.y), static_cast<int>(b.w), static_cast<int>(b.h)),
+      cv::rectangle(img,
+                    cv::Rect(static_cast<int>(b.x), static_cast<int>(b.y), static_cast<int>(b.w),
+                             static_cast<int>(b.h)),
                     cv::Scalar(0, 255, 255), 1);
     frames.push_back(img);
     captions.push_back("frame " + std::to_string(i));
   }
   const fs::path dir = fs::path(SLAMAWARE_BIN_DIR).parent_path() / "synth-sheets";
   fs::create_directories(dir);
-  ASSERT_TRUE(cv::imwrite((dir / "scene.png").string(), contactSheet(frames, captions, 4, 400, 300)));
+  ASSERT_TRUE(
+      cv::imwrite((dir / "scene.png").string(), contactSheet(frames, captions, 4, 400, 300)));
 }

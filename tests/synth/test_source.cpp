@@ -25,7 +25,8 @@ std::vector<uint8_t> readBytes(const std::string& path) {
 TEST(SynthSource, StreamsTheSameFramesAsTheWrittenFolder) {
   registerSynthSource();
   const std::string cfg = test::sourcePath("config/scenes/cafe_small.yaml");
-  std::unique_ptr<FrameSource> src = openSource("synth:" + cfg + "?frames=4&seed=9", SourceOptions{});
+  std::unique_ptr<FrameSource> src =
+      openSource("synth:" + cfg + "?frames=4&seed=9", SourceOptions{});
   ASSERT_EQ(src->length(), 4);
   EXPECT_DOUBLE_EQ(src->fps(), 30.0);
   EXPECT_EQ(src->camera().width(), 640);
