@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test demo eval bench record synth spy clean
+.PHONY: all deps build test demo eval bench record synth sample spy clean
 
 all: build
 
@@ -22,7 +22,7 @@ test: deps build
 
 # The whole pipeline on the bundled sample (or SOURCE=...), in a private network namespace
 # unless NETNS=0 (then it runs on the host bus, ttl=0, for lcm-spy to watch).
-SOURCE ?= $(SHARED)/sequences/middlebury_temple_ring
+SOURCE ?= logs/sample.lcm
 NETNS ?= 1
 demo: deps build
 	scripts/demo "$(SOURCE)" $(NETNS)
@@ -39,6 +39,16 @@ bench: deps build
 OUT ?= $(BUILD)/record.lcm
 record: deps build
 	scripts/record "$(SOURCE)" "$(OUT)"
+
+# Synthetic data: every scene of config/scenes (but the sample) into $(BUILD)/data/scenes/<name>,
+# every object set of config/objects into $(BUILD)/data/objects/<name>; times and sizes in
+# $(BUILD)/data/synth-summary.txt.
+synth: deps build
+	scripts/synth-all
+
+# Regenerates the bundled sample recording logs/sample.lcm from config/scenes/sample.yaml.
+sample: deps build
+	scripts/make-sample
 
 spy: build
 	scripts/lcm-spy

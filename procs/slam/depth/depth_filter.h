@@ -1,0 +1,118 @@
+#pragma once
+// Semi-dense depth (DESIGN.md §3): each keyframe's high-gradient pixels become depth-filter seeds
+// (seed.h), updated by epipolar search (epipolar_search.h) in every later located frame of the
+// same map; seeds that converge become coloured points with a depth standard deviation, stored
+// in their keyframe's camera frame so that they move with it when bundle adjustment moves the
+// keyframe. A keyframe's seeds live until max_keyframes newer keyframes exist; then the keyframe
+// is finished and its points are final.
+//
+// The filter works only on the data handed to process() (images, poses snapshotted by the
+// caller), never on the live map, so that it can run on its own thread deterministically.
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "common/geometry.h"
+#include "procs/slam/depth/epipolar_search.h"
+#include "procs/slam/depth/seed.h"
+#include "procs/slam/slam_options.h"
+
+namespace slamaware {
+
+/// A new keyframe to seed.
+struct DepthKeyframeInput {
+  int64_t id = -1;
+  int map_id = 0;
+  int64_t utime = 0;
+  int32_t seq = -1;
+  cv::Mat grey, bgr;  ///< 8-bit, undistorted
+  SE3 T_world_camera = SE3::Identity();
+  double min_depth = 0.5, mean_depth = 1.0;  ///< map units, from the keyframe's map points
+};
+
+/// One frame's worth of work.
+struct DepthFrameInput {
+  int64_t utime = 0;
+  int32_t seq = -1;
+  int map_id = 0;
+  bool located = false;  ///< false: the frame only carries keyframes / pose updates
+  cv::Mat grey;          ///< 8-bit, undistorted
+  SE3 T_world_camera = SE3::Identity();
+  std::vector<DepthKeyframeInput> new_keyframes;  ///< created with this frame
+  std::vector<std::pair<int64_t, SE3>>
+      keyframe_poses;  ///< current T_world_camera of live keyframes
+};
+
+/// A converged seed.
+struct SemiDensePoint {
+  Eigen::Vector3f p_camera;  ///< map units, host keyframe's camera frame
+  float depth_std = 0;       ///< map units, along the host ray
+  uint8_t rgb[3] = {0, 0, 0};
+};
+
+/// The semi-dense points of one keyframe.
+struct SemiDenseKeyframe {
+  int64_t id = -1;
+  int map_id = 0;
+  int64_t utime = 0;
+  int32_t seq = -1;
+  SE3 T_world_camera = SE3::Identity();  ///< last known pose of the keyframe
+  std::vector<SemiDensePoint> points;
+  bool finished = false;  ///< no seeds left: the points are final
+};
+
+struct DepthFilterStats {
+  int64_t active_seeds = 0;
+  int64_t points = 0;  ///< converged points stored
+  int64_t frames = 0;  ///< frames used for updates
+  int64_t measurements = 0, failures = 0;
+  int64_t calls = 0;          ///< process() calls
+  double last_update_ms = 0;  ///< time of the last process() call
+};
+
+class DepthFilter {
+ public:
+  /// width/height and the pinhole intrinsics of the (undistorted) images.
+  DepthFilter(const DepthFilterOptions& options, int width, int height, double fx, double fy,
+              double cx, double cy);
+
+  /// Updates the seeds with the frame, finishes keyframes that are too old (or of another map),
+  /// then seeds the new keyframes. Returns the ids of keyframes finished by this call.
+  std::vector<int64_t> process(const DepthFrameInput& input);
+
+  /// A copy of a keyframe's points (empty when unknown). Thread-safe.
+  SemiDenseKeyframe keyframe(int64_t id) const;
+  /// Copies of all stored keyframes of a map, by id. Thread-safe.
+  std::vector<SemiDenseKeyframe> mapKeyframes(int map_id) const;
+  DepthFilterStats stats() const;
+
+ private:
+  /// Seeds of a keyframe image: the strongest-gradient pixel of each cell, strongest first, at
+  /// most max_seeds_per_keyframe.
+  std::vector<Eigen::Vector2i> selectSeedPixels(const cv::Mat& grey) const;
+
+  struct Host {
+    SemiDenseKeyframe* store = nullptr;
+    cv::Mat grey, bgr;
+    SE3 T_world_camera;
+    std::vector<DepthSeed> seeds;
+    int newer_keyframes = 0;
+  };
+  void updateHost(Host& host, const DepthFrameInput& input, std::vector<SemiDensePoint>* converged);
+
+  DepthFilterOptions options_;
+  EpipolarSearchParams search_;
+  int width_, height_;
+  double fx_, fy_, cx_, cy_;
+  double px_error_angle_;
+  std::map<int64_t, Host> hosts_;  ///< keyframes with live seeds (worker only)
+  int64_t frames_ = 0, measurements_ = 0, failures_ = 0;  ///< worker only; copied into stats_
+  mutable std::mutex store_mutex_;
+  std::map<int64_t, SemiDenseKeyframe> store_;  ///< every keyframe's points (guarded)
+  DepthFilterStats stats_;                      ///< guarded by store_mutex_
+};
+
+}  // namespace slamaware

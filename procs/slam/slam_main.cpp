@@ -1,0 +1,184 @@
+// slamaware-slam: monocular keyframe SLAM with semi-dense depth. Reads CAMERA_INFO and CAMERA;
+// publishes SLAM_POSE for every frame handled (with the tracking state and the map id),
+// SLAM_KEYFRAME when keyframes are created, moved or culled, and SLAM_MAP (incremental per
+// keyframe, full every few seconds of sequence time). In lockstep every frame is handled and its
+// keyframe and map messages go out before its pose; in real time, frames that queued up behind a
+// newer one are dropped and counted.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <deque>
+#include <opencv2/core/utility.hpp>
+
+#include "common/bus/bus.h"
+#include "common/bus/image_msg.h"
+#include "common/bus/node.h"
+#include "common/bus/shutdown.h"
+#include "common/bus/status.h"
+#include "common/config.h"
+#include "common/image_codec.h"
+#include "procs/slam/slam_messages.h"
+#include "procs/slam/slam_options.h"
+#include "procs/slam/slam_system.h"
+
+using namespace slamaware;
+
+namespace {
+
+void publish(Bus& bus, const Channels& ch, const SlamOutput& out, StatusReporter& status) {
+  for (const auto& k : out.keyframes) bus.publish(ch.slam_keyframe, toMessage(k));
+  for (const auto& c : out.clouds) bus.publish(ch.slam_map, toMessage(c));
+  if (out.has_pose) bus.publish(ch.slam_pose, toMessage(out.pose));
+  for (const auto& e : out.events) {
+    spdlog::info("{}", e);
+    status.setMessage(e);
+  }
+}
+
+void reportStats(const SlamSystem& slam, StatusReporter& status) {
+  const SlamStats s = slam.stats();
+  status.setCounter("map_id", s.map_id);
+  status.setCounter("maps", s.maps);
+  status.setCounter("keyframes", s.keyframes);
+  status.setCounter("map_points", s.points);
+  status.setCounter("frames_located", s.frames_located);
+  status.setCounter("frames_lost", s.frames_lost);
+  status.setCounter("frames_unusable", s.frames_unusable);
+  status.setCounter("frames_duplicate", s.frames_duplicate);
+  status.setCounter("time_discontinuities", s.discontinuities);
+  status.setCounter("relocalizations", s.relocalizations);
+  status.setCounter("reinitializations", s.reinitializations);
+  status.setCounter("depth_seeds", s.depth_seeds);
+  status.setCounter("depth_points", s.depth_points);
+  status.setCounter("depth_frames_skipped", s.depth_frames_skipped);
+  status.setCounter("bundle_adjustments", s.bundle_adjustments);
+  status.setCounter("keyframes_culled", s.keyframes_culled);
+  status.setCounter("track_us", static_cast<int64_t>(s.track_ms * 1000));
+  status.setCounter("depth_update_us", static_cast<int64_t>(s.depth_update_ms * 1000));
+  status.setState(s.state == "LOST" ? StatusReporter::State::kDegraded
+                                    : StatusReporter::State::kRunning);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "slamaware-slam: monocular SLAM with semi-dense depth (CAMERA_INFO, CAMERA -> SLAM_POSE, "
+      "SLAM_KEYFRAME, SLAM_MAP)"};
+  NodeArgs node;
+  addNodeOptions(app, node);
+  CLI11_PARSE(app, argc, argv);
+
+  return runNode("slam", node, [&]() -> int {
+    const SystemConfig sys = loadSystem(node);
+    const SlamOptions opts = loadConfig<SlamOptions>(node.config, "slam");
+    const bool lockstep = sys.bus.lockstep;
+    // OpenCV's own thread pool would compete with tracking, mapping and the depth filter for
+    // the cores; those three are the parallelism we want.
+    cv::setNumThreads(1);
+    const Channels& ch = sys.channels;
+    Bus bus(sys.bus.url);
+    StatusReporter status(bus, "slam", ch.statusOf("slam"));
+    SlamSystem slam(opts, lockstep);
+
+    bus.subscribe<camera_info_t>(
+        ch.camera_info,
+        [&](const camera_info_t& info) {
+          CameraModel camera;
+          std::string why;
+          if (!cameraFromMessage(info, &camera, &why)) {
+            bus.reject(ch.camera_info, why);
+            return;
+          }
+          const bool first = !slam.hasCamera();
+          if (slam.setCamera(camera)) {
+            status.count("camera_changes");
+            status.setMessage("camera changed: SLAM restarted");
+            spdlog::warn("CAMERA_INFO changed to {}x{} fx {:.1f}: SLAM restarted", camera.width(),
+                         camera.height(), camera.fx());
+          } else if (first) {
+            spdlog::info("camera {}x{} fx {:.1f} fy {:.1f} from {}", camera.width(),
+                         camera.height(), camera.fx(), camera.fy(), info.source);
+          }
+        },
+        sys.bus.max_message_bytes);
+
+    std::deque<image_t> pending;
+    bus.subscribe<image_t>(
+        ch.camera, [&](const image_t& img) { pending.push_back(img); }, sys.bus.max_image_bytes);
+
+    auto handleFrame = [&](const image_t& img) {
+      status.noteInput(img.utime, img.seq);
+      SlamOutput out;
+      const std::string what = ch.camera + " seq " + std::to_string(img.seq);
+      if (!slam.hasCamera()) {
+        status.count("frames_before_camera_info");
+        out = slam.skipFrame(img.utime, img.seq);
+      } else {
+        cv::Mat bgr;
+        try {
+          bgr = decodeImageMessage(img, what);
+        } catch (const ImageError& e) {
+          bus.reject(ch.camera, e.what());
+          status.count("frames_corrupt");
+        }
+        if (!bgr.empty() &&
+            (bgr.cols != slam.camera().width() || bgr.rows != slam.camera().height())) {
+          bus.reject(ch.camera, what + ": frame is " + std::to_string(bgr.cols) + "x" +
+                                    std::to_string(bgr.rows) + " but CAMERA_INFO says " +
+                                    std::to_string(slam.camera().width()) + "x" +
+                                    std::to_string(slam.camera().height()));
+          status.count("frames_wrong_size");
+          bgr.release();
+        }
+        out = bgr.empty() ? slam.skipFrame(img.utime, img.seq)
+                          : slam.processFrame(img.utime, img.seq, bgr);
+      }
+      publish(bus, ch, out, status);
+      status.addProcessed();
+    };
+
+    status.setState(StatusReporter::State::kRunning);
+    status.publish();
+    spdlog::info("{} on {}", lockstep ? "lockstep" : "real time", sys.bus.url);
+    int64_t last_utime = 0;
+    int32_t last_seq = -1;
+    int rc = 0;
+    while (!shutdownRequested()) {
+      if (bus.handle(pending.empty() ? 20 : 0) < 0 && !shutdownRequested()) {
+        spdlog::error("LCM failed; stopping");
+        rc = 1;
+        break;
+      }
+      if (!lockstep && pending.size() > 1) {
+        // Real time: only the newest frame matters; the others are stale.
+        status.addDropped(static_cast<int64_t>(pending.size() - 1));
+        pending.erase(pending.begin(), pending.end() - 1);
+      }
+      while (!pending.empty()) {
+        const image_t img = std::move(pending.front());
+        pending.pop_front();
+        last_utime = img.utime;
+        last_seq = img.seq;
+        handleFrame(img);
+        if (!lockstep) break;  // look at the bus again before the next one
+      }
+      if (!lockstep && slam.hasCamera())
+        publish(bus, ch, slam.collectBackground(last_utime, last_seq), status);
+      reportStats(slam, status);
+      status.setQueueDepth(static_cast<int32_t>(pending.size()));
+      status.tick();
+    }
+    slam.flush();
+    status.setState(StatusReporter::State::kStopping);
+    reportStats(slam, status);
+    status.publish();
+    const SlamStats s = slam.stats();
+    spdlog::info(
+        "handled {} frames: {} located, {} lost, {} relocalisations, {} re-initialisations, {} "
+        "maps",
+        s.frames + s.frames_unusable, s.frames_located, s.frames_lost, s.relocalizations,
+        s.reinitializations, s.maps);
+    return rc;
+  });
+}

@@ -1,0 +1,142 @@
+// Depth filter: the Gaussian x Beta update converges to the true inverse depth and tells
+// outlier-dominated seeds apart; the whole filter (seeding, epipolar search, updates) recovers
+// the depth of a textured plane seen from a moving camera.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "procs/slam/depth/depth_filter.h"
+#include "procs/slam/depth/seed.h"
+#include "tests/slam/synthetic_scene.h"
+
+using namespace slamaware;
+
+namespace {
+
+// A texture with detail at several scales (a plane painted with it has gradients everywhere).
+cv::Mat makeTexture(int size, uint64_t seed) {
+  cv::RNG rng(seed);
+  cv::Mat acc(size, size, CV_32F, cv::Scalar(0));
+  for (int scale : {4, 16, 64}) {
+    cv::Mat small(size / scale, size / scale, CV_32F);
+    rng.fill(small, cv::RNG::UNIFORM, 0, 255);
+    cv::Mat big;
+    cv::resize(small, big, acc.size(), 0, 0, cv::INTER_CUBIC);
+    acc += big / 3;
+  }
+  cv::Mat out;
+  acc.convertTo(out, CV_8U);
+  return out;
+}
+
+// The view of the plane Z_world = plane_z (texture on it, 1 texel = texel_m metres, centred) by a
+// camera with pose T_world_camera.
+cv::Mat renderPlane(const cv::Mat& texture, double texel_m, double plane_z,
+                    const SE3& T_world_camera, const test::PinholeCamera& cam) {
+  cv::Mat map_x(cam.height, cam.width, CV_32F), map_y(cam.height, cam.width, CV_32F);
+  const Eigen::Vector3d c = T_world_camera.translation();
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const Eigen::Vector3d d = T_world_camera.linear() *
+                                Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1);
+      const double s = (plane_z - c.z()) / d.z();
+      const Eigen::Vector3d X = c + s * d;
+      map_x.at<float>(v, u) = static_cast<float>(X.x() / texel_m + texture.cols / 2.0);
+      map_y.at<float>(v, u) = static_cast<float>(X.y() / texel_m + texture.rows / 2.0);
+    }
+  }
+  cv::Mat out;
+  cv::remap(texture, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  return out;
+}
+
+}  // namespace
+
+TEST(DepthSeedUpdate, ConvergesToTheTrueInverseDepthDespiteOutliers) {
+  // Prior: depth between 0.5 and "infinity", mean 2; truth 1.25 (inverse depth 0.8).
+  DepthSeed seed = makeSeed(0, 0, Eigen::Vector3f::UnitZ(), 2.0f, 0.5f);
+  const float truth = 0.8f, tau = 0.02f;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<float> inlier(truth, tau);
+  std::uniform_real_distribution<float> outlier(0.f, seed.z_range), u01(0, 1);
+  for (int i = 0; i < 60; ++i)
+    updateSeed(&seed, u01(rng) < 0.3f ? outlier(rng) : inlier(rng), tau * tau);
+  EXPECT_NEAR(seed.mu, truth, 3 * tau / std::sqrt(40.f));
+  EXPECT_LT(std::sqrt(seed.sigma2), 0.01f);
+  // The Beta posterior has learnt the inlier ratio (0.7) roughly.
+  EXPECT_GT(seed.inlierRatio(), 0.5f);
+  EXPECT_LT(seed.inlierRatio(), 0.9f);
+}
+
+TEST(DepthSeedUpdate, ASeedFedOnlyOutliersIsRecognised) {
+  DepthSeed seed = makeSeed(0, 0, Eigen::Vector3f::UnitZ(), 2.0f, 0.5f);
+  std::mt19937_64 rng(6);
+  std::uniform_real_distribution<float> outlier(0.f, seed.z_range);
+  for (int i = 0; i < 100; ++i) updateSeed(&seed, outlier(rng), 0.02f * 0.02f);
+  // Dropped by the filter (inlier ratio under its threshold), and never converged.
+  EXPECT_LT(seed.inlierRatio(), DepthFilterOptions().min_inlier_ratio);
+  EXPECT_GT(std::sqrt(seed.sigma2), seed.z_range / DepthFilterOptions().convergence_ratio);
+}
+
+TEST(DepthSeedUpdate, DepthUncertaintyGrowsWithDistanceAndShrinksWithBaseline) {
+  const Eigen::Vector3d f = Eigen::Vector3d(0.1, 0, 1).normalized();
+  const double angle = 2 * std::atan(0.5 / 500.0);
+  const double near = depthUncertainty(Eigen::Vector3d(0.1, 0, 0), f, 1.0, angle);
+  const double far = depthUncertainty(Eigen::Vector3d(0.1, 0, 0), f, 3.0, angle);
+  const double wide = depthUncertainty(Eigen::Vector3d(0.3, 0, 0), f, 3.0, angle);
+  EXPECT_GT(near, 0);
+  EXPECT_GT(far, near);
+  EXPECT_LT(wide, far);
+  // Stereo rule of thumb: sigma_z ~ z^2 / (f b) x the angle's error in pixels (here one).
+  EXPECT_NEAR(far, 9.0 / (500 * 0.1), 0.3 * 9.0 / (500 * 0.1));
+}
+
+TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 3);
+  const double plane_z = 2.0, texel = 0.0015;
+  DepthFilterOptions options;
+  options.max_keyframes = 100;  // keep the one keyframe's seeds alive through the sequence
+  DepthFilter filter(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+
+  DepthFrameInput first;
+  first.map_id = 1;
+  first.located = true;
+  DepthKeyframeInput kf;
+  kf.id = 7;
+  kf.map_id = 1;
+  kf.grey = renderPlane(texture, texel, plane_z, SE3::Identity(), cam);
+  cv::cvtColor(kf.grey, kf.bgr, cv::COLOR_GRAY2BGR);
+  kf.min_depth = 1.0;  // what the sparse map would say, roughly
+  kf.mean_depth = 2.6;
+  first.grey = kf.grey;
+  first.new_keyframes.push_back(kf);
+  filter.process(first);
+  const int64_t seeds = filter.stats().active_seeds;
+  ASSERT_GT(seeds, 3000);
+
+  for (int k = 1; k <= 16; ++k) {
+    // Sideways and a little forward, with a slight turn.
+    SE3 T = SE3::Identity();
+    T.translation() = Eigen::Vector3d(0.02 * k, 0.005 * k, 0.01 * k);
+    T.linear() = expSO3(Eigen::Vector3d(0.002 * k, -0.004 * k, 0.001 * k));
+    DepthFrameInput f;
+    f.map_id = 1;
+    f.located = true;
+    f.grey = renderPlane(texture, texel, plane_z, T, cam);
+    f.T_world_camera = T;
+    f.keyframe_poses = {{7, SE3::Identity()}};
+    filter.process(f);
+  }
+  const SemiDenseKeyframe result = filter.keyframe(7);
+  EXPECT_GT(result.points.size(), 0.5 * seeds)
+      << "converged " << result.points.size() << " of " << seeds;
+  std::vector<double> rel;
+  for (const auto& p : result.points) rel.push_back(std::abs(p.p_camera.z() - plane_z) / plane_z);
+  std::sort(rel.begin(), rel.end());
+  EXPECT_LT(rel[rel.size() / 2], 0.01);       // median relative error under 1%
+  EXPECT_LT(rel[rel.size() * 9 / 10], 0.02);  // 90% under 2%
+  for (const auto& p : result.points) EXPECT_GT(p.depth_std, 0);
+}

@@ -1,0 +1,201 @@
+#include "tools/eval/pipeline_run.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "common/bus/log_reader.h"
+#include "common/dataset.h"
+#include "slamaware/keyframe_t.hpp"
+#include "slamaware/point_cloud_t.hpp"
+#include "slamaware/pose_t.hpp"
+
+namespace fs = std::filesystem;
+
+namespace slamaware {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// A child process with stdout and stderr in a file.
+class Child {
+ public:
+  Child(const std::vector<std::string>& argv, const std::string& output) {
+    std::string line;
+    for (const auto& a : argv) line += a + " ";
+    spdlog::debug("start: {}", line);
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (fd >= 0) {
+        dup2(fd, 1);
+        dup2(fd, 2);
+        close(fd);
+      }
+      std::vector<char*> args;
+      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      execvp(args[0], args.data());
+      _exit(127);
+    }
+  }
+  ~Child() { stop(std::chrono::milliseconds(2000)); }
+  Child(const Child&) = delete;
+
+  bool running() {
+    if (pid_ <= 0 || exited_) return false;
+    if (waitpid(pid_, &status_, WNOHANG) == pid_) exited_ = true;
+    return !exited_;
+  }
+  /// Exit code, or -1 if it did not exit within the timeout.
+  int wait(std::chrono::milliseconds timeout) {
+    const auto end = Clock::now() + timeout;
+    while (running()) {
+      if (Clock::now() > end) return -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_);
+  }
+  /// SIGINT, then SIGKILL after `grace`.
+  int stop(std::chrono::milliseconds grace) {
+    if (!running())
+      return exited_ ? (WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_)) : -1;
+    kill(pid_, SIGINT);
+    int rc = wait(grace);
+    if (rc == -1) {
+      kill(pid_, SIGKILL);
+      rc = wait(std::chrono::milliseconds(2000));
+    }
+    return rc;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int status_ = 0;
+  bool exited_ = false;
+};
+
+SE3 poseOf(const double position[3], const double orientation[4]) {
+  return se3FromArrays(position, orientation);
+}
+
+template <class Msg>
+bool decodeExactly(const LogRecord& r, Msg* m) {
+  try {
+    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) ==
+           static_cast<int>(r.data.size());
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+std::vector<PipelineStage> pipelineStages(const Channels& ch) {
+  return {{"slam", ch.slam_pose},
+          {"proposals", ch.proposals},
+          {"recognizer", ch.detections},
+          {"objectmap", ch.object_map}};
+}
+
+PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
+                        const SystemConfig& system, const PipelineRunOptions& options) {
+  PipelineRun result;
+  const SequenceFolder sequence = SequenceFolder::open(sequence_dir);
+  std::vector<PipelineStage> stages;
+  for (const auto& s : pipelineStages(system.channels)) {
+    if (!options.only.empty() &&
+        std::find(options.only.begin(), options.only.end(), s.name) == options.only.end())
+      continue;
+    if (fs::exists(fs::path(options.bin_dir) / ("slamaware-" + s.name))) stages.push_back(s);
+  }
+  if (stages.empty()) {
+    result.error = "no pipeline stage is built in " + options.bin_dir;
+    return result;
+  }
+  result.lockstep_channel = stages.back().output_channel;
+  std::string wait_for;
+  for (const auto& s : stages) {
+    result.stages.push_back(s.name);
+    wait_for += (wait_for.empty() ? "" : ",") + system.channels.statusOf(s.name);
+  }
+
+  Child logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path},
+               log_path + ".logger.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lcm-logger has no ready signal
+  std::vector<std::unique_ptr<Child>> procs;
+  for (const auto& s : stages) {
+    std::vector<std::string> argv = {(fs::path(options.bin_dir) / ("slamaware-" + s.name)).string(),
+                                     "--lockstep",
+                                     "--lcm-url",
+                                     options.lcm_url,
+                                     "--log-level",
+                                     "warn"};
+    const fs::path config = fs::path(options.config_dir) / (s.name + ".yaml");
+    if (fs::exists(config)) {
+      argv.push_back("--config");
+      argv.push_back(config.string());
+    }
+    procs.push_back(std::make_unique<Child>(argv, log_path + "." + s.name + ".txt"));
+  }
+  Child camera({(fs::path(options.bin_dir) / "slamaware-camera").string(), "--source", sequence_dir,
+                "--lockstep", result.lockstep_channel, "--wait-for", wait_for, "--lcm-url",
+                options.lcm_url, "--log-level", "warn"},
+               log_path + ".camera.txt");
+  const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(
+      1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, sequence.size()))));
+  const int camera_rc = camera.wait(timeout);
+  std::this_thread::sleep_for(
+      std::chrono::milliseconds(300));  // the last messages reach the logger
+  bool crashed = false;
+  for (size_t i = 0; i < procs.size(); ++i) {
+    const bool alive = procs[i]->running();
+    const int rc = procs[i]->stop(std::chrono::milliseconds(10000));
+    if (!alive || (rc != 0 && rc != 128 + SIGINT)) {
+      crashed = true;
+      result.error += "stage " + stages[i].name +
+                      (alive ? " exited with " + std::to_string(rc) : " died early") + "; ";
+    }
+  }
+  logger.stop(std::chrono::milliseconds(3000));
+  if (camera_rc != 0) result.error += "camera exited with " + std::to_string(camera_rc) + "; ";
+  result.ok = camera_rc == 0 && !crashed;
+  return result;
+}
+
+SlamRecording readSlamRecording(const std::string& log_path, const Channels& ch) {
+  SlamRecording run;
+  LogReader reader(log_path);
+  while (auto r = reader.next()) {
+    if (r->channel == ch.slam_pose) {
+      pose_t m;
+      if (!decodeExactly(*r, &m)) continue;
+      run.poses[m.seq] = {m.state, poseOf(m.position, m.orientation), m.map_id};
+    } else if (r->channel == ch.slam_keyframe) {
+      keyframe_t m;
+      if (!decodeExactly(*r, &m)) continue;
+      SlamRecording::Keyframe& k = run.keyframes[m.id];
+      k.seq = m.seq;
+      k.map_id = m.map_id;
+      k.culled = k.culled || m.culled;
+      if (!m.culled) k.T_world_camera = poseOf(m.position, m.orientation);
+    } else if (r->channel == ch.slam_map) {
+      point_cloud_t m;
+      if (!decodeExactly(*r, &m)) continue;
+      std::vector<SlamRecording::Point> pts(m.num_points);
+      for (int i = 0; i < m.num_points; ++i)
+        pts[i] = {Eigen::Vector3f(m.x[i], m.y[i], m.z[i]), m.keyframe_ids[i], m.depth_std[i]};
+      run.addCloud(m.map_id, m.full, m.keyframe_id, std::move(pts));
+    }
+  }
+  return run;
+}
+
+}  // namespace slamaware

@@ -1,0 +1,46 @@
+#pragma once
+// Runs the multi-process pipeline on one sequence folder, lockstep, and records the bus:
+// lcm-logger, then every stage of the pipeline whose binary is built, then the camera, which
+// publishes frame n+1 only after the last stage answered frame n. The stages are a table (the
+// order of DESIGN.md §1) so that later stages join by being built.
+#include <string>
+#include <vector>
+
+#include "common/bus/system_config.h"
+#include "tools/eval/slam_metrics.h"
+
+namespace slamaware {
+
+struct PipelineStage {
+  std::string name;            ///< process name: binary slamaware-<name>, heartbeat <NAME>_STATUS
+  std::string output_channel;  ///< what it publishes once per frame in lockstep
+};
+
+/// Every stage of the pipeline after the camera, in order, with its per-frame output channel.
+std::vector<PipelineStage> pipelineStages(const Channels& channels);
+
+struct PipelineRunOptions {
+  std::string bin_dir;                ///< where slamaware-* binaries are
+  std::string config_dir = "config";  ///< <name>.yaml passed as --config when it exists
+  std::string lcm_url;
+  std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
+  double timeout_per_frame_s = 20.0;
+};
+
+struct PipelineRun {
+  bool ok = false;
+  std::string error;
+  std::vector<std::string> stages;  ///< the stages that ran
+  std::string lockstep_channel;
+};
+
+/// Runs the pipeline on `sequence_dir`, recording the bus into `log_path` (process outputs go to
+/// <log_path>.<name>.txt).
+PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
+                        const SystemConfig& system, const PipelineRunOptions& options);
+
+/// Reads SLAM_POSE, SLAM_KEYFRAME and SLAM_MAP from a recorded log. Throws LogError for a
+/// damaged log.
+SlamRecording readSlamRecording(const std::string& log_path, const Channels& channels);
+
+}  // namespace slamaware
