@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     cv::setNumThreads(1);
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
-    StatusReporter status(bus, "slam", ch.statusOf("slam"));
+    StatusReporter status(bus, node.nameOr("slam"), ch.statusOf(node.nameOr("slam")));
     SlamSystem slam(opts, lockstep);
 
     bus.subscribe<camera_info_t>(
