@@ -285,13 +285,14 @@ void denseSiftFlat(const float* image, int width, int height, const DsiftGeometr
     triangleFilter(in, kOrientations, row_stride, b, cols, out);
   }
 
-  // Bin weights: VLFeat's flat-window weight (window mean x b per axis) times the triangular
-  // kernels' 1 / b^2 per axis.
+  // Bin weights: VLFeat's flat-window weight (the mean of the Gaussian window over the bin) times
+  // the triangular kernels' 1 / b^2 per axis (as the installed VLFeat 0.9.21 computes it: the
+  // descriptor is normalised anyway, but the mass that the contrast threshold reads is not).
   float weight[4][4];
   for (int by = 0; by < 4; ++by)
     for (int bx = 0; bx < 4; ++bx) {
-      const float wy = binWindowMean(b, 4, by, 2.0) * b;
-      const float wx = binWindowMean(b, 4, bx, 2.0) * b;
+      const float wy = binWindowMean(b, 4, by, 2.0);
+      const float wx = binWindowMean(b, 4, bx, 2.0);
       weight[by][bx] = (wx * wy) / (static_cast<float>(b) * b * b * b);
     }
   const float frame_size = static_cast<float>(3 * b + 1);

@@ -9,8 +9,8 @@
 // The formulas are VLFeat's: central-difference gradients, vl_fast_atan2_f / vl_fast_sqrt_f,
 // linear interpolation between the 2 nearest of 8 orientation bins, the triangular kernel
 // (b - |d|) / b^2 per axis, the flat-window bin weights (mean of a Gaussian window of sigma
-// 2 bins over each bin, times b per axis), the "norm" (mean mass), L2 normalisation, clamping at
-// 0.2 and L2 normalisation again. tests/recognizer/test_dense_sift.cpp compares it with
+// 2 bins over each bin), the "norm" (mean mass), L2 normalisation, clamping at 0.2 and L2
+// normalisation again. tests/recognizer/test_dense_sift.cpp compares it with
 // vl_dsift itself.
 #include <cstddef>
 

@@ -328,8 +328,8 @@ std::string TrainReport::toText() const {
   std::ostringstream o;
   o << "classes: ";
   for (size_t i = 0; i < classes.size(); ++i) o << (i ? ", " : "") << classes[i];
-  o << "\ntraining examples: " << train_crops << " crops, " << train_negatives
-    << " background boxes";
+  o << "\ntraining examples: " << train_crops << " crops (with their copies in scene context), "
+    << train_negatives << " background boxes";
   for (size_t r = 0; r < mined.size(); ++r)
     o << (r ? ", " : " (hard negatives mined: ") << mined[r];
   if (!mined.empty()) o << ")";
@@ -419,6 +419,42 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   std::vector<bool> is_val(static_cast<size_t>(all.size()));
   for (size_t i = 0; i < crops.size(); ++i) is_val[i] = split.crop_val[i];
   ReusableMatrix buffer;
+  if (has_background && options.context_copies > 0) {
+    // Crops in context: pasted into scene frames of the same split (any frame if that split has
+    // none), at the crop's own size, anywhere it fits.
+    std::vector<size_t> frames_of[2];
+    for (size_t f = 0; f < frames.size(); ++f) frames_of[split.frame_val[f] ? 1 : 0].push_back(f);
+    std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 7, 0));
+    ProgressBar bar("encode crops in scene context", static_cast<int64_t>(crops.size()));
+    std::map<size_t, cv::Mat> frame_cache;
+    for (size_t i = 0; i < crops.size(); ++i) {
+      const cv::Mat crop = readImage(crops[i].path);
+      const std::vector<size_t>& pool = frames_of[split.crop_val[i] ? 1 : 0].empty()
+                                            ? frames_of[split.crop_val[i] ? 0 : 1]
+                                            : frames_of[split.crop_val[i] ? 1 : 0];
+      for (int k = 0; k < options.context_copies; ++k) {
+        const size_t f = pool[rng() % pool.size()];
+        auto it = frame_cache.find(f);
+        if (it == frame_cache.end()) {
+          if (frame_cache.size() > 64) frame_cache.clear();
+          it = frame_cache.emplace(f, readImage(frames[f].path)).first;
+        }
+        if (crop.cols > it->second.cols || crop.rows > it->second.rows) continue;
+        cv::Mat scene = it->second.clone();
+        const int x = static_cast<int>(rng() % static_cast<uint32_t>(scene.cols - crop.cols + 1));
+        const int y = static_cast<int>(rng() % static_cast<uint32_t>(scene.rows - crop.rows + 1));
+        crop.copyTo(scene(cv::Rect(x, y, crop.cols, crop.rows)));
+        PyramidBox b;
+        if (!encoder.snap(x, y, crop.cols, crop.rows, scene.cols, scene.rows, &b)) continue;
+        encoder.encode(scene, {b}, EncoderKind::kDirect, &buffer);
+        all.add(buffer.row(0), indexOf(classes, crops[i].category),
+                indexOf(instances, crops[i].instance));
+        is_val.push_back(split.crop_val[i]);
+      }
+      bar.update(static_cast<int64_t>(i + 1));
+    }
+    bar.finish();
+  }
   if (has_background) {
     ProgressBar bar("encode background boxes", static_cast<int64_t>(frames.size()));
     for (size_t f = 0; f < frames.size(); ++f) {

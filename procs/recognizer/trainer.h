@@ -6,8 +6,10 @@
 //     single instance hold out every 5th view), and every `holdout_frame_every`-th scene frame.
 //  2. Vocabulary: raw features of the training crops and scene frames, a shuffled subset of
 //     `vocabulary_descriptors` of them -> PCA (D dims) -> VLFeat k-means (K codewords).
-//  3. Examples: every crop encoded as one box covering it; per training scene frame
-//     `negatives_per_frame` random boxes that overlap no ground-truth box (IoU < 0.1).
+//  3. Examples: every crop encoded as one box covering it, and `context_copies` times more pasted
+//     at a random place of a random scene frame (a box in a frame sees its surroundings, a crop
+//     alone only its mirrored border); per scene frame `negatives_per_frame` random boxes that
+//     overlap no ground-truth box (IoU < 0.1).
 //  4. One-vs-all logistic regression (SGD, L2) over the categories + "background", then
 //     `mining_rounds` rounds of hard-negative mining: `mining_candidates_per_frame` new random
 //     background boxes per training frame are scored and those the current model takes for an
@@ -34,6 +36,7 @@ struct TrainOptions {
   int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
   int kmeans_iterations = 100;
   int max_views_per_instance = 0;  ///< 0 = every view
+  int context_copies = 1;          ///< crops also encoded pasted into scene frames
   SgdOptions sgd;
   int negatives_per_frame = 10;
   int mining_rounds = 2;
@@ -52,6 +55,7 @@ struct TrainOptions {
     v("vocabulary_descriptors", vocabulary_descriptors, "features sampled for PCA and k-means");
     v("kmeans_iterations", kmeans_iterations, "maximum k-means iterations");
     v("max_views_per_instance", max_views_per_instance, "views used per object instance (0 = all)");
+    v("context_copies", context_copies, "copies of each crop pasted into random scene frames");
     v.section("sgd", sgd);
     v("negatives_per_frame", negatives_per_frame, "initial background boxes per scene frame");
     v("mining_rounds", mining_rounds, "rounds of hard-negative mining");
