@@ -12,6 +12,7 @@
 #include "common/dataset.h"
 #include "common/image_codec.h"
 #include "common/progress.h"
+#include <opencv2/core.hpp>
 
 namespace slamaware {
 
@@ -287,17 +288,21 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
                                   options.kmeans_iterations);
 }
 
-ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops,
-                       const std::vector<std::string>& classes,
-                       const std::vector<std::string>& instances, FrameEncoder& encoder,
+ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
+                       const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror,
                        const std::function<void(int64_t, int64_t)>& progress) {
   ExampleSet set(encoder.params().vladDims());
   ReusableMatrix buffer;
   for (size_t i = 0; i < crops.size(); ++i) {
-    const cv::Mat image = readImage(crops[i].path);
+    cv::Mat image = readImage(crops[i].path);
+    const int label = indexOf(classes, crops[i].category), group = indexOf(instances, crops[i].instance);
     encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
-    set.add(buffer.row(0), indexOf(classes, crops[i].category),
-            indexOf(instances, crops[i].instance));
+    set.add(buffer.row(0), label, group);
+    if (mirror) {
+      cv::flip(image, image, 1);
+      encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
+      set.add(buffer.row(0), label, group);
+    }
     if (progress) progress(static_cast<int64_t>(i + 1), static_cast<int64_t>(crops.size()));
   }
   return set;
@@ -412,12 +417,15 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   ExampleSet all(model.params.vladDims());
   {
     ProgressBar bar("encode crops", static_cast<int64_t>(crops.size()));
-    all = encodeCrops(crops, classes, instances, encoder,
+    all = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
                       [&](int64_t done, int64_t) { bar.update(done); });
     bar.finish();
   }
+  // Held-out crops (and their mirror images) stay held out.
+  const size_t per_crop = options.mirror_crops ? 2 : 1;
   std::vector<bool> is_val(static_cast<size_t>(all.size()));
-  for (size_t i = 0; i < crops.size(); ++i) is_val[i] = split.crop_val[i];
+  for (size_t i = 0; i < crops.size(); ++i)
+    for (size_t k = 0; k < per_crop; ++k) is_val[i * per_crop + k] = split.crop_val[i];
   ReusableMatrix buffer;
   if (has_background && options.context_copies > 0) {
     // Crops in context: pasted into scene frames of the same split (any frame if that split has
@@ -597,29 +605,21 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   return model;
 }
 
-LoioResult leaveOneInstanceOut(
-    const std::string& object_dir, const TrainOptions& options,
-    const std::function<void(const std::string&, int64_t, int64_t)>& progress) {
-  const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
-  std::set<std::string> category_set, instance_set;
-  for (const auto& c : crops) {
-    category_set.insert(c.category);
-    instance_set.insert(c.instance);
-  }
-  LoioResult result;
-  result.classes.assign(category_set.begin(), category_set.end());
-  result.instances.assign(instance_set.begin(), instance_set.end());
-  if (result.classes.size() < 2)
-    throw DatasetError(object_dir + ": leave-one-instance-out needs two categories");
+namespace {
+
+HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::vector<std::set<std::string>>& folds,
+                            const TrainOptions& options, const FoldProgress& progress, HeldOutResult result) {
   const size_t C = result.classes.size();
   result.confusion.assign(C, std::vector<int64_t>(C, 0));
-  SgdOptions sgd = options.sgd;
-  for (size_t fold = 0; fold < result.instances.size(); ++fold) {
-    const std::string& held = result.instances[fold];
+  const SgdOptions& sgd = options.sgd;
+  for (size_t fold = 0; fold < folds.size(); ++fold) {
+    const std::set<std::string>& held = folds[fold];
     std::vector<LabeledCrop> train_crops, test_crops;
-    for (const auto& c : crops) (c.instance == held ? test_crops : train_crops).push_back(c);
-    const std::string stage = "fold " + std::to_string(fold + 1) + "/" +
-                              std::to_string(result.instances.size()) + " (" + held + ")";
+    for (const auto& c : crops) (held.count(c.instance) ? test_crops : train_crops).push_back(c);
+    std::string names;
+    for (const auto& h : held) names += (names.empty() ? "" : ", ") + h;
+    const std::string stage = "fold " + std::to_string(fold + 1) + "/" + std::to_string(folds.size()) + " (" +
+                              (held.size() > 3 ? std::to_string(held.size()) + " instances" : names) + ")";
     Pca pca;
     Vocabulary vocabulary;
     fitEncoding(train_crops, {}, options, &pca, &vocabulary, [&](int64_t d, int64_t t) {
@@ -627,7 +627,7 @@ LoioResult leaveOneInstanceOut(
     });
     FrameEncoder encoder(options.encoding, pca, vocabulary);
     const ExampleSet train = encodeCrops(train_crops, result.classes, result.instances, encoder,
-                                         [&](int64_t d, int64_t t) {
+                                         options.mirror_crops, [&](int64_t d, int64_t t) {
                                            if (progress) progress(stage + " encode", d, t);
                                          });
     const ExampleSet test = encodeCrops(test_crops, result.classes, result.instances, encoder);
@@ -635,7 +635,7 @@ LoioResult leaveOneInstanceOut(
       if (progress) progress(stage + " train", e, sgd.epochs);
     });
     MatrixRM x(1, test.dims()), s;
-    int64_t right = 0;
+    std::map<std::string, std::pair<int64_t, int64_t>> per_instance;  // right, total
     for (int64_t i = 0; i < test.size(); ++i) {
       test.get(i, x.data());
       clf.scores(x, &s);
@@ -643,15 +643,55 @@ LoioResult leaveOneInstanceOut(
       s.row(0).maxCoeff(&best);
       const int label = test.label(i);
       ++result.confusion[static_cast<size_t>(label)][static_cast<size_t>(best)];
-      right += best == label;
+      auto& pi = per_instance[result.instances[static_cast<size_t>(test.group(i))]];
+      pi.first += best == label;
+      ++pi.second;
+      result.correct += best == label;
+      ++result.crops;
     }
-    result.crops += test.size();
-    result.correct += right;
-    result.instance_accuracy[held] = test.size() ? 100.0 * right / test.size() : 0;
-    spdlog::info("{}: {}/{} right ({:.1f}%)", stage, right, test.size(),
-                 result.instance_accuracy[held]);
+    for (const auto& [inst, rt] : per_instance) {
+      result.instance_accuracy[inst] = 100.0 * rt.first / rt.second;
+      spdlog::info("{}: {} {}/{} right ({:.1f}%)", stage, inst, rt.first, rt.second, result.instance_accuracy[inst]);
+    }
   }
   return result;
+}
+
+HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& object_dir, const char* protocol) {
+  std::set<std::string> category_set, instance_set;
+  for (const auto& c : crops) {
+    category_set.insert(c.category);
+    instance_set.insert(c.instance);
+  }
+  HeldOutResult r;
+  r.protocol = protocol;
+  r.classes.assign(category_set.begin(), category_set.end());
+  r.instances.assign(instance_set.begin(), instance_set.end());
+  if (r.classes.size() < 2) throw DatasetError(object_dir + ": evaluation needs two categories");
+  return r;
+}
+
+}  // namespace
+
+HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
+                                  const FoldProgress& progress) {
+  const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
+  HeldOutResult r = prepare(crops, object_dir, "leave-one-instance-out");
+  std::vector<std::set<std::string>> folds;
+  for (const auto& inst : r.instances) folds.push_back({inst});
+  return evaluateFolds(crops, folds, options, progress, r);
+}
+
+HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
+                                        const FoldProgress& progress) {
+  const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
+  HeldOutResult r = prepare(crops, object_dir, "one held-out instance per category");
+  TrainOptions o = options;
+  o.validation = true;
+  const Split split = makeSplit(crops, {}, o);
+  if (split.held_out_instances.empty()) throw DatasetError(object_dir + ": no category has two instances");
+  return evaluateFolds(crops, {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
+                       options, progress, r);
 }
 
 }  // namespace slamaware

@@ -37,6 +37,7 @@ struct TrainOptions {
   int kmeans_iterations = 100;
   int max_views_per_instance = 0;  ///< 0 = every view
   int context_copies = 1;          ///< crops also encoded pasted into scene frames
+  bool mirror_crops = true;        ///< crops also encoded mirrored left-right
   SgdOptions sgd;
   int negatives_per_frame = 10;
   int mining_rounds = 2;
@@ -56,6 +57,7 @@ struct TrainOptions {
     v("kmeans_iterations", kmeans_iterations, "maximum k-means iterations");
     v("max_views_per_instance", max_views_per_instance, "views used per object instance (0 = all)");
     v("context_copies", context_copies, "copies of each crop pasted into random scene frames");
+    v("mirror_crops", mirror_crops, "training crops also encoded mirrored left-right");
     v.section("sgd", sgd);
     v("negatives_per_frame", negatives_per_frame, "initial background boxes per scene frame");
     v("mining_rounds", mining_rounds, "rounds of hard-negative mining");
@@ -106,10 +108,10 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
                  const std::function<void(int64_t, int64_t)>& progress = {});
 
 /// Encodes each crop as one box covering it into an ExampleSet (label = index of its category in
-/// `classes`, group = index of its instance in `instances`).
-ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops,
-                       const std::vector<std::string>& classes,
-                       const std::vector<std::string>& instances, FrameEncoder& encoder,
+/// `classes`, group = index of its instance in `instances`); with `mirror`, each crop is followed
+/// by its left-right mirror image.
+ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
+                       const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror = false,
                        const std::function<void(int64_t, int64_t)>& progress = {});
 
 struct ValidationSummary {
@@ -133,10 +135,11 @@ struct TrainReport {
   std::string toText() const;
 };
 
-/// Leave-one-instance-out category accuracy of an object set: for each instance, PCA, vocabulary
-/// and classifiers are trained on the other instances only (no background class) and every crop
-/// of the held-out instance is classified by the best category.
-struct LoioResult {
+/// Category accuracy of an object set on instances unseen in training. Each fold holds out a set of
+/// instances: PCA, vocabulary and classifiers are trained on the other instances only (no
+/// background class) and every crop of the held-out instances is classified by the best category.
+struct HeldOutResult {
+  std::string protocol;  ///< "leave-one-instance-out" or "one held-out instance per category"
   std::vector<std::string> classes;
   std::vector<std::string> instances;
   std::vector<std::vector<int64_t>> confusion;      ///< [true category][predicted category]
@@ -144,9 +147,13 @@ struct LoioResult {
   int64_t crops = 0, correct = 0;
   double accuracy() const { return crops ? 100.0 * correct / crops : 0; }
 };
-LoioResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
-                               const std::function<void(const std::string& stage, int64_t done,
-                                                        int64_t total)>& progress = {});
+using FoldProgress = std::function<void(const std::string& stage, int64_t done, int64_t total)>;
+/// Every instance in turn (as many folds as instances).
+HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
+                                  const FoldProgress& progress = {});
+/// One fold: one instance of each category with two or more (chosen with options.seed).
+HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
+                                        const FoldProgress& progress = {});
 
 /// Trains a model (see the top of this file). Progress bars go to stderr.
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
