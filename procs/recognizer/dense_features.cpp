@@ -1,0 +1,176 @@
+#include "procs/recognizer/dense_features.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "procs/recognizer/dense_sift.h"
+
+namespace slamaware {
+
+namespace {
+
+double smoothingSigma(int bin, double magnif) {
+  const double s = bin / magnif;
+  return std::sqrt(std::max(0.0, s * s - 0.25));
+}
+
+// Radius of the kernel cv::GaussianBlur uses for a float image at this sigma.
+int gaussianRadius(double sigma) {
+  if (sigma <= 0) return 0;
+  const int ksize = cvRound(sigma * 4 * 2 + 1) | 1;
+  return ksize / 2;
+}
+
+}  // namespace
+
+void FeatureParams::validate() const {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("feature parameters: " + what);
+  };
+  if (step_px <= 0 || step_px % 2 != 0) fail("step_px must be a positive even number");
+  if (pool_cell_px <= 0 || pool_cell_px % step_px != 0)
+    fail("pool_cell_px must be a multiple of step_px");
+  if (bin_sizes_px.empty()) fail("bin_sizes_px is empty");
+  for (int b : bin_sizes_px)
+    if (b < 2 || b % 2 != 0) fail("every bin size must be an even number >= 2");
+  if (smoothing_magnif <= 0) fail("smoothing_magnif must be positive");
+}
+
+int FeatureParams::marginPx() const {
+  int m = 0;
+  for (int b : bin_sizes_px) {
+    // Support of a descriptor: its 4 bins +- one bin of triangular interpolation = 2.5 bins from
+    // the centre; +1 for the central-difference gradient; + the smoothing kernel.
+    const int reach = (5 * b + 1) / 2 + 1 + gaussianRadius(smoothingSigma(b, smoothing_magnif)) + 1;
+    m = std::max(m, reach - step_px / 2);
+  }
+  return (m + 3) / 4 * 4;
+}
+
+void EncodingParams::validate() const {
+  features.validate();
+  if (pca_dims <= 0 || pca_dims > kFeatureDims)
+    throw std::invalid_argument("encoding parameters: pca_dims must be in 1.." +
+                                std::to_string(kFeatureDims));
+  if (vocabulary_size <= 1 || vocabulary_size > 32767)
+    throw std::invalid_argument("encoding parameters: vocabulary_size must be in 2..32767");
+}
+
+CellRect CellRect::united(const CellRect& o) const {
+  if (empty()) return o;
+  if (o.empty()) return *this;
+  return CellRect{std::min(u0, o.u0), std::min(v0, o.v0), std::max(u1, o.u1), std::max(v1, o.v1)};
+}
+
+DenseFeatureExtractor::DenseFeatureExtractor(const FeatureParams& params) : params_(params) {
+  params_.validate();
+  margin_ = params_.marginPx();
+}
+
+void DenseFeatureExtractor::setImage(const cv::Mat& bgr) {
+  if (bgr.empty() || bgr.type() != CV_8UC3)
+    throw std::invalid_argument("setImage: expected an 8-bit BGR image");
+  width_ = bgr.cols;
+  height_ = bgr.rows;
+  const int T = params_.pool_cell_px;
+  const CellRect cells = imageCells();
+  const int extra_x = cells.u1 * T - width_, extra_y = cells.v1 * T - height_;
+  cv::Mat grey, grey_f, rgb, rgb_f;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  grey.convertTo(grey_f, CV_32F, 1.0 / 255.0);
+  cv::copyMakeBorder(grey_f, grey_padded_, margin_, margin_ + extra_y, margin_, margin_ + extra_x,
+                     cv::BORDER_REFLECT_101);
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  rgb.convertTo(rgb_f, CV_32FC3, 1.0 / 255.0);
+  cv::copyMakeBorder(rgb_f, rgb_padded_, margin_, margin_ + extra_y, margin_, margin_ + extra_x,
+                     cv::BORDER_REFLECT_101);
+}
+
+CellRect DenseFeatureExtractor::imageCells() const {
+  const int T = params_.pool_cell_px;
+  return CellRect{0, 0, (width_ + T - 1) / T, (height_ + T - 1) / T};
+}
+
+void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out) {
+  const CellRect all = imageCells();
+  CellRect region{std::max(requested.u0, all.u0), std::max(requested.v0, all.v0),
+                  std::min(requested.u1, all.u1), std::min(requested.v1, all.v1)};
+  FeatureGrid& grid = *out;
+  grid.scales = params_.scales();
+  if (region.empty() || grey_padded_.empty()) {
+    grid.region = CellRect{};
+    grid.nx = grid.ny = 0;
+    grid.features.resize(0, kFeatureDims);
+    return;
+  }
+  grid.region = region;
+  const int T = params_.pool_cell_px, step = params_.step_px, s = params_.stepsPerCell();
+  const int M = margin_;
+  grid.nx = region.width() * s;
+  grid.ny = region.height() * s;
+  const int64_t points = int64_t{grid.nx} * grid.ny;
+  grid.features.resize(points * grid.scales, kFeatureDims);
+
+  // The region plus its margin, in padded-image coordinates (the padding is M on the left/top).
+  const cv::Rect sub(region.u0 * T, region.v0 * T, region.width() * T + 2 * M,
+                     region.height() * T + 2 * M);
+  const cv::Mat grey_sub = grey_padded_(sub);
+  const int c0 = M + step / 2;  // centre of grid point 0 inside `sub`
+  std::vector<float>& norms = norms_;
+
+  for (int t = 0; t < grid.scales; ++t) {
+    const int b = params_.bin_sizes_px[t];
+    const double sigma = smoothingSigma(b, params_.smoothing_magnif);
+    cv::Mat& smooth = smooth_;
+    if (sigma > 0)
+      cv::GaussianBlur(grey_sub, smooth, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT_101);
+    else
+      grey_sub.copyTo(smooth);
+    if (!smooth.isContinuous()) smooth = smooth.clone();
+
+    // A frame starting at x has its centre at x + 1.5 bins.
+    DsiftGeometry geometry;
+    geometry.bin = b;
+    geometry.step = step;
+    geometry.min_x = c0 - 3 * b / 2;
+    geometry.min_y = c0 - 3 * b / 2;
+    geometry.nx = grid.nx;
+    geometry.ny = grid.ny;
+    norms.resize(static_cast<size_t>(points));
+    // Descriptor p of this scale goes to row t * points + p.
+    denseSiftFlat(smooth.ptr<float>(), smooth.cols, smooth.rows, geometry,
+                  grid.features.row(t * points), kFeatureDims, norms.data());
+    const float threshold = static_cast<float>(params_.contrast_threshold);
+    for (int64_t p = 0; p < points; ++p)
+      if (norms[static_cast<size_t>(p)] < threshold)
+        std::memset(grid.features.row(t * points + p), 0, sizeof(float) * kSiftDims);
+  }
+
+  // Mean RGB over each descriptor's support: the 4 x 4 bins around its centre.
+  cv::Mat& integral = integral_;
+  cv::integral(rgb_padded_(sub), integral, CV_64F);
+  const float w = static_cast<float>(params_.rgb_weight);
+  for (int t = 0; t < grid.scales; ++t) {
+    const int half = 2 * params_.bin_sizes_px[t];
+    const double inv_area = 1.0 / (4.0 * half * half);
+    for (int j = 0; j < grid.ny; ++j) {
+      const int y0 = c0 + step * j - half, y1 = c0 + step * j + half;
+      const cv::Vec3d* top = integral.ptr<cv::Vec3d>(y0);
+      const cv::Vec3d* bottom = integral.ptr<cv::Vec3d>(y1);
+      for (int i = 0; i < grid.nx; ++i) {
+        const int x0 = c0 + step * i - half, x1 = c0 + step * i + half;
+        const cv::Vec3d sum = bottom[x1] - bottom[x0] - top[x1] + top[x0];
+        float* row = grid.features.row(grid.rowOf(i, j, t));
+        for (int c = 0; c < 3; ++c) row[kSiftDims + c] = w * static_cast<float>(sum[c] * inv_area);
+      }
+    }
+  }
+}
+
+}  // namespace slamaware

@@ -1,0 +1,126 @@
+#include "procs/recognizer/frame_encoder.h"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace slamaware {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+CellRect spanOf(const std::vector<PyramidBox>& boxes) {
+  CellRect r;
+  for (const auto& b : boxes) r = r.united(b.cells());
+  return r;
+}
+
+}  // namespace
+
+EncoderKind parseEncoderKind(const std::string& name) {
+  if (name == "auto") return EncoderKind::kAuto;
+  if (name == "direct") return EncoderKind::kDirect;
+  if (name == "flair") return EncoderKind::kFlair;
+  throw std::invalid_argument("encoder must be auto, direct or flair, not '" + name + "'");
+}
+
+const char* encoderName(EncoderKind kind) {
+  switch (kind) {
+    case EncoderKind::kAuto:
+      return "auto";
+    case EncoderKind::kDirect:
+      return "direct";
+    case EncoderKind::kFlair:
+      return "flair";
+  }
+  return "?";
+}
+
+FrameEncoder::FrameEncoder(const EncodingParams& params, const Pca& pca,
+                           const Vocabulary& vocabulary, EncoderCostModel cost)
+    : params_(params),
+      pca_(pca),
+      vocabulary_(vocabulary),
+      cost_(cost),
+      extractor_(params.features) {
+  params_.validate();
+  if (pca.inDims() != kFeatureDims || pca.outDims() != params.pca_dims ||
+      vocabulary.dims() != params.pca_dims || vocabulary.size() != params.vocabulary_size)
+    throw std::invalid_argument(
+        "FrameEncoder: PCA / vocabulary do not match the encoding parameters");
+}
+
+bool FrameEncoder::snap(double x, double y, double w, double h, int width, int height,
+                        PyramidBox* out) const {
+  return snapBox(x, y, w, h, width, height, params_.features.pool_cell_px, out);
+}
+
+double FrameEncoder::estimateMs(const std::vector<PyramidBox>& boxes, EncoderKind kind) const {
+  if (boxes.empty()) return 0;
+  if (kind == EncoderKind::kFlair) {
+    const CellRect r = spanOf(boxes);
+    const double corners = static_cast<double>(r.width() + 1) * (r.height() + 1);
+    return (corners * cost_.flair_ns_per_corner * 1e-3 + boxes.size() * cost_.flair_us_per_box) *
+           1e-3;
+  }
+  const double per_cell = params_.features.descriptorsPerCell();
+  double descriptors = 0;
+  for (const auto& b : boxes) descriptors += static_cast<double>(b.cells().area()) * per_cell;
+  return (boxes.size() * cost_.direct_us_per_box +
+          descriptors * cost_.direct_ns_per_descriptor * 1e-3) *
+         1e-3;
+}
+
+EncoderKind FrameEncoder::choose(const std::vector<PyramidBox>& boxes) const {
+  const CellRect r = spanOf(boxes);
+  const double table_mb =
+      FlairEncoder::tableBytesFor(r, params_.vocabulary_size, params_.pca_dims) / 1e6;
+  if (table_mb > cost_.flair_max_table_mb) return EncoderKind::kDirect;
+  return estimateMs(boxes, EncoderKind::kFlair) < estimateMs(boxes, EncoderKind::kDirect)
+             ? EncoderKind::kFlair
+             : EncoderKind::kDirect;
+}
+
+void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes,
+                          EncoderKind kind, ReusableMatrix* out, Stats* stats) {
+  const int64_t dims = params_.vladDims();
+  out->resize(static_cast<int64_t>(boxes.size()), dims);
+  Stats local;
+  Stats& st = stats ? *stats : local;
+  st = Stats();
+  if (boxes.empty()) return;
+  auto t0 = Clock::now();
+  extractor_.setImage(bgr);
+  const CellRect image_cells = extractor_.imageCells();
+  const CellRect region = spanOf(boxes);
+  if (!image_cells.contains(region))
+    throw std::invalid_argument("FrameEncoder: box outside the image");
+  extractor_.extract(region, &grid_);
+  st.features_ms = msSince(t0);
+  st.region = region;
+
+  t0 = Clock::now();
+  codeFeatures(grid_, params_.features.stepsPerCell(), pca_, vocabulary_, &codes_);
+  st.coding_ms = msSince(t0);
+
+  t0 = Clock::now();
+  if (kind == EncoderKind::kAuto) kind = choose(boxes);
+  st.used = kind;
+  if (kind == EncoderKind::kFlair) {
+    flair_.build(codes_, vocabulary_, region);
+    st.table_bytes = flair_.tableBytes();
+    for (size_t i = 0; i < boxes.size(); ++i)
+      flair_.encode(boxes[i], out->row(static_cast<int64_t>(i)));
+  } else {
+    DirectEncoder direct(codes_, vocabulary_);
+    for (size_t i = 0; i < boxes.size(); ++i)
+      direct.encode(boxes[i], out->row(static_cast<int64_t>(i)));
+  }
+  st.encode_ms = msSince(t0);
+}
+
+}  // namespace slamaware

@@ -1,0 +1,83 @@
+#pragma once
+// Encodes the boxes of one frame: raw features over the cells the boxes span only, PCA and
+// codeword assignment as matrix products, then one VLAD vector per box by the direct encoder or
+// FLAIR, whichever the cost model expects to be cheaper for this set of boxes.
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "procs/recognizer/vlad.h"
+
+namespace slamaware {
+
+enum class EncoderKind { kAuto, kDirect, kFlair };
+/// "auto", "direct", "flair"; throws std::invalid_argument otherwise.
+EncoderKind parseEncoderKind(const std::string& name);
+const char* encoderName(EncoderKind kind);
+
+/// Time model of the two encoders (defaults measured by slamaware-bench-recognizer on a
+/// 640x480 frame; see README). Direct: per box a fixed part plus a part per descriptor inside
+/// the box. FLAIR: a table build per corner of the region the boxes span, plus a fixed time per
+/// box whatever its size.
+struct EncoderCostModel {
+  double direct_us_per_box = 55.0;
+  double direct_ns_per_descriptor = 16.0;
+  double flair_ns_per_corner = 3500.0;
+  double flair_us_per_box = 110.0;
+  /// FLAIR is not used when its tables would need more memory than this (the direct encoder then
+  /// handles the frame).
+  double flair_max_table_mb = 200.0;
+
+  template <class V>
+  void visit(V& v) {
+    v("direct_us_per_box", direct_us_per_box, "us, direct encoder: fixed cost per box");
+    v("direct_ns_per_descriptor", direct_ns_per_descriptor,
+      "ns, direct encoder: cost per descriptor in a box");
+    v("flair_ns_per_corner", flair_ns_per_corner, "ns, FLAIR: table build per pooling-cell corner");
+    v("flair_us_per_box", flair_us_per_box, "us, FLAIR: cost per box (any size)");
+    v("flair_max_table_mb", flair_max_table_mb, "MB, FLAIR is not used above this table size");
+  }
+};
+
+class FrameEncoder {
+ public:
+  struct Stats {
+    double features_ms = 0;  ///< dense SIFT + RGB
+    double coding_ms = 0;    ///< PCA + assignment
+    double encode_ms = 0;    ///< table build (FLAIR) + per-box VLAD
+    EncoderKind used = EncoderKind::kDirect;
+    size_t table_bytes = 0;  ///< FLAIR tables of this frame (0 with the direct encoder)
+    CellRect region;         ///< cells whose features were computed
+  };
+
+  /// Keeps references: the parameters, PCA and vocabulary must outlive the encoder.
+  FrameEncoder(const EncodingParams& params, const Pca& pca, const Vocabulary& vocabulary,
+               EncoderCostModel cost = EncoderCostModel());
+
+  /// Snaps a pixel box to this image's pooling grid (see snapBox).
+  bool snap(double x, double y, double w, double h, int width, int height, PyramidBox* out) const;
+  /// The encoder the cost model picks for these boxes.
+  EncoderKind choose(const std::vector<PyramidBox>& boxes) const;
+  /// Estimated ms of each encoder for these boxes (excluding features and coding).
+  double estimateMs(const std::vector<PyramidBox>& boxes, EncoderKind kind) const;
+
+  /// Encodes `boxes` of the 8-bit BGR image into the rows of *out (boxes.size() x vladDims).
+  void encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes, EncoderKind kind,
+              ReusableMatrix* out, Stats* stats = nullptr);
+
+  /// The last frame's codes (for benchmarks and tests).
+  const FrameCodes& codes() const { return codes_; }
+  const EncodingParams& params() const { return params_; }
+
+ private:
+  const EncodingParams& params_;
+  const Pca& pca_;
+  const Vocabulary& vocabulary_;
+  EncoderCostModel cost_;
+  DenseFeatureExtractor extractor_;
+  FeatureGrid grid_;
+  FrameCodes codes_;
+  FlairEncoder flair_;
+};
+
+}  // namespace slamaware

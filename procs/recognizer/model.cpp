@@ -1,0 +1,317 @@
+#include "procs/recognizer/model.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+namespace slamaware {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kMagic[8] = {'S', 'L', 'M', 'R', 'E', 'C', 'O', 'G'};
+constexpr size_t kHeaderSize = 28;
+
+std::array<uint32_t, 256> makeCrcTable() {
+  std::array<uint32_t, 256> t{};
+  for (uint32_t i = 0; i < 256; ++i) {
+    uint32_t c = i;
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    t[i] = c;
+  }
+  return t;
+}
+
+class Writer {
+ public:
+  template <class T>
+  void pod(const T& v) {
+    const auto* p = reinterpret_cast<const uint8_t*>(&v);
+    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+  }
+  void str(const std::string& s) {
+    pod<uint64_t>(s.size());
+    bytes_.insert(bytes_.end(), s.begin(), s.end());
+  }
+  void floats(const float* p, size_t n) {
+    pod<uint64_t>(n);
+    const auto* b = reinterpret_cast<const uint8_t*>(p);
+    bytes_.insert(bytes_.end(), b, b + n * sizeof(float));
+  }
+  void ints(const std::vector<int>& v) {
+    pod<uint64_t>(v.size());
+    for (int x : v) pod<int32_t>(x);
+  }
+  std::vector<uint8_t>& bytes() { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_;
+};
+
+class Reader {
+ public:
+  Reader(const uint8_t* data, size_t size, std::string what)
+      : p_(data), end_(data + size), what_(std::move(what)) {}
+  template <class T>
+  T pod(const char* field) {
+    need(sizeof(T), field);
+    T v;
+    std::memcpy(&v, p_, sizeof(T));
+    p_ += sizeof(T);
+    return v;
+  }
+  std::string str(const char* field) {
+    const uint64_t n = pod<uint64_t>(field);
+    need(n, field);
+    std::string s(reinterpret_cast<const char*>(p_), static_cast<size_t>(n));
+    p_ += n;
+    return s;
+  }
+  std::vector<float> floats(const char* field, uint64_t expected) {
+    const uint64_t n = pod<uint64_t>(field);
+    if (n != expected)
+      throw ModelError(what_ + ": field " + field + " has " + std::to_string(n) +
+                       " values, expected " + std::to_string(expected));
+    need(n * sizeof(float), field);
+    std::vector<float> v(static_cast<size_t>(n));
+    std::memcpy(v.data(), p_, static_cast<size_t>(n) * sizeof(float));
+    p_ += n * sizeof(float);
+    return v;
+  }
+  std::vector<int> ints(const char* field) {
+    const uint64_t n = pod<uint64_t>(field);
+    if (n > 1024) throw ModelError(what_ + ": field " + field + " is implausibly long");
+    std::vector<int> v;
+    for (uint64_t i = 0; i < n; ++i) v.push_back(pod<int32_t>(field));
+    return v;
+  }
+  bool done() const { return p_ == end_; }
+
+ private:
+  void need(uint64_t n, const char* field) const {
+    if (n > static_cast<uint64_t>(end_ - p_))
+      throw ModelError(what_ + ": payload ends inside field " + field);
+  }
+  const uint8_t* p_;
+  const uint8_t* end_;
+  std::string what_;
+};
+
+void writeField(Writer& w, const RecognizerModel& m) {
+  const FeatureParams& f = m.params.features;
+  w.pod<int32_t>(f.step_px);
+  w.ints(f.bin_sizes_px);
+  w.pod<double>(f.smoothing_magnif);
+  w.pod<double>(f.contrast_threshold);
+  w.pod<double>(f.rgb_weight);
+  w.pod<int32_t>(f.pool_cell_px);
+  w.pod<int32_t>(m.params.pca_dims);
+  w.pod<int32_t>(m.params.vocabulary_size);
+  w.pod<int32_t>(m.pca.inDims());
+  w.floats(m.pca.mean.data(), static_cast<size_t>(m.pca.mean.size()));
+  w.floats(m.pca.basis.data(), static_cast<size_t>(m.pca.basis.size()));  // column-major
+  w.floats(m.pca.variance.data(), static_cast<size_t>(m.pca.variance.size()));
+  w.floats(m.vocabulary.centers.data(),
+           static_cast<size_t>(m.vocabulary.centers.size()));  // row-major
+  const LinearClassifier& c = m.classifier;
+  w.pod<int32_t>(c.numClasses());
+  for (const auto& name : c.classes) w.str(name);
+  w.pod<int64_t>(c.dims());
+  w.floats(c.weights.data(), static_cast<size_t>(c.weights.size()));  // row-major
+  w.floats(c.bias.data(), static_cast<size_t>(c.bias.size()));
+  w.pod<float>(c.temperature);
+  w.pod<float>(c.uniform_mix);
+  w.str(m.provenance);
+}
+
+RecognizerModel readFields(Reader& r, const std::string& what) {
+  RecognizerModel m;
+  FeatureParams& f = m.params.features;
+  f.step_px = r.pod<int32_t>("step_px");
+  f.bin_sizes_px = r.ints("bin_sizes_px");
+  f.smoothing_magnif = r.pod<double>("smoothing_magnif");
+  f.contrast_threshold = r.pod<double>("contrast_threshold");
+  f.rgb_weight = r.pod<double>("rgb_weight");
+  f.pool_cell_px = r.pod<int32_t>("pool_cell_px");
+  m.params.pca_dims = r.pod<int32_t>("pca_dims");
+  m.params.vocabulary_size = r.pod<int32_t>("vocabulary_size");
+  try {
+    m.params.validate();
+  } catch (const std::exception& e) {
+    throw ModelError(what + ": " + e.what());
+  }
+  const int in_dims = r.pod<int32_t>("pca_in_dims");
+  if (in_dims != kFeatureDims)
+    throw ModelError(what + ": PCA input has " + std::to_string(in_dims) +
+                     " dimensions, this build computes " + std::to_string(kFeatureDims));
+  const int D = m.params.pca_dims, K = m.params.vocabulary_size;
+  auto mean = r.floats("pca_mean", static_cast<uint64_t>(in_dims));
+  m.pca.mean = Eigen::Map<Eigen::RowVectorXf>(mean.data(), in_dims);
+  auto basis = r.floats("pca_basis", static_cast<uint64_t>(in_dims) * D);
+  m.pca.basis = Eigen::Map<Eigen::MatrixXf>(basis.data(), in_dims, D);
+  auto variance = r.floats("pca_variance", static_cast<uint64_t>(D));
+  m.pca.variance = Eigen::Map<Eigen::VectorXf>(variance.data(), D);
+  auto centers = r.floats("vocabulary", static_cast<uint64_t>(K) * D);
+  m.vocabulary.centers = Eigen::Map<MatrixRM>(centers.data(), K, D);
+  const int C = r.pod<int32_t>("num_classes");
+  if (C < 1 || C > 100000)
+    throw ModelError(what + ": implausible number of classes " + std::to_string(C));
+  for (int c = 0; c < C; ++c) m.classifier.classes.push_back(r.str("class_name"));
+  const int64_t dims = r.pod<int64_t>("classifier_dims");
+  if (dims != m.params.vladDims())
+    throw ModelError(what + ": classifiers have " + std::to_string(dims) +
+                     " inputs, the encoding gives " + std::to_string(m.params.vladDims()));
+  auto weights = r.floats("weights", static_cast<uint64_t>(C) * static_cast<uint64_t>(dims));
+  m.classifier.weights = Eigen::Map<MatrixRM>(weights.data(), C, dims);
+  auto bias = r.floats("bias", static_cast<uint64_t>(C));
+  m.classifier.bias = Eigen::Map<Eigen::VectorXf>(bias.data(), C);
+  m.classifier.temperature = r.pod<float>("temperature");
+  m.classifier.uniform_mix = r.pod<float>("uniform_mix");
+  m.provenance = r.str("provenance");
+  if (!r.done()) throw ModelError(what + ": unexpected bytes after the last field");
+  return m;
+}
+
+void putU32(uint8_t* p, uint32_t v) { std::memcpy(p, &v, 4); }
+void putU64(uint8_t* p, uint64_t v) { std::memcpy(p, &v, 8); }
+
+uint32_t headerCrc(const uint8_t* header) { return crc32(header + 16, 12, crc32(header, 12)); }
+
+}  // namespace
+
+uint32_t crc32(const void* data, size_t size, uint32_t crc) {
+  static const std::array<uint32_t, 256> table = makeCrcTable();
+  const auto* p = static_cast<const uint8_t*>(data);
+  crc = ~crc;
+  for (size_t i = 0; i < size; ++i) crc = table[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
+  return ~crc;
+}
+
+void RecognizerModel::check(const std::string& what) const {
+  auto fail = [&](const std::string& why) { throw ModelError(what + ": " + why); };
+  try {
+    params.validate();
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+  const int D = params.pca_dims, K = params.vocabulary_size;
+  if (pca.inDims() != kFeatureDims || pca.outDims() != D || pca.mean.size() != kFeatureDims)
+    fail("PCA does not map " + std::to_string(kFeatureDims) + " to " + std::to_string(D) +
+         " dimensions");
+  if (vocabulary.size() != K || vocabulary.dims() != D)
+    fail("vocabulary is not " + std::to_string(K) + " x " + std::to_string(D));
+  const int C = classifier.numClasses();
+  if (C < 1) fail("no classes");
+  if (classifier.weights.rows() != C || classifier.bias.size() != C ||
+      classifier.dims() != params.vladDims())
+    fail("classifier weights are not " + std::to_string(C) + " x " +
+         std::to_string(params.vladDims()));
+  if (!(classifier.temperature > 0) || !(classifier.uniform_mix >= 0) ||
+      !(classifier.uniform_mix < 1))
+    fail("calibration out of range");
+}
+
+bool RecognizerModel::hasBackground() const {
+  return !classifier.classes.empty() && classifier.classes.back() == "background";
+}
+
+void saveModel(const RecognizerModel& model, const std::string& path) {
+  model.check("model for " + path);
+  Writer w;
+  writeField(w, model);
+  const std::vector<uint8_t>& payload = w.bytes();
+  uint8_t header[kHeaderSize] = {};
+  std::memcpy(header, kMagic, 8);
+  putU32(header + 8, kModelFormatVersion);
+  putU64(header + 16, payload.size());
+  putU32(header + 24, crc32(payload.data(), payload.size()));
+  putU32(header + 12, headerCrc(header));
+
+  const fs::path target(path);
+  if (target.has_parent_path()) fs::create_directories(target.parent_path());
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0) throw ModelError(path + ": cannot create " + tmp + ": " + std::strerror(errno));
+  auto writeAll = [&](const uint8_t* p, size_t n) {
+    while (n > 0) {
+      const ssize_t k = ::write(fd, p, n);
+      if (k < 0) {
+        if (errno == EINTR) continue;
+        return false;
+      }
+      p += k;
+      n -= static_cast<size_t>(k);
+    }
+    return true;
+  };
+  if (!writeAll(header, kHeaderSize) || !writeAll(payload.data(), payload.size()) ||
+      ::fsync(fd) != 0) {
+    const std::string err = std::strerror(errno);
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw ModelError(path + ": writing failed: " + err);
+  }
+  ::close(fd);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string err = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    throw ModelError(path + ": cannot rename the temporary file into place: " + err);
+  }
+  // Make the rename itself durable.
+  const std::string dir =
+      target.has_parent_path() ? target.parent_path().string() : std::string(".");
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+RecognizerModel loadModel(const std::string& path) {
+  const std::string what = "model " + path;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ModelError(what + ": cannot open the file");
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+  if (bytes.size() < kHeaderSize || std::memcmp(bytes.data(), kMagic, 8) != 0) {
+    if (bytes.size() >= 8 && std::memcmp(bytes.data(), kMagic, 8) == 0)
+      throw ModelError(what + ": truncated inside the header (" + std::to_string(bytes.size()) +
+                       " bytes)");
+    throw ModelError(what + ": not a slamaware recognizer model (bad magic)");
+  }
+  uint32_t version, header_crc, payload_crc;
+  uint64_t payload_size;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  std::memcpy(&header_crc, bytes.data() + 12, 4);
+  std::memcpy(&payload_size, bytes.data() + 16, 8);
+  std::memcpy(&payload_crc, bytes.data() + 24, 4);
+  if (headerCrc(bytes.data()) != header_crc)
+    throw ModelError(what + ": header checksum mismatch (file is corrupt)");
+  if (version != kModelFormatVersion)
+    throw ModelError(what + ": format version " + std::to_string(version) +
+                     ", this build reads version " + std::to_string(kModelFormatVersion) +
+                     " (retrain with slamaware-train)");
+  const uint64_t have = bytes.size() - kHeaderSize;
+  if (have < payload_size)
+    throw ModelError(what + ": truncated: " + std::to_string(have) + " of " +
+                     std::to_string(payload_size) + " payload bytes present");
+  if (have > payload_size)
+    throw ModelError(what + ": " + std::to_string(have - payload_size) +
+                     " unexpected bytes after the payload");
+  if (crc32(bytes.data() + kHeaderSize, payload_size) != payload_crc)
+    throw ModelError(what + ": payload checksum mismatch (file is corrupt)");
+  Reader r(bytes.data() + kHeaderSize, static_cast<size_t>(payload_size), what);
+  RecognizerModel m = readFields(r, what);
+  m.check(what);
+  return m;
+}
+
+}  // namespace slamaware

@@ -1,0 +1,87 @@
+#include "procs/recognizer/recognizer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace slamaware {
+
+Recognizer::Recognizer(std::shared_ptr<const RecognizerModel> model,
+                       const RecognizerOptions& options)
+    : model_(std::move(model)),
+      options_(options),
+      kind_(parseEncoderKind(options.encoder)),
+      encoder_(model_->params, model_->pca, model_->vocabulary, options.cost) {
+  classes_ = model_->classifier.classes;
+  append_background_ = !model_->hasBackground();
+  if (append_background_) classes_.push_back("background");
+}
+
+std::vector<std::string> Recognizer::missingClasses() const {
+  std::vector<std::string> missing;
+  for (const auto& c : options_.expected_classes)
+    if (std::find(classes_.begin(), classes_.end(), c) == classes_.end()) missing.push_back(c);
+  return missing;
+}
+
+FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& requests) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameDetections out;
+  out.classes = classes_;
+  std::vector<PyramidBox> snapped;
+  const double W = bgr.cols, H = bgr.rows;
+  for (size_t i = 0; i < requests.size(); ++i) {
+    const BoxRequest& r = requests[i];
+    if (!std::isfinite(r.x) || !std::isfinite(r.y) || !std::isfinite(r.w) || !std::isfinite(r.h)) {
+      ++out.rejected_not_finite;
+      continue;
+    }
+    if (!(r.w > 0) || !(r.h > 0)) {
+      ++out.rejected_empty;
+      continue;
+    }
+    const double x0 = std::max(r.x, 0.0), y0 = std::max(r.y, 0.0);
+    const double x1 = std::min(r.x + r.w, W), y1 = std::min(r.y + r.h, H);
+    PyramidBox pb;
+    if (!(x1 > x0) || !(y1 > y0) || !encoder_.snap(r.x, r.y, r.w, r.h, bgr.cols, bgr.rows, &pb)) {
+      ++out.rejected_outside;
+      continue;
+    }
+    if (static_cast<int>(snapped.size()) >= options_.max_boxes) {
+      ++out.rejected_over_limit;
+      continue;
+    }
+    if (x0 != r.x || y0 != r.y || x1 != r.x + r.w || y1 != r.y + r.h) ++out.clipped;
+    BoxDetection d;
+    d.input_index = static_cast<int>(i);
+    d.candidate_id = r.candidate_id;
+    d.x = static_cast<float>(x0);
+    d.y = static_cast<float>(y0);
+    d.w = static_cast<float>(x1 - x0);
+    d.h = static_cast<float>(y1 - y0);
+    out.boxes.push_back(std::move(d));
+    snapped.push_back(pb);
+  }
+  if (snapped.empty()) return out;
+
+  encoder_.encode(bgr, snapped, kind_, &encoded_, &out.stats);
+  model_->classifier.scores(encoded_.map(), &scores_);
+  model_->classifier.logProbabilities(scores_, &log_p_);
+  const int C = static_cast<int>(classes_.size());
+  const float log_objects =
+      append_background_
+          ? static_cast<float>(std::log1p(-std::exp(options_.missing_background_log_prob)))
+          : 0.f;
+  for (size_t b = 0; b < out.boxes.size(); ++b) {
+    auto& lp = out.boxes[b].log_prob;
+    lp.resize(static_cast<size_t>(C));
+    for (int c = 0; c < static_cast<int>(log_p_.cols()); ++c)
+      lp[static_cast<size_t>(c)] = log_p_(b, c) + log_objects;
+    if (append_background_) lp.back() = static_cast<float>(options_.missing_background_log_prob);
+  }
+  out.total_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace slamaware

@@ -1,0 +1,99 @@
+#pragma once
+// The recognizer stage without the bus: a frame and its proposal boxes in, per-box calibrated
+// class log-probabilities out (what DETECTIONS carries).
+#include <memory>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
+
+#include "procs/recognizer/frame_encoder.h"
+#include "procs/recognizer/model.h"
+
+namespace slamaware {
+
+struct RecognizerOptions {
+  std::string model = "build/models/recognizer.model";  ///< model file (slamaware-train)
+  /// Classes the rest of the system expects; those the model lacks are reported (the process
+  /// keeps running with the classes it has).
+  std::vector<std::string> expected_classes;
+  std::string encoder = "auto";  ///< auto | direct | flair
+  int max_boxes = 300;           ///< boxes per frame beyond this are rejected
+  /// Log-probability given to "background" when the model was trained without negatives (it has
+  /// no background class); the object classes share the rest.
+  double missing_background_log_prob = -13.8;
+  EncoderCostModel cost;
+  // Node: joining CAMERA and PROPOSALS.
+  int frame_buffer = 30;           ///< CAMERA frames kept for joining (oldest dropped)
+  int proposals_buffer = 30;       ///< PROPOSALS waiting for their frame
+  double pending_timeout_s = 2.0;  ///< s a PROPOSALS message waits for its frame (wall clock)
+  double model_retry_s = 5.0;      ///< s between attempts to load a missing or bad model
+
+  template <class V>
+  void visit(V& v) {
+    v("model", model, "model file written by slamaware-train (relative to the working directory)");
+    v("expected_classes", expected_classes,
+      "classes the system expects; missing ones are reported");
+    v("encoder", encoder, "auto (cheaper of the two per frame), direct or flair");
+    v("max_boxes", max_boxes, "boxes per frame beyond this are rejected");
+    v("missing_background_log_prob", missing_background_log_prob,
+      "log p(background) published when the model has no background class");
+    v.section("cost", cost);
+    v("frame_buffer", frame_buffer, "CAMERA frames kept for joining with PROPOSALS");
+    v("proposals_buffer", proposals_buffer, "PROPOSALS waiting for their frame");
+    v("pending_timeout_s", pending_timeout_s, "s a PROPOSALS message waits for its CAMERA frame");
+    v("model_retry_s", model_retry_s, "s between attempts to load a missing or unreadable model");
+  }
+};
+
+/// A proposal box: pixels, (x, y) = top-left corner.
+struct BoxRequest {
+  double x = 0, y = 0, w = 0, h = 0;
+  int32_t candidate_id = -1;
+};
+
+struct BoxDetection {
+  int input_index = -1;  ///< position in the request
+  int32_t candidate_id = -1;
+  float x = 0, y = 0, w = 0, h = 0;  ///< the box clipped to the image
+  std::vector<float> log_prob;       ///< per class of FrameDetections::classes
+};
+
+struct FrameDetections {
+  std::vector<std::string> classes;  ///< "background" last
+  std::vector<BoxDetection> boxes;   ///< valid boxes, in request order
+  int rejected_not_finite = 0, rejected_empty = 0, rejected_outside = 0, rejected_over_limit = 0;
+  int clipped = 0;
+  FrameEncoder::Stats stats;
+  double total_ms = 0;  ///< encoding + scoring
+  int rejected() const {
+    return rejected_not_finite + rejected_empty + rejected_outside + rejected_over_limit;
+  }
+};
+
+class Recognizer {
+ public:
+  /// Throws std::invalid_argument for a bad encoder name.
+  Recognizer(std::shared_ptr<const RecognizerModel> model, const RecognizerOptions& options);
+  /// The published class list: the model's classes, "background" last (appended if missing).
+  const std::vector<std::string>& classes() const { return classes_; }
+  /// Classes of options.expected_classes the model does not have.
+  std::vector<std::string> missingClasses() const;
+  const RecognizerModel& model() const { return *model_; }
+
+  /// Classifies the valid boxes of one 8-bit BGR frame. Boxes that are not finite, have no area,
+  /// or lie outside the image are rejected (counted); boxes partly outside are clipped.
+  /// Deterministic for a given input.
+  FrameDetections recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& boxes);
+
+ private:
+  std::shared_ptr<const RecognizerModel> model_;
+  RecognizerOptions options_;
+  EncoderKind kind_;
+  std::vector<std::string> classes_;
+  bool append_background_ = false;
+  FrameEncoder encoder_;
+  ReusableMatrix encoded_;
+  MatrixRM scores_, log_p_;
+};
+
+}  // namespace slamaware

@@ -1,0 +1,697 @@
+#include "procs/recognizer/trainer.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "common/dataset.h"
+#include "common/image_codec.h"
+#include "common/progress.h"
+#include <opencv2/core.hpp>
+
+namespace slamaware {
+
+namespace {
+
+double uniform01(std::mt19937& rng) { return static_cast<double>(rng()) / 4294967296.0; }
+
+double iou(const cv::Rect2d& a, const cv::Rect2d& b) {
+  const double inter = (a & b).area();
+  const double uni = a.area() + b.area() - inter;
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+// Seed for item i of stage `stage` (stable whatever else is trained).
+uint32_t subSeed(uint32_t seed, uint32_t stage, uint32_t i) {
+  std::seed_seq seq{seed, stage, i};
+  uint32_t out;
+  seq.generate(&out, &out + 1);
+  return out;
+}
+
+int indexOf(const std::vector<std::string>& v, const std::string& s) {
+  auto it = std::find(v.begin(), v.end(), s);
+  return it == v.end() ? -1 : static_cast<int>(it - v.begin());
+}
+
+// The box covering a whole image, on its pooling grid.
+PyramidBox wholeImage(const FrameEncoder& encoder, const cv::Mat& image) {
+  PyramidBox b;
+  encoder.snap(0, 0, image.cols, image.rows, image.cols, image.rows, &b);
+  return b;
+}
+
+// Softmax probability of the last class (background) from raw one-vs-all scores.
+double backgroundProbability(const float* s, int C) {
+  float lp[256];
+  std::vector<float> big;
+  float* out = lp;
+  if (C > 256) {
+    big.resize(static_cast<size_t>(C));
+    out = big.data();
+  }
+  calibratedLogProbabilities(s, C, 1.f, 0.f, out);
+  return std::exp(static_cast<double>(out[C - 1]));
+}
+
+struct Split {
+  std::vector<bool> crop_val, frame_val;
+  std::vector<std::string> held_out_instances;
+};
+
+Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFrame>& frames,
+                const TrainOptions& options) {
+  Split s;
+  s.crop_val.assign(crops.size(), false);
+  s.frame_val.assign(frames.size(), false);
+  if (!options.validation) return s;
+  std::map<std::string, std::set<std::string>> instances;
+  for (const auto& c : crops) instances[c.category].insert(c.instance);
+  std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 1, 0));
+  std::set<std::string> held;
+  for (const auto& [category, names] : instances) {
+    if (names.size() < 2) continue;
+    auto it = names.begin();
+    std::advance(it, static_cast<long>(rng() % names.size()));
+    held.insert(*it);
+  }
+  s.held_out_instances.assign(held.begin(), held.end());
+  std::map<std::string, int> view_counter;
+  for (size_t i = 0; i < crops.size(); ++i) {
+    const auto& c = crops[i];
+    if (held.count(c.instance)) {
+      s.crop_val[i] = true;
+    } else if (instances[c.category].size() < 2) {
+      s.crop_val[i] =
+          (view_counter[c.instance]++ % 5) == 4;  // single instance: hold out every 5th view
+    }
+  }
+  const int every = std::max(2, options.holdout_frame_every);
+  if (frames.size() >= 2)
+    for (size_t f = 0; f < frames.size(); ++f)
+      s.frame_val[f] = static_cast<int>(f) % every == every / 2;
+  return s;
+}
+
+// Encodes `boxes` of one scene frame as background examples (group = -1 - frame index).
+void addBackground(FrameEncoder& encoder, const cv::Mat& image,
+                   const std::vector<cv::Rect2d>& boxes, int label, int group,
+                   ReusableMatrix* buffer, ExampleSet* out) {
+  std::vector<PyramidBox> snapped;
+  for (const auto& r : boxes) {
+    PyramidBox b;
+    if (encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) snapped.push_back(b);
+  }
+  if (snapped.empty()) return;
+  encoder.encode(image, snapped, EncoderKind::kAuto, buffer);
+  for (int64_t i = 0; i < buffer->rows(); ++i) out->add(buffer->row(i), label, group);
+}
+
+ValidationSummary summarize(const LinearClassifier& clf, const ExampleSet& val, bool has_background,
+                            const std::vector<std::string>& held_out) {
+  ValidationSummary v;
+  if (val.size() == 0) return v;
+  v.available = true;
+  v.held_out_instances = held_out;
+  const int C = clf.numClasses();
+  const int objects = has_background ? C - 1 : C;
+  v.confusion.assign(static_cast<size_t>(C), std::vector<int64_t>(static_cast<size_t>(C), 0));
+  MatrixRM x(1, val.dims()), s, lp;
+  int64_t obj_right = 0, right = 0, bg_right = 0;
+  double nll = 0;
+  for (int64_t i = 0; i < val.size(); ++i) {
+    val.get(i, x.data());
+    clf.scores(x, &s);
+    clf.logProbabilities(s, &lp);
+    const int label = val.label(i);
+    int best = 0, best_obj = 0;
+    for (int c = 1; c < C; ++c)
+      if (lp(0, c) > lp(0, best)) best = c;
+    for (int c = 1; c < objects; ++c)
+      if (lp(0, c) > lp(0, best_obj)) best_obj = c;
+    ++v.confusion[static_cast<size_t>(label)][static_cast<size_t>(best)];
+    nll -= lp(0, label);
+    if (has_background && label == C - 1) {
+      ++v.negatives;
+      bg_right += best == label;
+    } else {
+      ++v.crops;
+      obj_right += best_obj == label;
+      right += best == label;
+    }
+  }
+  v.object_accuracy = v.crops ? 100.0 * obj_right / v.crops : 0;
+  v.accuracy = v.crops ? 100.0 * right / v.crops : 0;
+  v.background_accuracy = v.negatives ? 100.0 * bg_right / v.negatives : 0;
+  v.nll = nll / static_cast<double>(val.size());
+  return v;
+}
+
+}  // namespace
+
+std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
+                                      int max_views_per_instance) {
+  std::vector<LabeledCrop> crops;
+  for (const auto& dir : object_dirs) {
+    const ObjectSet set = ObjectSet::open(dir);
+    std::map<std::string, std::vector<const ObjectView*>> by_instance;
+    for (const auto& v : set.views()) by_instance[v.instance].push_back(&v);
+    for (const auto& [instance, views] : by_instance) {
+      const size_t n = views.size();
+      const size_t keep =
+          max_views_per_instance > 0 ? std::min(n, static_cast<size_t>(max_views_per_instance)) : n;
+      for (size_t k = 0; k < keep; ++k) {
+        const ObjectView* v = views[k * n / keep];
+        crops.push_back(LabeledCrop{v->crop_path, v->category, v->instance});
+      }
+    }
+  }
+  return crops;
+}
+
+std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs) {
+  std::vector<SceneFrame> frames;
+  for (const auto& dir : sequence_dirs) {
+    const SequenceFolder seq = SequenceFolder::open(dir);
+    if (!seq.hasBoxes())
+      throw DatasetError(dir +
+                         ": no boxes.csv; background boxes need to know where the objects are");
+    std::map<int, std::vector<cv::Rect2d>> objects;
+    for (const auto& b : seq.boxes()) objects[b.frame].push_back(cv::Rect2d(b.x, b.y, b.w, b.h));
+    for (size_t i = 0; i < seq.size(); ++i) {
+      SceneFrame f;
+      f.path = seq.framePath(i);
+      f.sequence = seq.info().name.empty() ? dir : seq.info().name;
+      f.index = static_cast<int>(i);
+      f.objects = objects[static_cast<int>(i)];
+      frames.push_back(std::move(f));
+    }
+  }
+  return frames;
+}
+
+std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
+                                              const std::vector<cv::Rect2d>& objects, int count,
+                                              const TrainOptions& options, uint32_t seed) {
+  std::vector<cv::Rect2d> boxes;
+  std::mt19937 rng(seed);
+  const double min_side = options.negative_min_size_px;
+  const double max_w = std::max(min_side, options.negative_max_size * width);
+  const double max_h = std::max(min_side, options.negative_max_size * height);
+  if (width < min_side || height < min_side) return boxes;
+  for (int attempt = 0; attempt < count * 50 && static_cast<int>(boxes.size()) < count; ++attempt) {
+    const double w =
+        std::min(min_side + uniform01(rng) * (max_w - min_side), static_cast<double>(width));
+    const double aspect =
+        std::exp(std::log(0.5) + uniform01(rng) * (std::log(2.0) - std::log(0.5)));
+    const double h = std::clamp(w * aspect, min_side, std::min(max_h, static_cast<double>(height)));
+    const cv::Rect2d r(uniform01(rng) * (width - w), uniform01(rng) * (height - h), w, h);
+    bool ok = true;
+    for (const auto& o : objects)
+      if (iou(r, o) >= options.negative_max_iou) ok = false;
+    if (ok) boxes.push_back(r);
+  }
+  return boxes;
+}
+
+void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneFrame>& frames,
+                 const TrainOptions& options, Pca* pca, Vocabulary* vocabulary,
+                 const std::function<void(int64_t, int64_t)>& progress) {
+  const EncodingParams& p = options.encoding;
+  p.validate();
+  DenseFeatureExtractor extractor(p.features);
+  FeatureGrid grid;
+  const int64_t target = std::max<int64_t>(options.vocabulary_descriptors, p.vocabulary_size * 4);
+  // Half of the sample from scene frames when there are any (the background needs codewords too).
+  const int64_t from_frames = frames.empty() ? 0 : target / 2;
+  const int64_t from_crops = crops.empty() ? 0 : target - from_frames;
+  const int64_t per_crop = crops.empty() ? 0
+                                         : (from_crops + static_cast<int64_t>(crops.size()) - 1) /
+                                               static_cast<int64_t>(crops.size());
+  const int64_t per_frame = frames.empty()
+                                ? 0
+                                : (from_frames + static_cast<int64_t>(frames.size()) - 1) /
+                                      static_cast<int64_t>(frames.size());
+  std::vector<float> rows;
+  const int64_t total = static_cast<int64_t>(crops.size() + frames.size());
+  int64_t done = 0;
+  auto sample = [&](const std::string& path, int64_t quota, uint32_t seed) {
+    extractor.setImage(readImage(path));
+    extractor.extract(extractor.imageCells(), &grid);
+    const int64_t n = grid.features.rows();
+    std::vector<int64_t> idx(static_cast<size_t>(n));
+    for (int64_t i = 0; i < n; ++i) idx[static_cast<size_t>(i)] = i;
+    std::mt19937 rng(seed);
+    const int64_t take = std::min(quota, n);
+    for (int64_t i = 0; i < take; ++i) {
+      std::swap(
+          idx[static_cast<size_t>(i)],
+          idx[static_cast<size_t>(i + static_cast<int64_t>(rng() % static_cast<uint32_t>(n - i)))]);
+      const float* r = grid.features.row(idx[static_cast<size_t>(i)]);
+      rows.insert(rows.end(), r, r + kFeatureDims);
+    }
+    if (progress) progress(++done, total);
+  };
+  for (size_t i = 0; i < crops.size(); ++i)
+    sample(crops[i].path, per_crop,
+           subSeed(static_cast<uint32_t>(options.seed), 2, static_cast<uint32_t>(i)));
+  for (size_t i = 0; i < frames.size(); ++i)
+    sample(frames[i].path, per_frame,
+           subSeed(static_cast<uint32_t>(options.seed), 3, static_cast<uint32_t>(i)));
+  int64_t n = static_cast<int64_t>(rows.size()) / kFeatureDims;
+  if (n < p.vocabulary_size)
+    throw std::runtime_error("fitEncoding: only " + std::to_string(n) + " features for " +
+                             std::to_string(p.vocabulary_size) + " codewords");
+  // The shuffled subset.
+  MatrixRM samples(std::min(n, target), kFeatureDims);
+  {
+    std::vector<int64_t> idx(static_cast<size_t>(n));
+    for (int64_t i = 0; i < n; ++i) idx[static_cast<size_t>(i)] = i;
+    std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 4, 0));
+    for (int64_t i = n - 1; i > 0; --i)
+      std::swap(idx[static_cast<size_t>(i)],
+                idx[static_cast<size_t>(rng() % static_cast<uint32_t>(i + 1))]);
+    for (int64_t i = 0; i < samples.rows(); ++i)
+      std::copy_n(rows.data() + idx[static_cast<size_t>(i)] * kFeatureDims, kFeatureDims,
+                  samples.row(i).data());
+  }
+  *pca = Pca::fit(samples, p.pca_dims);
+  MatrixRM projected(samples.rows(), p.pca_dims);
+  pca->project(samples, projected);
+  *vocabulary = Vocabulary::train(projected, p.vocabulary_size,
+                                  subSeed(static_cast<uint32_t>(options.seed), 5, 0),
+                                  options.kmeans_iterations);
+}
+
+ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
+                       const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror,
+                       const std::function<void(int64_t, int64_t)>& progress) {
+  ExampleSet set(encoder.params().vladDims());
+  ReusableMatrix buffer;
+  for (size_t i = 0; i < crops.size(); ++i) {
+    cv::Mat image = readImage(crops[i].path);
+    const int label = indexOf(classes, crops[i].category), group = indexOf(instances, crops[i].instance);
+    encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
+    set.add(buffer.row(0), label, group);
+    if (mirror) {
+      cv::flip(image, image, 1);
+      encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
+      set.add(buffer.row(0), label, group);
+    }
+    if (progress) progress(static_cast<int64_t>(i + 1), static_cast<int64_t>(crops.size()));
+  }
+  return set;
+}
+
+std::string TrainReport::toJson() const {
+  nlohmann::json j;
+  j["classes"] = classes;
+  j["train_crops"] = train_crops;
+  j["train_negatives"] = train_negatives;
+  j["mined_per_round"] = mined;
+  if (validation.available) {
+    nlohmann::json v;
+    v["held_out_instances"] = validation.held_out_instances;
+    v["crops"] = validation.crops;
+    v["object_accuracy"] = validation.object_accuracy;
+    v["accuracy"] = validation.accuracy;
+    v["negatives"] = validation.negatives;
+    v["background_accuracy"] = validation.background_accuracy;
+    v["nll"] = validation.nll;
+    v["confusion"] = validation.confusion;
+    j["validation"] = v;
+  }
+  return j.dump();
+}
+
+std::string TrainReport::toText() const {
+  std::ostringstream o;
+  o << "classes: ";
+  for (size_t i = 0; i < classes.size(); ++i) o << (i ? ", " : "") << classes[i];
+  o << "\ntraining examples: " << train_crops << " crops (with their copies in scene context), "
+    << train_negatives << " background boxes";
+  for (size_t r = 0; r < mined.size(); ++r)
+    o << (r ? ", " : " (hard negatives mined: ") << mined[r];
+  if (!mined.empty()) o << ")";
+  o << "\n";
+  if (!validation.available) {
+    o << "validation: none (nothing held out)\n";
+    return o.str();
+  }
+  const auto& v = validation;
+  o << "validation on held-out data";
+  if (!v.held_out_instances.empty()) {
+    o << " (instances ";
+    for (size_t i = 0; i < v.held_out_instances.size(); ++i)
+      o << (i ? ", " : "") << v.held_out_instances[i];
+    o << ")";
+  }
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                ":\n  %lld crops: best object class right %.1f%%, best class overall right %.1f%%\n"
+                "  %lld background boxes: classified background %.1f%%\n  calibrated NLL %.3f\n",
+                static_cast<long long>(v.crops), v.object_accuracy, v.accuracy,
+                static_cast<long long>(v.negatives), v.background_accuracy, v.nll);
+  o << buf << "  confusion (rows: true, columns: predicted):\n";
+  for (size_t r = 0; r < v.confusion.size(); ++r) {
+    std::snprintf(buf, sizeof(buf), "    %-14s", classes[r].c_str());
+    o << buf;
+    for (int64_t n : v.confusion[r]) {
+      std::snprintf(buf, sizeof(buf), " %6lld", static_cast<long long>(n));
+      o << buf;
+    }
+    o << "\n";
+  }
+  return o.str();
+}
+
+RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
+                           const std::vector<std::string>& sequence_dirs,
+                           const TrainOptions& options, TrainReport* report) {
+  options.encoding.validate();
+  const std::vector<LabeledCrop> crops = collectCrops(object_dirs, options.max_views_per_instance);
+  const std::vector<SceneFrame> frames = collectSceneFrames(sequence_dirs);
+  if (crops.empty()) throw DatasetError("no training crops");
+  std::set<std::string> category_set, instance_set;
+  for (const auto& c : crops) {
+    category_set.insert(c.category);
+    instance_set.insert(c.instance);
+  }
+  if (category_set.size() < 2 && frames.empty())
+    throw DatasetError("need at least two categories, or background from --negatives");
+  std::vector<std::string> classes(category_set.begin(), category_set.end());
+  const bool has_background = !frames.empty();
+  if (has_background) classes.push_back("background");
+  const int bg = has_background ? static_cast<int>(classes.size()) - 1 : -1;
+  const std::vector<std::string> instances(instance_set.begin(), instance_set.end());
+  const Split split = makeSplit(crops, frames, options);
+  spdlog::info(
+      "{} crops of {} instances in {} categories, {} scene frames; held out: {} instances, {} "
+      "frames",
+      crops.size(), instances.size(), category_set.size(), frames.size(),
+      split.held_out_instances.size(),
+      std::count(split.frame_val.begin(), split.frame_val.end(), true));
+
+  RecognizerModel model;
+  model.params = options.encoding;
+  {
+    std::vector<LabeledCrop> train_crops;
+    std::vector<SceneFrame> train_frames;
+    for (size_t i = 0; i < crops.size(); ++i)
+      if (!split.crop_val[i]) train_crops.push_back(crops[i]);
+    for (size_t i = 0; i < frames.size(); ++i)
+      if (!split.frame_val[i]) train_frames.push_back(frames[i]);
+    ProgressBar bar("vocabulary features",
+                    static_cast<int64_t>(train_crops.size() + train_frames.size()));
+    fitEncoding(train_crops, train_frames, options, &model.pca, &model.vocabulary,
+                [&](int64_t done, int64_t) { bar.update(done); });
+    bar.finish();
+  }
+  FrameEncoder encoder(model.params, model.pca, model.vocabulary);
+
+  ExampleSet all(model.params.vladDims());
+  {
+    ProgressBar bar("encode crops", static_cast<int64_t>(crops.size()));
+    all = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
+                      [&](int64_t done, int64_t) { bar.update(done); });
+    bar.finish();
+  }
+  // Held-out crops (and their mirror images) stay held out.
+  const size_t per_crop = options.mirror_crops ? 2 : 1;
+  std::vector<bool> is_val(static_cast<size_t>(all.size()));
+  for (size_t i = 0; i < crops.size(); ++i)
+    for (size_t k = 0; k < per_crop; ++k) is_val[i * per_crop + k] = split.crop_val[i];
+  ReusableMatrix buffer;
+  if (has_background && options.context_copies > 0) {
+    // Crops in context: pasted into scene frames of the same split (any frame if that split has
+    // none), at the crop's own size, anywhere it fits.
+    std::vector<size_t> frames_of[2];
+    for (size_t f = 0; f < frames.size(); ++f) frames_of[split.frame_val[f] ? 1 : 0].push_back(f);
+    std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 7, 0));
+    ProgressBar bar("encode crops in scene context", static_cast<int64_t>(crops.size()));
+    std::map<size_t, cv::Mat> frame_cache;
+    for (size_t i = 0; i < crops.size(); ++i) {
+      const cv::Mat crop = readImage(crops[i].path);
+      const std::vector<size_t>& pool = frames_of[split.crop_val[i] ? 1 : 0].empty()
+                                            ? frames_of[split.crop_val[i] ? 0 : 1]
+                                            : frames_of[split.crop_val[i] ? 1 : 0];
+      for (int k = 0; k < options.context_copies; ++k) {
+        const size_t f = pool[rng() % pool.size()];
+        auto it = frame_cache.find(f);
+        if (it == frame_cache.end()) {
+          if (frame_cache.size() > 64) frame_cache.clear();
+          it = frame_cache.emplace(f, readImage(frames[f].path)).first;
+        }
+        if (crop.cols > it->second.cols || crop.rows > it->second.rows) continue;
+        cv::Mat scene = it->second.clone();
+        const int x = static_cast<int>(rng() % static_cast<uint32_t>(scene.cols - crop.cols + 1));
+        const int y = static_cast<int>(rng() % static_cast<uint32_t>(scene.rows - crop.rows + 1));
+        crop.copyTo(scene(cv::Rect(x, y, crop.cols, crop.rows)));
+        PyramidBox b;
+        if (!encoder.snap(x, y, crop.cols, crop.rows, scene.cols, scene.rows, &b)) continue;
+        encoder.encode(scene, {b}, EncoderKind::kDirect, &buffer);
+        all.add(buffer.row(0), indexOf(classes, crops[i].category),
+                indexOf(instances, crops[i].instance));
+        is_val.push_back(split.crop_val[i]);
+      }
+      bar.update(static_cast<int64_t>(i + 1));
+    }
+    bar.finish();
+  }
+  if (has_background) {
+    ProgressBar bar("encode background boxes", static_cast<int64_t>(frames.size()));
+    for (size_t f = 0; f < frames.size(); ++f) {
+      const cv::Mat image = readImage(frames[f].path);
+      const auto boxes = randomBackgroundBoxes(
+          image.cols, image.rows, frames[f].objects, options.negatives_per_frame, options,
+          subSeed(static_cast<uint32_t>(options.seed), 6, static_cast<uint32_t>(f)));
+      addBackground(encoder, image, boxes, bg, -1 - static_cast<int>(f), &buffer, &all);
+      is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
+      bar.update(static_cast<int64_t>(f + 1));
+    }
+    bar.finish();
+  }
+  // Training and held-out parts.
+  ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });
+  ExampleSet train = std::move(all);
+  train.filter([&](int64_t i) { return !is_val[static_cast<size_t>(i)]; });
+
+  auto trainStage = [&](const ExampleSet& set, const std::string& label) {
+    ProgressBar bar(label, options.sgd.epochs);
+    LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); });
+    bar.finish();
+    return clf;
+  };
+  LinearClassifier clf = trainStage(train, "train classifiers");
+
+  std::vector<int64_t> mined;
+  if (has_background) {
+    const int C = static_cast<int>(classes.size());
+    for (int round = 1; round <= options.mining_rounds; ++round) {
+      ExampleSet hard(model.params.vladDims());
+      std::vector<double> hardness;
+      MatrixRM s;
+      ProgressBar bar("hard negatives, round " + std::to_string(round),
+                      static_cast<int64_t>(frames.size()));
+      for (size_t f = 0; f < frames.size(); ++f) {
+        bar.update(static_cast<int64_t>(f + 1));
+        if (split.frame_val[f]) continue;
+        const cv::Mat image = readImage(frames[f].path);
+        const auto boxes = randomBackgroundBoxes(
+            image.cols, image.rows, frames[f].objects, options.mining_candidates_per_frame, options,
+            subSeed(static_cast<uint32_t>(options.seed), 10 + static_cast<uint32_t>(round),
+                    static_cast<uint32_t>(f)));
+        std::vector<PyramidBox> snapped;
+        for (const auto& r : boxes) {
+          PyramidBox b;
+          if (encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b))
+            snapped.push_back(b);
+        }
+        if (snapped.empty()) continue;
+        encoder.encode(image, snapped, EncoderKind::kAuto, &buffer);
+        clf.scores(buffer.map(), &s);
+        for (int64_t i = 0; i < s.rows(); ++i) {
+          const double p_bg = backgroundProbability(s.row(i).data(), C);
+          if (p_bg >= 0.5) continue;
+          hard.add(buffer.row(i), bg, -1 - static_cast<int>(f));
+          hardness.push_back(-p_bg);
+        }
+        // Keep the memory bounded: only the hardest mining_max_per_round survive.
+        if (hard.size() > 2 * static_cast<int64_t>(options.mining_max_per_round)) {
+          std::vector<double> sorted = hardness;
+          std::nth_element(sorted.begin(), sorted.begin() + options.mining_max_per_round - 1,
+                           sorted.end(), std::greater<double>());
+          const double cut = sorted[static_cast<size_t>(options.mining_max_per_round - 1)];
+          int64_t kept = 0;
+          std::vector<double> kept_h;
+          hard.filter([&](int64_t i) {
+            const bool k =
+                hardness[static_cast<size_t>(i)] >= cut && kept < options.mining_max_per_round;
+            if (k) {
+              ++kept;
+              kept_h.push_back(hardness[static_cast<size_t>(i)]);
+            }
+            return k;
+          });
+          hardness = kept_h;
+        }
+      }
+      bar.finish();
+      if (hard.size() > options.mining_max_per_round) {
+        std::vector<double> sorted = hardness;
+        std::nth_element(sorted.begin(), sorted.begin() + options.mining_max_per_round - 1,
+                         sorted.end(), std::greater<double>());
+        const double cut = sorted[static_cast<size_t>(options.mining_max_per_round - 1)];
+        int64_t kept = 0;
+        hard.filter([&](int64_t i) {
+          const bool k =
+              hardness[static_cast<size_t>(i)] >= cut && kept < options.mining_max_per_round;
+          kept += k;
+          return k;
+        });
+      }
+      mined.push_back(hard.size());
+      spdlog::info("hard-negative round {}: {} background boxes taken for objects added", round,
+                   hard.size());
+      if (hard.size() == 0) break;
+      train.append(hard);
+      clf = trainStage(train, "retrain, round " + std::to_string(round));
+    }
+  }
+
+  ValidationSummary summary;
+  if (val.size() > 0) {
+    MatrixRM s(val.size(), clf.numClasses()), x(1, val.dims()), row;
+    std::vector<int> labels;
+    for (int64_t i = 0; i < val.size(); ++i) {
+      val.get(i, x.data());
+      clf.scores(x, &row);
+      s.row(i) = row.row(0);
+      labels.push_back(val.label(i));
+    }
+    calibrate(s, labels, &clf);
+    summary = summarize(clf, val, has_background, split.held_out_instances);
+    // Final classifiers on all the data, with the held-out calibration.
+    const float temperature = clf.temperature, mix = clf.uniform_mix;
+    train.append(val);
+    clf = trainStage(train, "final training on all data");
+    clf.temperature = temperature;
+    clf.uniform_mix = mix;
+  } else {
+    clf.uniform_mix = 0.01f;  // nothing to fit on: keep a floor so that views can still be summed
+  }
+  model.classifier = std::move(clf);
+
+  TrainReport local;
+  TrainReport& r = report ? *report : local;
+  r.classes = classes;
+  r.train_crops = 0;
+  r.train_negatives = 0;
+  for (int64_t i = 0; i < train.size(); ++i)
+    (train.label(i) == bg ? r.train_negatives : r.train_crops) += 1;
+  r.mined = mined;
+  r.validation = summary;
+  nlohmann::json prov;
+  prov["objects"] = object_dirs;
+  prov["negatives"] = sequence_dirs;
+  prov["report"] = nlohmann::json::parse(r.toJson());
+  model.provenance = prov.dump();
+  model.check("trained model");
+  return model;
+}
+
+namespace {
+
+HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::vector<std::set<std::string>>& folds,
+                            const TrainOptions& options, const FoldProgress& progress, HeldOutResult result) {
+  const size_t C = result.classes.size();
+  result.confusion.assign(C, std::vector<int64_t>(C, 0));
+  const SgdOptions& sgd = options.sgd;
+  for (size_t fold = 0; fold < folds.size(); ++fold) {
+    const std::set<std::string>& held = folds[fold];
+    std::vector<LabeledCrop> train_crops, test_crops;
+    for (const auto& c : crops) (held.count(c.instance) ? test_crops : train_crops).push_back(c);
+    std::string names;
+    for (const auto& h : held) names += (names.empty() ? "" : ", ") + h;
+    const std::string stage = "fold " + std::to_string(fold + 1) + "/" + std::to_string(folds.size()) + " (" +
+                              (held.size() > 3 ? std::to_string(held.size()) + " instances" : names) + ")";
+    Pca pca;
+    Vocabulary vocabulary;
+    fitEncoding(train_crops, {}, options, &pca, &vocabulary, [&](int64_t d, int64_t t) {
+      if (progress) progress(stage + " vocabulary", d, t);
+    });
+    FrameEncoder encoder(options.encoding, pca, vocabulary);
+    const ExampleSet train = encodeCrops(train_crops, result.classes, result.instances, encoder,
+                                         options.mirror_crops, [&](int64_t d, int64_t t) {
+                                           if (progress) progress(stage + " encode", d, t);
+                                         });
+    const ExampleSet test = encodeCrops(test_crops, result.classes, result.instances, encoder);
+    const LinearClassifier clf = trainOneVsAll(train, result.classes, sgd, [&](int e) {
+      if (progress) progress(stage + " train", e, sgd.epochs);
+    });
+    MatrixRM x(1, test.dims()), s;
+    std::map<std::string, std::pair<int64_t, int64_t>> per_instance;  // right, total
+    for (int64_t i = 0; i < test.size(); ++i) {
+      test.get(i, x.data());
+      clf.scores(x, &s);
+      Eigen::Index best;
+      s.row(0).maxCoeff(&best);
+      const int label = test.label(i);
+      ++result.confusion[static_cast<size_t>(label)][static_cast<size_t>(best)];
+      auto& pi = per_instance[result.instances[static_cast<size_t>(test.group(i))]];
+      pi.first += best == label;
+      ++pi.second;
+      result.correct += best == label;
+      ++result.crops;
+    }
+    for (const auto& [inst, rt] : per_instance) {
+      result.instance_accuracy[inst] = 100.0 * rt.first / rt.second;
+      spdlog::info("{}: {} {}/{} right ({:.1f}%)", stage, inst, rt.first, rt.second, result.instance_accuracy[inst]);
+    }
+  }
+  return result;
+}
+
+HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& object_dir, const char* protocol) {
+  std::set<std::string> category_set, instance_set;
+  for (const auto& c : crops) {
+    category_set.insert(c.category);
+    instance_set.insert(c.instance);
+  }
+  HeldOutResult r;
+  r.protocol = protocol;
+  r.classes.assign(category_set.begin(), category_set.end());
+  r.instances.assign(instance_set.begin(), instance_set.end());
+  if (r.classes.size() < 2) throw DatasetError(object_dir + ": evaluation needs two categories");
+  return r;
+}
+
+}  // namespace
+
+HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
+                                  const FoldProgress& progress) {
+  const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
+  HeldOutResult r = prepare(crops, object_dir, "leave-one-instance-out");
+  std::vector<std::set<std::string>> folds;
+  for (const auto& inst : r.instances) folds.push_back({inst});
+  return evaluateFolds(crops, folds, options, progress, r);
+}
+
+HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
+                                        const FoldProgress& progress) {
+  const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
+  HeldOutResult r = prepare(crops, object_dir, "one held-out instance per category");
+  TrainOptions o = options;
+  o.validation = true;
+  const Split split = makeSplit(crops, {}, o);
+  if (split.held_out_instances.empty()) throw DatasetError(object_dir + ": no category has two instances");
+  return evaluateFolds(crops, {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
+                       options, progress, r);
+}
+
+}  // namespace slamaware

@@ -1,0 +1,163 @@
+#pragma once
+// Training the recognizer's model from object sets (labelled crops) and, for the background
+// class, scene sequences with ground-truth boxes (boxes.csv).
+//
+//  1. Split: one instance of each category with >= 2 instances is held out (categories with a
+//     single instance hold out every 5th view), and every `holdout_frame_every`-th scene frame.
+//  2. Vocabulary: raw features of the training crops and scene frames, a shuffled subset of
+//     `vocabulary_descriptors` of them -> PCA (D dims) -> VLFeat k-means (K codewords).
+//  3. Examples: every crop encoded as one box covering it, and `context_copies` times more pasted
+//     at a random place of a random scene frame (a box in a frame sees its surroundings, a crop
+//     alone only its mirrored border); per scene frame `negatives_per_frame` random boxes that
+//     overlap no ground-truth box (IoU < 0.1).
+//  4. One-vs-all logistic regression (SGD, L2) over the categories + "background", then
+//     `mining_rounds` rounds of hard-negative mining: `mining_candidates_per_frame` new random
+//     background boxes per training frame are scored and those the current model takes for an
+//     object (p(background) < 0.5) are added, up to `mining_max_per_round`, and the
+//     classifiers are retrained.
+//  5. Calibration (classifier.h) on the held-out crops and frames, validation summary on them;
+//     then the classifiers are retrained on all data with the same options (the calibration and
+//     the summary stay those of the held-out data).
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "procs/recognizer/classifier.h"
+#include "procs/recognizer/frame_encoder.h"
+#include "procs/recognizer/model.h"
+
+namespace slamaware {
+
+struct TrainOptions {
+  EncodingParams encoding;
+  int seed = 7;                         ///< every random choice of the trainer
+  int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
+  int kmeans_iterations = 100;
+  int max_views_per_instance = 0;  ///< 0 = every view
+  int context_copies = 1;          ///< crops also encoded pasted into scene frames
+  bool mirror_crops = true;        ///< crops also encoded mirrored left-right
+  SgdOptions sgd;
+  int negatives_per_frame = 10;
+  int mining_rounds = 2;
+  int mining_candidates_per_frame = 100;
+  int mining_max_per_round = 1000;
+  double negative_max_iou = 0.1;  ///< background boxes overlap every object less than this
+  int negative_min_size_px = 24;
+  double negative_max_size = 0.6;  ///< of the image width / height
+  bool validation = true;          ///< hold out data for calibration and the summary
+  int holdout_frame_every = 5;
+
+  template <class V>
+  void visit(V& v) {
+    v.section("encoding", encoding);
+    v("seed", seed, "seed of every random choice of the trainer");
+    v("vocabulary_descriptors", vocabulary_descriptors, "features sampled for PCA and k-means");
+    v("kmeans_iterations", kmeans_iterations, "maximum k-means iterations");
+    v("max_views_per_instance", max_views_per_instance, "views used per object instance (0 = all)");
+    v("context_copies", context_copies, "copies of each crop pasted into random scene frames");
+    v("mirror_crops", mirror_crops, "training crops also encoded mirrored left-right");
+    v.section("sgd", sgd);
+    v("negatives_per_frame", negatives_per_frame, "initial background boxes per scene frame");
+    v("mining_rounds", mining_rounds, "rounds of hard-negative mining");
+    v("mining_candidates_per_frame", mining_candidates_per_frame,
+      "background boxes scored per frame and round");
+    v("mining_max_per_round", mining_max_per_round, "hard negatives added per round at most");
+    v("negative_max_iou", negative_max_iou,
+      "background boxes overlap every object box less than this IoU");
+    v("negative_min_size_px", negative_min_size_px, "px, smallest background box side");
+    v("negative_max_size", negative_max_size, "largest background box side, fraction of the image");
+    v("validation", validation,
+      "hold out instances and frames for calibration and the validation summary");
+    v("holdout_frame_every", holdout_frame_every, "every n-th scene frame is held out");
+  }
+};
+
+/// One labelled crop.
+struct LabeledCrop {
+  std::string path;
+  std::string category;
+  std::string instance;
+};
+
+/// A scene frame with its ground-truth object boxes (anything else in it is background).
+struct SceneFrame {
+  std::string path;
+  std::string sequence;
+  int index = 0;
+  std::vector<cv::Rect2d> objects;
+};
+
+/// The crops of the object sets (categories merged by name across sets), at most
+/// max_views_per_instance per instance (evenly spaced). Throws DatasetError.
+std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
+                                      int max_views_per_instance);
+/// The frames of sequence folders with boxes.csv. Throws DatasetError (also for a folder without
+/// boxes.csv: its background is unknown).
+std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs);
+
+/// `count` random boxes of an image that overlap each of `objects` by IoU < max_iou.
+std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
+                                              const std::vector<cv::Rect2d>& objects, int count,
+                                              const TrainOptions& options, uint32_t seed);
+
+/// Fits PCA and vocabulary on a shuffled subset of the raw features of the crops and frames.
+void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneFrame>& frames,
+                 const TrainOptions& options, Pca* pca, Vocabulary* vocabulary,
+                 const std::function<void(int64_t, int64_t)>& progress = {});
+
+/// Encodes each crop as one box covering it into an ExampleSet (label = index of its category in
+/// `classes`, group = index of its instance in `instances`); with `mirror`, each crop is followed
+/// by its left-right mirror image.
+ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
+                       const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror = false,
+                       const std::function<void(int64_t, int64_t)>& progress = {});
+
+struct ValidationSummary {
+  bool available = false;
+  std::vector<std::string> held_out_instances;
+  int64_t crops = 0;               ///< held-out crops
+  double object_accuracy = 0;      ///< % of held-out crops whose best object class is right
+  double accuracy = 0;             ///< % of held-out crops whose best class overall is right
+  int64_t negatives = 0;           ///< held-out background boxes
+  double background_accuracy = 0;  ///< % of them classified background
+  double nll = 0;                  ///< mean negative log-likelihood after calibration
+  std::vector<std::vector<int64_t>> confusion;  ///< [true class][predicted class]
+};
+
+struct TrainReport {
+  std::vector<std::string> classes;
+  int64_t train_crops = 0, train_negatives = 0;
+  std::vector<int64_t> mined;  ///< hard negatives added per round
+  ValidationSummary validation;
+  std::string toJson() const;
+  std::string toText() const;
+};
+
+/// Category accuracy of an object set on instances unseen in training. Each fold holds out a set of
+/// instances: PCA, vocabulary and classifiers are trained on the other instances only (no
+/// background class) and every crop of the held-out instances is classified by the best category.
+struct HeldOutResult {
+  std::string protocol;  ///< "leave-one-instance-out" or "one held-out instance per category"
+  std::vector<std::string> classes;
+  std::vector<std::string> instances;
+  std::vector<std::vector<int64_t>> confusion;      ///< [true category][predicted category]
+  std::map<std::string, double> instance_accuracy;  ///< % per held-out instance
+  int64_t crops = 0, correct = 0;
+  double accuracy() const { return crops ? 100.0 * correct / crops : 0; }
+};
+using FoldProgress = std::function<void(const std::string& stage, int64_t done, int64_t total)>;
+/// Every instance in turn (as many folds as instances).
+HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
+                                  const FoldProgress& progress = {});
+/// One fold: one instance of each category with two or more (chosen with options.seed).
+HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
+                                        const FoldProgress& progress = {});
+
+/// Trains a model (see the top of this file). Progress bars go to stderr.
+RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
+                           const std::vector<std::string>& sequence_dirs,
+                           const TrainOptions& options, TrainReport* report);
+
+}  // namespace slamaware

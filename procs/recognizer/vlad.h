@@ -1,0 +1,117 @@
+#pragma once
+// VLAD with a 1x1 + 2x2 + 4x4 spatial pyramid, and the two box encoders that compute it.
+//
+// Membership. A descriptor belongs to a box when its pooling cell does (dense_features.h): boxes
+// are snapped to the pooling grid (snapBox), and so are their pyramid cells: the 4x4 boundaries
+// are u0 + floor(i * width / 4), i = 0..4, the 2x2 ones are the even ones of those, so the
+// levels nest exactly. A pyramid cell narrower than one pooling cell is empty (a zero block).
+//
+// Layout of an encoded box (21 * K * D floats): cell 0 = the whole box, cells 1..4 = the 2x2
+// level (row-major), cells 5..20 = the 4x4 level (row-major); each cell holds K blocks of D: the
+// sum of (descriptor - codeword) over the cell's descriptors assigned to that codeword. Then the
+// signed square root of every element, then L2 normalisation of the whole vector (finishVlad).
+//
+// Both encoders produce the same vector up to float rounding. DirectEncoder sums the descriptors
+// inside each 4x4 cell (cost grows with the box's area); FlairEncoder reads the 4x4 cells from
+// per-codeword integral tables at the 25 distinct corners (cost independent of the area, plus one
+// table build per frame whose cost grows with the area the boxes span).
+#include <cstddef>
+#include <vector>
+
+#include "procs/recognizer/dense_features.h"
+#include "procs/recognizer/pca_vocabulary.h"
+
+namespace slamaware {
+
+/// A box on the pooling grid with the boundaries of its 4x4 pyramid cells (cell (i, j) =
+/// [u[i], u[i+1]) x [v[j], v[j+1])).
+struct PyramidBox {
+  int u[5] = {0, 0, 0, 0, 0};
+  int v[5] = {0, 0, 0, 0, 0};
+  CellRect cells() const { return CellRect{u[0], v[0], u[4], v[4]}; }
+};
+
+/// Snaps the pixel box (x, y = top-left corner, w, h) of an image of width x height to the
+/// pooling grid: clipped to the image, each edge moved to the nearest cell boundary; a box
+/// narrower than one cell keeps the cell under its centre. Returns false (and leaves *out alone)
+/// for a box that is not finite or has no area inside the image.
+bool snapBox(double x, double y, double w, double h, int width, int height, int pool_cell_px,
+             PyramidBox* out);
+/// A pyramid box from cell boundaries [u0, u1) x [v0, v1) (u1 > u0, v1 > v0).
+PyramidBox pyramidFromCells(const CellRect& cells);
+
+/// The frame's descriptors projected by PCA and assigned to codewords: what both box encoders
+/// read. Rows are those of the FeatureGrid they come from.
+struct FrameCodes {
+  CellRect region;  ///< pooling cells covered
+  int nx = 0, ny = 0, scales = 0;
+  int steps_per_cell = 0;      ///< grid points per pooling cell along x and y
+  ReusableMatrix projected;    ///< N x D
+  std::vector<int16_t> words;  ///< N codeword indices
+  int64_t rowOf(int i, int j, int t) const { return (int64_t{t} * ny + j) * nx + i; }
+};
+
+/// Projects the raw features with `pca` and assigns them to `vocabulary` (reuses out's memory).
+void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
+                  const Vocabulary& vocabulary, FrameCodes* out);
+
+/// Normalises the 21 * K * D raw residual sums in place: blocks whose count is zero are set to
+/// exactly zero (FLAIR's table differences leave rounding noise there), then each element
+/// becomes sign(v) sqrt(|v|) (alpha = 0.5), then the vector is scaled to unit L2 norm (left at
+/// zero when it is all zero). `counts` holds 21 * K descriptor counts.
+void finishVlad(float* v, const float* counts, int K, int D);
+
+/// Sums the 4x4 cells (5..20) into the 2x2 cells (1..4) and the whole box (0), for sums (K * D
+/// per cell) and counts (K per cell).
+void sumPyramidLevels(float* v, float* counts, int K, int D);
+
+/// Encodes boxes by summing the residuals of the descriptors inside each 4x4 pyramid cell, then
+/// the 4x4 cells into the 2x2 cells and the whole box. Shares the frame's projections and
+/// codeword assignments with FLAIR (a strong baseline, not a per-box recomputation); its cost
+/// grows with the box's area.
+class DirectEncoder {
+ public:
+  DirectEncoder(const FrameCodes& codes, const Vocabulary& vocabulary)
+      : codes_(codes), vocabulary_(vocabulary) {}
+  /// Writes the normalised 21 * K * D vector of `box` (inside codes.region) to out.
+  void encode(const PyramidBox& box, float* out);
+
+ private:
+  const FrameCodes& codes_;
+  const Vocabulary& vocabulary_;
+  std::vector<float> counts_;
+};
+
+/// FLAIR (Van de Sande et al., CVPR 2014): per-codeword integral tables of residual sums and
+/// counts over the pooling grid, so that any box and its 21 pyramid cells cost 25 corner lookups
+/// whatever its area. Tables are float, one entry of K * (D + 1) floats per cell corner, over the
+/// region the boxes span only; the residual (descriptor - codeword) is integrated rather than the
+/// descriptor, which keeps the table values small and their rounding error low.
+class FlairEncoder {
+ public:
+  /// Builds the tables over `region` (within codes.region). Reuses its memory across frames.
+  void build(const FrameCodes& codes, const Vocabulary& vocabulary, const CellRect& region);
+  /// Writes the normalised vector of `box` (inside the built region) to out.
+  void encode(const PyramidBox& box, float* out);
+  const CellRect& region() const { return region_; }
+  /// Bytes of the tables for the region built last.
+  size_t tableBytes() const { return tableBytesFor(region_, K_, D_); }
+  /// Bytes the tables need for a region.
+  static size_t tableBytesFor(const CellRect& region, int K, int D);
+
+ private:
+  const float* sumsAt(int a, int b) const {
+    return sums_.data() + (int64_t{b} * (region_.width() + 1) + a) * K_ * D_;
+  }
+  const float* countsAt(int a, int b) const {
+    return counts_.data() + (int64_t{b} * (region_.width() + 1) + a) * K_;
+  }
+  CellRect region_;
+  int K_ = 0, D_ = 0;
+  std::vector<float> sums_;    ///< corners x K x D
+  std::vector<float> counts_;  ///< corners x K
+  std::vector<float> box_counts_;
+  std::vector<float> row_sums_, row_counts_;
+};
+
+}  // namespace slamaware

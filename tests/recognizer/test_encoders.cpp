@@ -1,0 +1,152 @@
+// FLAIR and the direct encoder give the same VLAD vectors (to float rounding) on random boxes of
+// a real-sized frame, including boxes touching the image border and boxes smaller than a pyramid
+// cell; a box's vector does not depend on the other boxes of the frame; FLAIR's tables cover only
+// the boxes' span.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "procs/recognizer/frame_encoder.h"
+#include "tests/recognizer/synthetic_data.h"
+
+using namespace slamaware;
+
+namespace {
+
+struct Fixture {
+  EncodingParams params;
+  Pca pca;
+  Vocabulary vocabulary;
+  cv::Mat frame = test::texturedFrame(11);
+  Fixture() {
+    // PCA and vocabulary from the frame's own features (any fixed pair will do for agreement).
+    DenseFeatureExtractor ex(params.features);
+    ex.setImage(frame);
+    FeatureGrid g;
+    ex.extract(ex.imageCells(), &g);
+    MatrixRM sample(8000, kFeatureDims);
+    std::mt19937 rng(2);
+    for (int64_t r = 0; r < sample.rows(); ++r) {
+      const float* f =
+          g.features.row(static_cast<int64_t>(rng() % static_cast<uint32_t>(g.features.rows())));
+      std::copy(f, f + kFeatureDims, sample.row(r).data());
+    }
+    pca = Pca::fit(sample, params.pca_dims);
+    MatrixRM y(sample.rows(), params.pca_dims);
+    pca.project(sample, y);
+    vocabulary = Vocabulary::train(y, params.vocabulary_size, 3, 20);
+  }
+};
+
+Fixture& fixture() {
+  static Fixture f;
+  return f;
+}
+
+struct Diff {
+  double max_abs = 0, min_cos = 1;
+};
+
+Diff compare(const ReusableMatrix& a, const ReusableMatrix& b) {
+  Diff d;
+  for (int64_t r = 0; r < a.rows(); ++r) {
+    double dot = 0, na = 0, nb = 0;
+    for (int64_t c = 0; c < a.cols(); ++c) {
+      const double x = a.row(r)[c], y = b.row(r)[c];
+      d.max_abs = std::max(d.max_abs, std::fabs(x - y));
+      dot += x * y;
+      na += x * x;
+      nb += y * y;
+    }
+    d.min_cos = std::min(d.min_cos, dot / std::sqrt(na * nb));
+  }
+  return d;
+}
+
+}  // namespace
+
+TEST(Encoders, FlairAndDirectAgreeOnRandomBorderAndTinyBoxes) {
+  Fixture& fx = fixture();
+  FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
+  const int W = fx.frame.cols, H = fx.frame.rows;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<PyramidBox> boxes;
+  auto add = [&](double x, double y, double w, double h) {
+    PyramidBox b;
+    ASSERT_TRUE(enc.snap(x, y, w, h, W, H, &b)) << x << " " << y << " " << w << " " << h;
+    boxes.push_back(b);
+  };
+  for (int i = 0; i < 40; ++i) {  // random sizes from 20 px to the whole image
+    const double w = 20 + u(rng) * (W - 20), h = 20 + u(rng) * (H - 20);
+    add(u(rng) * (W - w), u(rng) * (H - h), w, h);
+  }
+  add(0, 0, W, H);              // the whole image
+  add(0, 0, 57, 33);            // top-left corner
+  add(W - 90, H - 41, 90, 41);  // bottom-right corner
+  add(W - 20, 100, 20, 300);    // right edge, thin
+  add(-30, -30, 100, 100);      // partly outside
+  add(300, 200, 20, 20);        // 20 px: smaller than 4 pooling cells
+  add(301, 201, 9, 12);         // smaller than one pooling cell
+  add(100, 100, 24, 70);        // narrow: some 4x4 columns empty
+  ReusableMatrix direct, flair;
+  FrameEncoder::Stats sd, sf;
+  enc.encode(fx.frame, boxes, EncoderKind::kDirect, &direct, &sd);
+  enc.encode(fx.frame, boxes, EncoderKind::kFlair, &flair, &sf);
+  EXPECT_EQ(sd.used, EncoderKind::kDirect);
+  EXPECT_EQ(sf.used, EncoderKind::kFlair);
+  ASSERT_EQ(direct.rows(), static_cast<int64_t>(boxes.size()));
+  ASSERT_EQ(direct.cols(), fx.params.vladDims());
+  const Diff d = compare(direct, flair);
+  // Elements of a unit vector of 107,520 dims are ~0.003 to 0.05; float rounding stays far below.
+  EXPECT_LT(d.max_abs, 2e-4);
+  EXPECT_GT(d.min_cos, 0.99999);
+  // Every vector is a unit vector.
+  for (int64_t r = 0; r < direct.rows(); ++r) EXPECT_NEAR(direct.map().row(r).norm(), 1.0, 1e-4);
+}
+
+TEST(Encoders, BoxVectorDoesNotDependOnTheOtherBoxes) {
+  Fixture& fx = fixture();
+  FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
+  PyramidBox small, big;
+  ASSERT_TRUE(enc.snap(200, 150, 80, 60, fx.frame.cols, fx.frame.rows, &small));
+  ASSERT_TRUE(enc.snap(0, 0, 640, 480, fx.frame.cols, fx.frame.rows, &big));
+  ReusableMatrix alone, together;
+  FrameEncoder::Stats st;
+  enc.encode(fx.frame, {small}, EncoderKind::kDirect, &alone, &st);
+  EXPECT_EQ(st.region.area(), small.cells().area());  // features only where the box is
+  enc.encode(fx.frame, {big, small}, EncoderKind::kDirect, &together, &st);
+  EXPECT_EQ(st.region.area(), 80 * 60);
+  double max_abs = 0;
+  for (int64_t c = 0; c < alone.cols(); ++c)
+    max_abs =
+        std::max(max_abs, static_cast<double>(std::fabs(alone.row(0)[c] - together.row(1)[c])));
+  EXPECT_LT(max_abs, 1e-4);
+}
+
+TEST(Encoders, FlairTablesCoverTheBoxesSpanAndAreReported) {
+  Fixture& fx = fixture();
+  FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
+  PyramidBox a, b;
+  ASSERT_TRUE(enc.snap(80, 80, 64, 64, 640, 480, &a));    // cells 10..18
+  ASSERT_TRUE(enc.snap(160, 120, 80, 40, 640, 480, &b));  // cells 20..30 x 15..20
+  ReusableMatrix out;
+  FrameEncoder::Stats st;
+  enc.encode(fx.frame, {a, b}, EncoderKind::kFlair, &out, &st);
+  EXPECT_EQ(st.region, (CellRect{10, 10, 30, 20}));
+  // (20 + 1) x (10 + 1) corners x 64 codewords x (80 sums + 1 count) floats.
+  EXPECT_EQ(st.table_bytes, size_t{21} * 11 * 64 * 81 * 4);
+  EXPECT_EQ(FlairEncoder::tableBytesFor(CellRect{0, 0, 80, 60}, 64, 80),
+            size_t{81} * 61 * 64 * 81 * 4);
+}
+
+TEST(Encoders, CostModelPicksDirectForFewSmallBoxesAndFlairForMany) {
+  Fixture& fx = fixture();
+  FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
+  PyramidBox small, large;
+  ASSERT_TRUE(enc.snap(300, 200, 40, 40, 640, 480, &small));
+  ASSERT_TRUE(enc.snap(0, 0, 600, 440, 640, 480, &large));
+  EXPECT_EQ(enc.choose({small}), EncoderKind::kDirect);
+  EXPECT_EQ(enc.choose(std::vector<PyramidBox>(500, large)), EncoderKind::kFlair);
+}

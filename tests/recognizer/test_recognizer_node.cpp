@@ -1,0 +1,211 @@
+// slamaware-recognizer as a process, in a private network namespace: it answers every PROPOSALS
+// message in lockstep, keeps running on a proposal for a frame it never saw, boxes outside the
+// image, zero-size and non-finite boxes, a corrupt JPEG, undecodable messages, a model lacking
+// classes the config names, and a missing model; RECOGNIZER_STATUS counts each of them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+
+#include "common/bus/bus.h"
+#include "common/bus/image_msg.h"
+#include "procs/recognizer/model.h"
+#include "procs/recognizer/trainer.h"
+#include "slamaware/detections_t.hpp"
+#include "slamaware/image_t.hpp"
+#include "slamaware/proposals_t.hpp"
+#include "slamaware/status_t.hpp"
+#include "tests/recognizer/synthetic_data.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+using namespace std::chrono_literals;
+
+namespace {
+
+std::string writeConfig(const std::string& dir, const std::string& model,
+                        const std::string& expected) {
+  const std::string path = dir + "/recognizer.yaml";
+  std::ofstream f(path);
+  f << "recognizer:\n  model: " << model << "\n  expected_classes: " << expected
+    << "\n  pending_timeout_s: 0.5\n  model_retry_s: 0.5\n";
+  return path;
+}
+
+proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxes) {
+  proposals_t p;
+  p.utime = 1000000 + seq * 33333;
+  p.seq = seq;
+  p.map_id = 1;
+  p.num_boxes = static_cast<int32_t>(boxes.size());
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    box_t b;
+    b.x = boxes[i][0];
+    b.y = boxes[i][1];
+    b.w = boxes[i][2];
+    b.h = boxes[i][3];
+    p.boxes.push_back(b);
+    p.candidate_ids.push_back(100 + static_cast<int32_t>(i));
+    p.median_depth.push_back(1.f);
+  }
+  return p;
+}
+
+int64_t counter(const status_t& s, const std::string& name) {
+  for (int i = 0; i < s.num_counters; ++i)
+    if (s.counter_names[static_cast<size_t>(i)] == name)
+      return s.counter_values[static_cast<size_t>(i)];
+  return 0;
+}
+
+struct Listener {
+  Bus bus{test::testUrl()};
+  std::map<int32_t, detections_t> detections;
+  int answers = 0;
+  status_t last_status{};
+  bool have_status = false;
+  Listener() {
+    bus.subscribe<detections_t>("DETECTIONS", [this](const detections_t& d) {
+      detections[d.seq] = d;
+      ++answers;
+    });
+    bus.subscribe<status_t>("RECOGNIZER_STATUS", [this](const status_t& s) {
+      last_status = s;
+      have_status = true;
+    });
+  }
+  bool pump(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+    return test::waitUntil(
+        [&] {
+          bus.handle(10);
+          return done();
+        },
+        timeout);
+  }
+};
+
+}  // namespace
+
+TEST(RecognizerNode, SurvivesBadInputAndCountsIt) {
+  const std::string dir = test::tempDir("recognizer_node");
+  // A small model of "bar" and "disc" (no background class: the node appends it).
+  TrainOptions o;
+  o.vocabulary_descriptors = 5000;
+  o.kmeans_iterations = 10;
+  o.sgd.epochs = 5;
+  o.validation = false;
+  const std::string objects = test::makeSyntheticObjectSet(dir + "/objects", 2, 6);
+  const RecognizerModel model = trainModel({objects}, {}, o, nullptr);
+  saveModel(model, dir + "/model.bin");
+  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar, mug]");
+
+  Listener l;
+  test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url",
+                           test::testUrl(), "--lockstep"},
+                          dir + "/node.log");
+  ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
+
+  cv::Mat frame = test::texturedFrame(4);
+  test::syntheticObjectView("disc", 1, 3, 96).copyTo(frame(cv::Rect(200, 150, 96, 96)));
+  image_t good0 = makeImageMessage(frame, 1000000, 0, image_t::PIXEL_FORMAT_JPEG);
+  image_t corrupt1 = good0;
+  corrupt1.seq = 1;
+  corrupt1.utime += 33333;
+  for (size_t i = corrupt1.data.size() / 4; i < corrupt1.data.size(); ++i)
+    corrupt1.data[i] = 0;  // JPEG body wiped
+  image_t good2 = makeImageMessage(frame, 1066666, 2, image_t::PIXEL_FORMAT_JPEG);
+  image_t good4 =
+      makeImageMessage(frame, 1133332, 4, image_t::PIXEL_FORMAT_JPEG);  // seq 3 never sent
+
+  l.bus.publish("CAMERA", good0);
+  l.bus.publish("CAMERA", corrupt1);
+  l.bus.publish("CAMERA", good2);
+  l.bus.publish("CAMERA", good4);
+  l.bus.handle(50);
+  const float nan = std::nanf("");
+  // seq 0: one good box, one partly outside (clipped), and four unusable ones.
+  l.bus.publish("PROPOSALS", proposals(0, {{200, 150, 96, 96},
+                                           {-20, -20, 60, 60},
+                                           {700, 10, 50, 50},
+                                           {10, 10, 0, 20},
+                                           {10, 10, 20, -5},
+                                           {nan, 10, 20, 20}}));
+  l.bus.publish("PROPOSALS", proposals(1, {{200, 150, 96, 96}}));  // its JPEG is corrupt
+  l.bus.publish("PROPOSALS", proposals(2, {}));                    // no boxes
+  l.bus.publish("PROPOSALS", proposals(3, {{200, 150, 96, 96}}));  // frame 3 was never sent
+  l.bus.publish("PROPOSALS", proposals(9, {{200, 150, 96, 96}}));  // frame 9 never comes (time-out)
+  const std::vector<uint8_t> junk(100, 0xAB);
+  l.bus.publishRaw("PROPOSALS", junk.data(), junk.size());  // not a proposals_t at all
+  l.bus.publish("PROPOSALS", proposals(4, {{0, 0, 640, 480}}));
+
+  ASSERT_TRUE(l.pump([&] { return l.answers >= 6; }, 20s)) << l.answers << " answers\n"
+                                                           << node.log();
+  for (int32_t seq : {0, 1, 2, 3, 4, 9})
+    ASSERT_TRUE(l.detections.count(seq)) << "no DETECTIONS for seq " << seq;
+  EXPECT_EQ(l.answers, 6);  // exactly one per PROPOSALS message
+
+  const detections_t& d0 = l.detections[0];
+  EXPECT_EQ(d0.class_names, (std::vector<std::string>{"bar", "disc", "background"}));
+  ASSERT_EQ(d0.num_boxes, 2);
+  EXPECT_EQ(d0.candidate_ids, (std::vector<int32_t>{100, 101}));
+  EXPECT_FLOAT_EQ(d0.boxes[1].x, 0.f);  // clipped to the image
+  EXPECT_FLOAT_EQ(d0.boxes[1].w, 40.f);
+  EXPECT_EQ(d0.encode_ms, 0.f);  // lockstep: no timing in the output
+  for (const auto& row : d0.log_prob) {
+    double sum = 0;
+    for (float lp : row) sum += std::exp(static_cast<double>(lp));
+    EXPECT_NEAR(sum, 1.0, 1e-4);
+  }
+  EXPECT_EQ(l.detections[1].num_boxes, 0);
+  EXPECT_EQ(l.detections[2].num_boxes, 0);
+  EXPECT_EQ(l.detections[3].num_boxes, 0);
+  EXPECT_EQ(l.detections[9].num_boxes, 0);
+  EXPECT_EQ(l.detections[4].num_boxes, 1);
+
+  // The heartbeat counts every reject (it is published once a second).
+  ASSERT_TRUE(l.pump(
+      [&] {
+        return l.have_status && counter(l.last_status, "boxes_rejected") >= 4 &&
+               counter(l.last_status, "proposals_without_frame") >= 2;
+      },
+      5s))
+      << node.log();
+  const status_t& s = l.last_status;
+  EXPECT_EQ(counter(s, "boxes_rejected"), 4);
+  EXPECT_EQ(counter(s, "boxes_rejected.outside_image"), 1);
+  EXPECT_EQ(counter(s, "boxes_rejected.zero_size"), 2);
+  EXPECT_EQ(counter(s, "boxes_rejected.not_finite"), 1);
+  EXPECT_EQ(counter(s, "boxes_clipped"), 1);
+  EXPECT_EQ(counter(s, "proposals_without_frame"), 2);
+  EXPECT_EQ(counter(s, "frames_corrupt"), 1);
+  EXPECT_EQ(counter(s, "classes_missing"), 1);
+  EXPECT_EQ(counter(s, "rejected.CAMERA"), 1);
+  EXPECT_EQ(counter(s, "rejected.PROPOSALS"), 3);  // 2 without frame + 1 undecodable
+  EXPECT_EQ(s.frames_processed, 3);                // seq 0, 2 and 4 had a decodable frame
+  EXPECT_EQ(s.state, status_t::STATE_DEGRADED);    // the model lacks "mug"
+  EXPECT_NE(s.message.find("mug"), std::string::npos) << s.message;
+  EXPECT_TRUE(node.running()) << node.log();
+  EXPECT_EQ(node.stop(), 0) << node.log();
+}
+
+TEST(RecognizerNode, WithoutAModelItAnswersEmptyAndReportsIt) {
+  const std::string dir = test::tempDir("recognizer_node_nomodel");
+  const std::string config = writeConfig(dir, dir + "/absent.model", "[]");
+  Listener l;
+  test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url",
+                           test::testUrl(), "--lockstep"},
+                          dir + "/node.log");
+  ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
+  l.bus.publish("CAMERA", makeImageMessage(test::texturedFrame(1, 320, 240), 5, 0,
+                                           image_t::PIXEL_FORMAT_JPEG));
+  l.bus.handle(50);
+  l.bus.publish("PROPOSALS", proposals(0, {{10, 10, 50, 50}}));
+  ASSERT_TRUE(l.pump([&] { return l.answers >= 1; }, 10s)) << node.log();
+  EXPECT_EQ(l.detections[0].num_boxes, 0);
+  ASSERT_TRUE(l.pump([&] { return counter(l.last_status, "model_load_failures") >= 1; }, 5s));
+  EXPECT_EQ(l.last_status.state, status_t::STATE_DEGRADED);
+  EXPECT_NE(l.last_status.message.find("absent.model"), std::string::npos) << l.last_status.message;
+  EXPECT_TRUE(node.running());
+  EXPECT_EQ(node.stop(), 0) << node.log();
+}

@@ -1,0 +1,95 @@
+// The CAMERA / PROPOSALS join on seq: bounded buffers, proposals for frames never seen, waiting,
+// time-outs and a camera stream that restarts; and config/recognizer.yaml equals the defaults.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "common/config.h"
+#include "procs/recognizer/recognizer.h"
+#include "procs/recognizer/seq_joiner.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+
+using Joiner = SeqJoiner<std::string, int>;
+
+TEST(SeqJoiner, JoinsProposalsWithTheFrameOfTheSameSeq) {
+  Joiner j(4, 4, 1.0);
+  j.addFrame(0, "f0");
+  j.addFrame(1, "f1");
+  j.addProposals(1, 10, 0.0);
+  j.addProposals(0, 20, 0.0);
+  ASSERT_EQ(j.ready().size(), 2u);
+  EXPECT_EQ(*j.ready()[0].frame, "f1");
+  EXPECT_EQ(j.ready()[0].proposals, 10);
+  EXPECT_EQ(*j.ready()[1].frame, "f0");
+}
+
+TEST(SeqJoiner, ProposalsWaitForTheirFrame) {
+  Joiner j(4, 4, 1.0);
+  j.addProposals(3, 30, 0.0);
+  EXPECT_TRUE(j.ready().empty());
+  EXPECT_EQ(j.pending(), 1u);
+  j.addFrame(3, "f3");
+  ASSERT_EQ(j.ready().size(), 1u);
+  EXPECT_EQ(*j.ready()[0].frame, "f3");
+  EXPECT_EQ(j.pending(), 0u);
+}
+
+TEST(SeqJoiner, ProposalsForAFrameNeverSeenComeOutWithoutFrame) {
+  Joiner j(2, 4, 1.0);
+  j.addFrame(5, "f5");
+  j.addProposals(2, 1, 0.0);  // older than every frame seen: the frame was lost
+  ASSERT_EQ(j.ready().size(), 1u);
+  EXPECT_FALSE(j.ready()[0].frame);
+  EXPECT_EQ(j.ready()[0].outcome, Joiner::Outcome::kUnknownFrame);
+  j.ready().clear();
+  j.addProposals(7, 2, 0.0);  // waits ...
+  j.addFrame(8, "f8");        // ... but the camera skipped 7
+  ASSERT_EQ(j.ready().size(), 1u);
+  EXPECT_EQ(j.ready()[0].seq, 7);
+  EXPECT_EQ(j.ready()[0].outcome, Joiner::Outcome::kUnknownFrame);
+}
+
+TEST(SeqJoiner, BuffersAreBounded) {
+  Joiner j(3, 2, 10.0);
+  for (int s = 0; s < 10; ++s) j.addFrame(s, "f" + std::to_string(s));
+  EXPECT_EQ(j.frames(), 3u);
+  j.addProposals(6, 0, 0.0);  // evicted
+  EXPECT_EQ(j.ready().back().outcome, Joiner::Outcome::kUnknownFrame);
+  j.addProposals(20, 0, 0.0);
+  j.addProposals(21, 0, 0.0);
+  j.addProposals(22, 0, 0.0);  // the oldest waiting one is given up
+  EXPECT_EQ(j.pending(), 2u);
+  EXPECT_EQ(j.ready().back().seq, 20);
+  EXPECT_EQ(j.ready().back().outcome, Joiner::Outcome::kOverflow);
+}
+
+TEST(SeqJoiner, WaitingProposalsTimeOut) {
+  Joiner j(3, 5, 2.0);
+  j.addProposals(1, 0, 10.0);
+  j.expire(11.0);
+  EXPECT_EQ(j.pending(), 1u);
+  j.expire(12.5);
+  EXPECT_EQ(j.pending(), 0u);
+  ASSERT_EQ(j.ready().size(), 1u);
+  EXPECT_EQ(j.ready()[0].outcome, Joiner::Outcome::kTimedOut);
+}
+
+TEST(SeqJoiner, CameraRestartClearsOldFrames) {
+  Joiner j(5, 5, 1.0);
+  j.addFrame(40, "old40");
+  j.addFrame(41, "old41");
+  j.addFrame(0, "new0");  // --loop or a restarted camera
+  EXPECT_EQ(j.frames(), 1u);
+  j.addProposals(0, 0, 0.0);
+  ASSERT_EQ(j.ready().size(), 1u);
+  EXPECT_EQ(*j.ready()[0].frame, "new0");
+}
+
+TEST(ShippedConfig, RecognizerYamlEqualsDefaults) {
+  RecognizerOptions file = loadConfig<RecognizerOptions>(test::sourcePath("config/recognizer.yaml"),
+                                                         "recognizer", false);
+  RecognizerOptions defaults;
+  EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+}

@@ -1,0 +1,214 @@
+// Training separates two categories (synthetic ones always; a subset of the real UW RGB-D crops
+// when ../shared/data is there); a saved model reloads to identical predictions; a truncated,
+// bit-flipped or otherwise wrong model file is refused with a message that names it.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/dataset.h"
+#include "common/image_codec.h"
+#include "procs/recognizer/recognizer.h"
+#include "procs/recognizer/trainer.h"
+#include "tests/recognizer/synthetic_data.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Options small enough for a test (the encoding itself keeps the paper's parameters).
+TrainOptions testOptions() {
+  TrainOptions o;
+  o.vocabulary_descriptors = 20000;
+  o.kmeans_iterations = 25;
+  o.sgd.epochs = 12;
+  o.negatives_per_frame = 8;
+  o.mining_candidates_per_frame = 30;
+  o.mining_max_per_round = 60;
+  return o;
+}
+
+struct Trained {
+  std::string objects, scenes, model_path;
+  TrainReport report;
+  RecognizerModel model;
+};
+
+// One synthetic model shared by the tests of this file (training is the slow part).
+const Trained& synthetic() {
+  static Trained t = [] {
+    Trained t;
+    const std::string dir = test::tempDir("recognizer_training");
+    t.objects = test::makeSyntheticObjectSet(dir + "/objects", 3, 14);
+    t.scenes = test::makeSyntheticScenes(dir + "/scenes", 6);
+    t.model = trainModel({t.objects}, {t.scenes}, testOptions(), &t.report);
+    t.model_path = dir + "/model.bin";
+    saveModel(t.model, t.model_path);
+    return t;
+  }();
+  return t;
+}
+
+std::vector<char> readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void writeBytes(const std::string& path, const std::vector<char>& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string loadError(const std::string& path) {
+  try {
+    loadModel(path);
+  } catch (const ModelError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Training, SeparatesTwoSyntheticCategoriesOnHeldOutInstances) {
+  const Trained& t = synthetic();
+  EXPECT_EQ(t.model.classifier.classes, (std::vector<std::string>{"bar", "disc", "background"}));
+  const ValidationSummary& v = t.report.validation;
+  ASSERT_TRUE(v.available);
+  EXPECT_EQ(v.held_out_instances.size(), 2u);  // one instance of each category
+  EXPECT_EQ(v.crops, 2 * 28);  // 28 held-out crops, each also pasted into a scene frame
+  EXPECT_GE(v.object_accuracy, 90.0) << t.report.toText();
+  EXPECT_GE(v.background_accuracy, 90.0) << t.report.toText();
+  EXPECT_GT(t.model.classifier.temperature, 0.f);
+  EXPECT_EQ(t.report.mined.size() <= 2u, true);
+  EXPECT_GT(t.report.train_negatives, 0);
+}
+
+TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
+  const Trained& t = synthetic();
+  auto model = std::make_shared<const RecognizerModel>(t.model);
+  RecognizerOptions opts;
+  Recognizer rec(model, opts);
+  cv::Mat frame = test::texturedFrame(900, 640, 480);
+  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
+  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  const FrameDetections d =
+      rec.recognize(frame, {{100, 100, 72, 72, 1}, {400, 250, 72, 72, 2}, {250, 20, 100, 80, 3}});
+  ASSERT_EQ(d.boxes.size(), 3u);
+  auto best = [&](const BoxDetection& b) {
+    return d.classes[static_cast<size_t>(std::max_element(b.log_prob.begin(), b.log_prob.end()) -
+                                         b.log_prob.begin())];
+  };
+  EXPECT_EQ(best(d.boxes[0]), "disc");
+  EXPECT_EQ(best(d.boxes[1]), "bar");
+  EXPECT_EQ(best(d.boxes[2]), "background");
+  for (const auto& b : d.boxes) {
+    double sum = 0;
+    for (float lp : b.log_prob) sum += std::exp(static_cast<double>(lp));
+    EXPECT_NEAR(sum, 1.0, 1e-4);
+  }
+}
+
+TEST(ModelFile, ReloadsToIdenticalPredictions) {
+  const Trained& t = synthetic();
+  const RecognizerModel loaded = loadModel(t.model_path);
+  EXPECT_EQ(loaded.classifier.classes, t.model.classifier.classes);
+  EXPECT_EQ(loaded.provenance, t.model.provenance);
+  Recognizer a(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions());
+  Recognizer b(std::make_shared<const RecognizerModel>(loaded), RecognizerOptions());
+  const cv::Mat frame = test::texturedFrame(31);
+  const std::vector<BoxRequest> boxes = {
+      {10, 20, 200, 150, 0}, {300, 100, 64, 64, 1}, {0, 0, 640, 480, 2}};
+  const FrameDetections da = a.recognize(frame, boxes), db = b.recognize(frame, boxes);
+  ASSERT_EQ(da.boxes.size(), 3u);
+  ASSERT_EQ(db.boxes.size(), 3u);
+  for (size_t i = 0; i < 3; ++i)
+    EXPECT_EQ(da.boxes[i].log_prob, db.boxes[i].log_prob);  // bit for bit
+}
+
+TEST(ModelFile, TruncatedBitFlippedAndForeignFilesAreRefusedNamingTheFile) {
+  const Trained& t = synthetic();
+  const std::string dir = test::tempDir("recognizer_model_corrupt");
+  const std::vector<char> good = readBytes(t.model_path);
+  ASSERT_GT(good.size(), 1000u);
+
+  const std::string truncated = dir + "/truncated.model";
+  writeBytes(truncated,
+             std::vector<char>(good.begin(), good.begin() + static_cast<long>(good.size() / 2)));
+  std::string e = loadError(truncated);
+  EXPECT_NE(e.find(truncated), std::string::npos) << e;
+  EXPECT_NE(e.find("truncated"), std::string::npos) << e;
+
+  const std::string flipped = dir + "/flipped.model";
+  std::vector<char> bytes = good;
+  bytes[bytes.size() / 3] ^= 0x10;
+  writeBytes(flipped, bytes);
+  e = loadError(flipped);
+  EXPECT_NE(e.find(flipped), std::string::npos) << e;
+  EXPECT_NE(e.find("checksum"), std::string::npos) << e;
+
+  const std::string header = dir + "/header.model";
+  bytes = good;
+  bytes[17] ^= 0x01;  // payload size field
+  writeBytes(header, bytes);
+  e = loadError(header);
+  EXPECT_NE(e.find("checksum"), std::string::npos) << e;
+
+  const std::string foreign = dir + "/foreign.model";
+  writeBytes(foreign, std::vector<char>(good.size(), 'x'));
+  e = loadError(foreign);
+  EXPECT_NE(e.find("not a slamaware recognizer model"), std::string::npos) << e;
+
+  e = loadError(dir + "/missing.model");
+  EXPECT_NE(e.find("missing.model"), std::string::npos) << e;
+}
+
+TEST(ModelFile, WritesAtomicallyOverAnOldModel) {
+  const Trained& t = synthetic();
+  const std::string dir = test::tempDir("recognizer_model_atomic");
+  const std::string path = dir + "/m.model";
+  writeBytes(path, std::vector<char>(10, 'o'));
+  saveModel(t.model, path);
+  EXPECT_EQ(readBytes(path), readBytes(t.model_path));
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename(), "m.model");  // no temp left
+}
+
+// Real data: train on two apples and two balls, classify two other instances.
+TEST(Training, SeparatesApplesFromBallsOnUnseenUwInstances) {
+  const std::string uw = test::sharedData("objects/uw_rgbd_apple_ball");
+  SKIP_WITHOUT_SHARED_DATA(uw);
+  const std::string dir = test::tempDir("recognizer_uw_subset");
+  auto link = [&](const std::string& set, const std::string& category,
+                  const std::string& instance) {
+    fs::create_directories(dir + "/" + set + "/" + category);
+    fs::create_directory_symlink(uw + "/" + category + "/" + instance,
+                                 dir + "/" + set + "/" + category + "/" + instance);
+  };
+  link("train", "apple", "apple_1");
+  link("train", "apple", "apple_3");
+  link("train", "ball", "ball_1");
+  link("train", "ball", "ball_2");
+  link("test", "apple", "apple_5");
+  link("test", "ball", "ball_3");
+  TrainOptions o = testOptions();
+  o.max_views_per_instance = 40;
+  o.validation = false;
+  TrainReport report;
+  const RecognizerModel model = trainModel({dir + "/train"}, {}, o, &report);
+  EXPECT_EQ(model.classifier.classes, (std::vector<std::string>{"apple", "ball"}));
+  FrameEncoder enc(model.params, model.pca, model.vocabulary);
+  const auto crops = collectCrops({dir + "/test"}, 30);
+  ASSERT_EQ(crops.size(), 60u);
+  const ExampleSet test_set = encodeCrops(crops, model.classifier.classes, {}, enc);
+  int right = 0;
+  MatrixRM x(1, test_set.dims()), s;
+  for (int64_t i = 0; i < test_set.size(); ++i) {
+    test_set.get(i, x.data());
+    model.classifier.scores(x, &s);
+    right += (s(0, 0) > s(0, 1) ? 0 : 1) == test_set.label(i);
+  }
+  EXPECT_GE(right, 54) << "of 60 crops of apple_5 and ball_3";
+}
