@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   bool loop = false;
   int64_t max_frames = -1;
   addNodeOptions(app, node, false);
-  app.add_option("--source", source, "sequence folder, video file, v4l:N or synth:CONFIG")->required();
+  app.add_option("--source", source, "sequence folder, video file, LCM log (.lcm), v4l:N or synth:CONFIG")->required();
   app.add_option("--speed", speed, "1 = real time, 2 = twice as fast, 0 = as fast as possible")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--lockstep", lockstep_channel,

@@ -233,7 +233,7 @@ int main(int argc, char** argv) {
                         ": key 'recognizer.encoder': " + e.what());
     }
     Bus bus(sys.bus.url);
-    StatusReporter status(bus, "recognizer", sys.channels.statusOf("recognizer"));
+    StatusReporter status(bus, node.nameOr("recognizer"), sys.channels.statusOf(node.nameOr("recognizer")));
     RecognizerNode rec(bus, status, sys, options);
     rec.ensureModel();
     status.publish();

@@ -421,11 +421,23 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                       [&](int64_t done, int64_t) { bar.update(done); });
     bar.finish();
   }
-  // Held-out crops (and their mirror images) stay held out.
+  // Held-out crops stay held out; their mirror images are augmentation, not validation data, and
+  // join the training set only for the final retraining on everything.
   const size_t per_crop = options.mirror_crops ? 2 : 1;
   std::vector<bool> is_val(static_cast<size_t>(all.size()));
+  ExampleSet held_out_mirrors(all.dims());
   for (size_t i = 0; i < crops.size(); ++i)
     for (size_t k = 0; k < per_crop; ++k) is_val[i * per_crop + k] = split.crop_val[i];
+  if (per_crop > 1) {
+    held_out_mirrors = all.select([&](int64_t i) { return i % 2 == 1 && is_val[static_cast<size_t>(i)]; });
+    std::vector<bool> keep(static_cast<size_t>(all.size()));
+    for (size_t i = 0; i < keep.size(); ++i) keep[i] = !(i % 2 == 1 && is_val[i]);
+    all.filter([&](int64_t i) { return keep[static_cast<size_t>(i)]; });
+    std::vector<bool> v;
+    for (size_t i = 0; i < keep.size(); ++i)
+      if (keep[i]) v.push_back(is_val[i]);
+    is_val = v;
+  }
   ReusableMatrix buffer;
   if (has_background && options.context_copies > 0) {
     // Crops in context: pasted into scene frames of the same split (any frame if that split has
@@ -579,6 +591,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     // Final classifiers on all the data, with the held-out calibration.
     const float temperature = clf.temperature, mix = clf.uniform_mix;
     train.append(val);
+    train.append(held_out_mirrors);
     clf = trainStage(train, "final training on all data");
     clf.temperature = temperature;
     clf.uniform_mix = mix;

@@ -71,22 +71,5 @@ point_cloud_t toMessage(const CloudOutput& c) {
   return m;
 }
 
-bool cameraFromMessage(const camera_info_t& info, CameraModel* camera, std::string* why) {
-  const bool finite = std::isfinite(info.fx) && std::isfinite(info.fy) && std::isfinite(info.cx) &&
-                      std::isfinite(info.cy);
-  bool dist_finite = true;
-  for (double d : info.distortion) dist_finite = dist_finite && std::isfinite(d);
-  if (info.width < 64 || info.height < 64 || info.width > 8192 || info.height > 8192 || !finite ||
-      !dist_finite || info.fx <= 0 || info.fy <= 0) {
-    *why = "camera_info " + std::to_string(info.width) + "x" + std::to_string(info.height) +
-           " fx " + std::to_string(info.fx) + " fy " + std::to_string(info.fy) +
-           " is not a usable camera";
-    return false;
-  }
-  *camera = CameraModel(info.width, info.height, info.fx, info.fy, info.cx, info.cy,
-                        {info.distortion[0], info.distortion[1], info.distortion[2],
-                         info.distortion[3], info.distortion[4]});
-  return true;
-}
 
 }  // namespace slamaware

@@ -2,6 +2,7 @@
 // SLAM outputs <-> LCM messages (pose_t, keyframe_t, point_cloud_t), and camera_info_t -> camera.
 #include <string>
 
+#include "common/bus/image_msg.h"
 #include "common/camera_model.h"
 #include "procs/slam/slam_system.h"
 #include "slamaware/camera_info_t.hpp"
@@ -14,8 +15,5 @@ namespace slamaware {
 pose_t toMessage(const PoseOutput& pose);
 keyframe_t toMessage(const KeyframeOutput& kf);
 point_cloud_t toMessage(const CloudOutput& cloud);
-
-/// The camera a camera_info_t describes; false (and *why) when it is not a usable camera.
-bool cameraFromMessage(const camera_info_t& info, CameraModel* camera, std::string* why);
 
 }  // namespace slamaware

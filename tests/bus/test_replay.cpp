@@ -67,3 +67,38 @@ TEST(Replay, DamagedLogIsReportedWithByteOffset) {
   EXPECT_EQ(replay.wait(30s), 3) << replay.log();
   EXPECT_NE(replay.log().find("byte offset"), std::string::npos) << replay.log();
 }
+
+// A log as the camera's source: the frames come out again byte for byte (JPEG passes through,
+// utime and seq are the recorded ones), paced by the camera, lockstep-able like any source.
+TEST(Replay, CameraPlaysALogAsItsSource) {
+  const std::string dir = test::tempDir("replay_camera_log");
+  const std::string log = recordSession(dir, 12);
+  const auto original = payloads(log, "CAMERA");
+  ASSERT_EQ(original.size(), 12u);
+  const std::string out = dir + "/played.lcm";
+  {
+    test::BusRecorder recorder(out, "CAMERA.*");
+    test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", log, "--lcm-url", test::testUrl(),
+                               "--speed", "0", "--lockstep", "CAMERA"},
+                              dir + "/played.txt");
+    ASSERT_EQ(camera.wait(30s), 0) << camera.log();
+    EXPECT_NE(camera.log().find("12 frames"), std::string::npos) << camera.log();
+  }
+  EXPECT_EQ(payloads(out, "CAMERA"), original);
+  EXPECT_FALSE(payloads(out, "CAMERA_INFO").empty());
+
+  // A damaged log: the frames before the damage are played, the damage is reported.
+  std::filesystem::resize_file(log, std::filesystem::file_size(log) - 100);
+  test::ChildProcess damaged({test::binPath("slamaware-camera"), "--source", log, "--lcm-url", test::testUrl(),
+                              "--speed", "0"},
+                             dir + "/damaged.txt");
+  EXPECT_EQ(damaged.wait(30s), 0) << damaged.log();
+  EXPECT_NE(damaged.log().find("byte offset"), std::string::npos) << damaged.log();
+  // A file that is not a log at all is a clear error.
+  const std::string bogus = dir + "/bogus.lcm";
+  std::ofstream(bogus) << "not a log";
+  test::ChildProcess bad({test::binPath("slamaware-camera"), "--source", bogus, "--lcm-url", test::testUrl()},
+                         dir + "/bogus.txt");
+  EXPECT_EQ(bad.wait(10s), 2) << bad.log();
+  EXPECT_NE(bad.log().find("bogus.lcm"), std::string::npos) << bad.log();
+}

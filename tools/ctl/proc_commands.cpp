@@ -1,4 +1,4 @@
-// slamaware-ctl status | start | stop | restart | logs: the supervisors' view and commands.
+// slamaware-ctl status | start | stop | restart | wait | logs: the supervisors' view and commands.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -139,6 +139,32 @@ int runLogs(const NodeArgs& node, const std::string& name, int lines, bool follo
   return 0;
 }
 
+// Waits until every process matching `target` has finished (stopped or failed); 0 when all of
+// them exited with code 0.
+int runWait(const NodeArgs& node, const std::string& target, double timeout_s) {
+  const SystemConfig sys = loadSystem(node);
+  Bus bus(sys.bus.url);
+  auto finished = [&](const std::map<std::string, proc_status_t>& m) {
+    int found = 0;
+    for (const auto& [h, st] : m)
+      for (const auto& p : st.procs) {
+        if (target != "all" && p.name != target && p.group != target) continue;
+        ++found;
+        if (p.state != proc_info_t::STATE_STOPPED && p.state != proc_info_t::STATE_FAILED) return false;
+      }
+    return found > 0;
+  };
+  const auto last = collect(bus, sys.channels.proc_status, timeout_s, finished);
+  if (!finished(last)) {
+    std::fprintf(stderr, "'%s' has not finished within %.0f s\n", target.c_str(), timeout_s);
+    return 1;
+  }
+  for (const auto& [h, st] : last)
+    for (const auto& p : st.procs)
+      if ((target == "all" || p.name == target || p.group == target) && p.exit_code != 0) return 1;
+  return 0;
+}
+
 }  // namespace
 
 void addProcCommands(CLI::App& app, CtlContext& ctx) {
@@ -165,6 +191,15 @@ void addProcCommands(CLI::App& app, CtlContext& ctx) {
           runNode("ctl", ctx.node, [&] { return runCommand(ctx.node, c, args->target, args->host, args->wait); });
     });
   }
+
+  auto wait_args = std::make_shared<CmdArgs>();
+  wait_args->wait = 3600;
+  auto* wait_cmd = app.add_subcommand("wait", "wait until a process or group has finished (exit 0: all exited with 0)");
+  wait_cmd->add_option("target", wait_args->target, "process name, group name, or all")->required();
+  wait_cmd->add_option("--timeout", wait_args->wait, "s to wait at most");
+  wait_cmd->callback([&ctx, wait_args] {
+    ctx.exit_code = runNode("ctl", ctx.node, [&] { return runWait(ctx.node, wait_args->target, wait_args->wait); });
+  });
 
   auto log_name = std::make_shared<std::string>();
   auto lines = std::make_shared<int>(50);
