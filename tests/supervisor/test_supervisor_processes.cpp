@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "common/bus/bus.h"
+#include "common/bus/log_reader.h"
 #include "slamaware/proc_status_t.hpp"
 #include "tests/support/test_support.h"
 
@@ -160,4 +161,100 @@ TEST_F(SupervisorFixture, CommandsAndCleanShutdown) {
   EXPECT_EQ(sup_->wait(10s), 0) << sup_->log();
   EXPECT_FALSE(alive(c1)) << "no child outlives the supervisor";
   EXPECT_FALSE(alive(c2));
+}
+
+namespace {
+
+// Runs a shell command; its exit code.
+int sh(const std::string& cmd) { return std::system(cmd.c_str()); }
+
+// Output of a shell command.
+std::string shOut(const std::string& cmd) {
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  std::string out;
+  char buf[512];
+  while (p && fgets(buf, sizeof(buf), p)) out += buf;
+  if (p) pclose(p);
+  return out;
+}
+
+// A "host": a network namespace kept alive by a sleeping process, joined to the other host by a
+// veth pair; its multicast goes out on the veth (ttl=1 crosses it, as between two machines).
+struct Host {
+  std::string name, address;
+  std::unique_ptr<test::ChildProcess> holder;
+  std::string enter() const { return "nsenter -t " + std::to_string(holder->pid()) + " -n"; }
+};
+
+}  // namespace
+
+TEST(SupervisorTwoHosts, PipelineMessagesCrossAndCtlSeesBothHosts) {
+  const std::string dir = test::tempDir("supervisor_two_hosts");
+  Host a{"a", "10.77.0.1", {}}, b{"b", "10.77.0.2", {}};
+  for (Host* h : {&a, &b}) {
+    h->holder = std::make_unique<test::ChildProcess>(std::vector<std::string>{"unshare", "-n", "sleep", "300"},
+                                                     dir + "/holder_" + h->name + ".txt");
+    // unshare runs sleep in the new namespace once it has made it.
+    ASSERT_TRUE(test::waitUntil([&] { return shOut("readlink /proc/" + std::to_string(h->holder->pid()) + "/exe")
+                                                   .find("sleep") != std::string::npos; },
+                                2000ms));
+  }
+  ASSERT_EQ(sh("ip link add sw_a type veth peer name sw_b"), 0) << "needs a network namespace with CAP_NET_ADMIN";
+  ASSERT_EQ(sh("ip link set sw_a netns " + std::to_string(a.holder->pid())), 0);
+  ASSERT_EQ(sh("ip link set sw_b netns " + std::to_string(b.holder->pid())), 0);
+  for (Host* h : {&a, &b}) {
+    const std::string dev = "sw_" + h->name;
+    ASSERT_EQ(sh(h->enter() + " sh -c 'ip link set lo up && ip addr add " + h->address + "/24 dev " + dev +
+                 " && ip link set " + dev + " up && ip route add 224.0.0.0/4 dev " + dev + "'"),
+              0);
+  }
+  // One system.yaml for both hosts, ttl=1; each supervisor runs the entries of its host.
+  const std::string url = "udpm://239.255.76.67:7667?ttl=1&recv_buf_size=4194304";
+  const std::string seq = test::makeTestSequence("sup_two_hosts_seq", 60, 10.0);
+  const std::string system = dir + "/system.yaml";
+  auto entry = [&](const std::string& name, const std::string& host, const std::string& args) {
+    return "  - name: " + name + "\n    host: " + host + "\n    command: [" + test::binPath("slamaware-" + name) +
+           ", --lcm-url, \"" + url + "\", --log-level, warn" + args + "]\n";
+  };
+  std::ofstream(system) << "bus:\n  url: \"" << url << "\"\nsupervisor:\n  log_dir: " << dir << "/logs\nprocesses:\n"
+                        << entry("slam", "a", "") << entry("camera", "a", ", --source, " + seq + ", --loop")
+                        << entry("recognizer", "b", "");
+  test::ChildProcess sup_a({"nsenter", "-t", std::to_string(a.holder->pid()), "-n", test::binPath("slamaware-supervisor"),
+                            "--system", system, "--host", "a"},
+                           dir + "/supervisor_a.txt");
+  test::ChildProcess sup_b({"nsenter", "-t", std::to_string(b.holder->pid()), "-n", test::binPath("slamaware-supervisor"),
+                            "--system", system, "--host", "b"},
+                           dir + "/supervisor_b.txt");
+  // Host b hears host a's pipeline: camera frames and SLAM poses.
+  const std::string log_b = dir + "/heard_on_b.lcm";
+  test::ChildProcess logger_b({"nsenter", "-t", std::to_string(b.holder->pid()), "-n", "lcm-logger", "--lcm-url=" + url,
+                               "-f", "-c", "CAMERA|SLAM_POSE|RECOGNIZER_STATUS", log_b},
+                              dir + "/logger_b.txt");
+  // slamaware-ctl on host a lists the processes of both hosts.
+  const std::string ctl = a.enter() + " " + test::binPath("slamaware-ctl") + " --system " + system + " status --wait 2";
+  std::string status;
+  const bool both = test::waitUntil([&] {
+    status = shOut(ctl);
+    return status.find("slam") != std::string::npos && status.find("recognizer") != std::string::npos &&
+           status.find("camera") != std::string::npos && status.find("running") != std::string::npos;
+  }, 30s);
+  EXPECT_TRUE(both) << status << sup_a.log() << sup_b.log();
+  std::this_thread::sleep_for(3s);
+  logger_b.stop();
+  std::map<std::string, int> heard;
+  for (const auto& ev : LogReader::readAll(log_b)) ++heard[ev.channel];
+  std::printf("heard on host b: CAMERA %d, SLAM_POSE %d, RECOGNIZER_STATUS %d\n", heard["CAMERA"], heard["SLAM_POSE"],
+              heard["RECOGNIZER_STATUS"]);
+  std::printf("%s", status.c_str());
+  EXPECT_GT(heard["CAMERA"], 5) << "camera frames from host a reach host b";
+  EXPECT_GT(heard["SLAM_POSE"], 5) << "SLAM poses from host a reach host b";
+  EXPECT_GT(heard["RECOGNIZER_STATUS"], 0) << "host b's own recognizer runs";
+  // A command from host a reaches host b's supervisor.
+  const std::string out = shOut(a.enter() + " " + test::binPath("slamaware-ctl") + " --system " + system +
+                                " restart recognizer --host b");
+  EXPECT_NE(out.find("recognizer"), std::string::npos) << out;
+  sup_a.signal(SIGTERM);
+  sup_b.signal(SIGTERM);
+  EXPECT_EQ(sup_a.wait(10s), 0) << sup_a.log();
+  EXPECT_EQ(sup_b.wait(10s), 0) << sup_b.log();
 }

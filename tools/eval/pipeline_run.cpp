@@ -114,7 +114,9 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     if (!options.only.empty() &&
         std::find(options.only.begin(), options.only.end(), s.name) == options.only.end())
       continue;
-    if (fs::exists(fs::path(options.bin_dir) / ("slamaware-" + s.name))) stages.push_back(s);
+    // Each stage consumes the one before it: the pipeline is the built beginning of the chain.
+    if (!fs::exists(fs::path(options.bin_dir) / ("slamaware-" + s.name))) break;
+    stages.push_back(s);
   }
   if (stages.empty()) {
     result.error = "no pipeline stage is built in " + options.bin_dir;
