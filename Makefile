@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test demo eval bench record synth sample spy clean
+.PHONY: all deps build test demo eval bench record synth sample model spy clean
 
 all: build
 
@@ -49,6 +49,11 @@ synth: deps build
 # Regenerates the bundled sample recording logs/sample.lcm from config/scenes/sample.yaml.
 sample: deps build
 	scripts/make-sample
+
+# Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set,
+# full training options; about 25 minutes on 2 cores).
+model: deps build
+	FORCE=1 TRAIN_CONFIG= scripts/demo-model
 
 spy: build
 	scripts/lcm-spy

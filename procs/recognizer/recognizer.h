@@ -12,7 +12,7 @@
 namespace slamaware {
 
 struct RecognizerOptions {
-  std::string model = "build/models/recognizer.model";  ///< model file (slamaware-train)
+  std::string model = "models/recognizer.model";  ///< model file (slamaware-train)
   /// Classes the rest of the system expects; those the model lacks are reported (the process
   /// keeps running with the classes it has).
   std::vector<std::string> expected_classes;

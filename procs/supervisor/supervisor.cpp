@@ -131,6 +131,13 @@ void Supervisor::spawn(Managed& m, double now) {
 void Supervisor::startAll(double now) {
   starting_ = true;
   next_to_start_ = 0;
+  // Processes waiting for their turn in the start order count as starting (so that nobody takes
+  // a queued process for one that has already run and stopped).
+  for (auto& m : procs_)
+    if (m->spec.autostart && m->info.pid == 0 && m->started_at == 0 && m->info.state == ProcState::kStopped) {
+      m->info.state = ProcState::kStarting;
+      m->info.message = "queued in the start order";
+    }
   tick(now);
 }
 
@@ -261,8 +268,8 @@ void Supervisor::tick(double now) {
   // Ordered start: the next process once the previous one reports running (or timed out).
   while (starting_ && next_to_start_ < procs_.size()) {
     Managed& prev_or_next = *procs_[next_to_start_];
-    if (prev_or_next.info.pid == 0 && prev_or_next.info.state == ProcState::kStopped && prev_or_next.spec.autostart &&
-        prev_or_next.started_at == 0) {
+    if (prev_or_next.info.pid == 0 && prev_or_next.spec.autostart && prev_or_next.started_at == 0 &&
+        (prev_or_next.info.state == ProcState::kStopped || prev_or_next.info.state == ProcState::kStarting)) {
       spawn(prev_or_next, now);
     }
     Managed& m = prev_or_next;
