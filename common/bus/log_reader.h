@@ -34,6 +34,16 @@ struct LogRecord {
   int64_t offset = 0;  ///< byte offset of the event in the file
 };
 
+/// Decodes a logged message as Msg; false when it fails to decode or leaves bytes over.
+template <class Msg>
+bool decodeRecord(const LogRecord& r, Msg* m) {
+  try {
+    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) == static_cast<int>(r.data.size());
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 class LogReader {
  public:
   /// Opens a log; throws LogError if it cannot be read.

@@ -32,8 +32,7 @@ namespace {
 template <class T>
 std::optional<T> decodeAs(const LogRecord& ev) {
   T msg{};
-  const int n = static_cast<int>(ev.data.size());
-  if (msg.decode(ev.data.data(), 0, n) != n) return std::nullopt;
+  if (!decodeRecord(ev, &msg)) return std::nullopt;
   return msg;
 }
 

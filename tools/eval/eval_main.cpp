@@ -1,9 +1,10 @@
 // slamaware-eval: runs the pipeline (the processes that exist: camera -> slam -> ...) lockstep on
 // each sequence folder, records the bus, and computes the report sections of the stages from the
-// recording and the ground truth (DESIGN.md §7): for now the "slam" section of every sequence, and
-// "overall" over the synthetic suite, plus a top-down trajectory plot per sequence. Runs inside a
-// private network namespace (scripts/eval). --offline runs the SLAM library in-process instead
-// (no bus; for development).
+// recording and the ground truth (DESIGN.md §7): the "slam" and "proposals" sections of every
+// sequence, and "overall" over the synthetic suite, plus plots per sequence (trajectory, recall
+// against boxes). Runs inside a private network namespace (scripts/eval). --offline runs the SLAM
+// library in-process instead (no bus; for development); --from-logs scores earlier recordings
+// and --proposals-config re-runs the proposals stage on them with other options.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -16,9 +17,11 @@
 #include "common/bus/system_config.h"
 #include "common/config.h"
 #include "common/dataset.h"
+#include "procs/proposals/proposal_options.h"
 #include "procs/slam/slam_options.h"
 #include "tools/eval/offline_run.h"
 #include "tools/eval/pipeline_run.h"
+#include "tools/eval/proposal_metrics.h"
 #include "tools/eval/slam_metrics.h"
 
 using namespace slamaware;
@@ -39,7 +42,10 @@ int main(int argc, char** argv) {
       "slamaware-eval: the pipeline on sequence folders, lockstep, scored against ground truth"};
   std::string out, out_dir = "build/eval", system_path, slam_config, stages, log_level = "info";
   std::vector<std::string> sequences;
-  bool offline = false, verbose = false;
+  std::string proposals_config;
+  int draw_frames = 0;
+  bool offline = false, verbose = false, from_logs = false;
+  ProposalEvalOptions peo;
   PipelineRunOptions pipeline;
   pipeline.bin_dir = selfDir();
   app.add_option("sequences", sequences, "sequence folders")->required();
@@ -53,6 +59,13 @@ int main(int argc, char** argv) {
   app.add_option("--slam-config", slam_config,
                  "offline: SLAM options file (default: <config-dir>/slam.yaml)");
   app.add_flag("--verbose", verbose, "offline: a line per frame");
+  app.add_flag("--from-logs", from_logs, "score the recordings already in <out-dir>/logs (no run)");
+  app.add_option("--proposals-config", proposals_config,
+                 "re-run the proposals stage on the recording with this options file");
+  app.add_option("--draw-proposals", draw_frames,
+                 "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
+  app.add_option("--baseline-frames", peo.baseline_frames,
+                 "frames per sequence for the selective-search baseline (0: none)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
@@ -74,6 +87,11 @@ int main(int argc, char** argv) {
 
     nlohmann::json report = nlohmann::json::object();
     std::vector<nlohmann::json> synthetic;
+    ProposalScores synthetic_proposals;
+    bool any_proposals = false;
+    const bool rerun = !proposals_config.empty();
+    const ProposalOptions proposal_options =
+        rerun ? loadConfig<ProposalOptions>(proposals_config, "proposals", false) : ProposalOptions{};
     int failures = 0;
     for (const auto& dir : sequences) {
       const std::string name = fs::path(dir).filename().string();
@@ -81,13 +99,18 @@ int main(int argc, char** argv) {
       try {
         const SequenceFolder seq = SequenceFolder::open(dir);
         SlamRecording run;
-        if (offline) {
+        const std::string log = (fs::path(out_dir) / "logs" / (name + ".lcm")).string();
+        bool have_proposals = rerun;
+        if (from_logs) {
+          run = readSlamRecording(log, system.channels);
+          have_proposals = true;
+        } else if (offline) {
           run = runSlamOffline(seq, slam_options, verbose);
         } else {
-          const std::string log = (fs::path(out_dir) / "logs" / (name + ".lcm")).string();
           spdlog::info("{}: running the pipeline, recording {}", name, log);
           const PipelineRun pr = runPipeline(dir, log, system, pipeline);
           section["pipeline_stages"] = pr.stages;
+          for (const auto& st : pr.stages) have_proposals = have_proposals || st == "proposals";
           if (!pr.ok) {
             section["pipeline_error"] = pr.error;
             spdlog::error("{}: {}", name, pr.error);
@@ -103,6 +126,25 @@ int main(int argc, char** argv) {
         spdlog::info("{}: tracked {}%, ATE {} m ({}% of path), {} maps", name,
                      slam.value("tracked_pct", 0.0), slam.value("ate_rmse", 0.0),
                      slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
+        if (have_proposals && !offline && seq.hasBoxes()) {
+          const ProposalRecording pr = rerun ? rerunProposals(log, system.channels, proposal_options)
+                                             : readProposalRecording(log, system.channels);
+          const ProposalScores sc = scoreProposals(pr, seq, peo);
+          if (draw_frames > 0) {
+            const fs::path d = fs::path(out_dir) / "proposals" / name;
+            fs::create_directories(d);
+            drawProposalFrames(pr, seq, d.string(), peo.stride, draw_frames, 20);
+          }
+          const nlohmann::json p =
+              proposalSection(sc, (fs::path(out_dir) / "plots" / (name + "_proposals.png")).string());
+          report["sequences"][name]["proposals"] = p;
+          if (isSyntheticSequence(seq)) {
+            mergeScores(&synthetic_proposals, sc);
+            any_proposals = true;
+          }
+          spdlog::info("{}: proposals recall {:.1f}% at IoU 0.5 ({:.1f}% at 0.7), {} boxes per frame", name,
+                       p.value("recall_iou50", 0.0), p.value("recall_iou70", 0.0), p.value("boxes_per_frame", 0.0));
+        }
       } catch (const std::exception& e) {
         section["error"] = e.what();
         spdlog::error("{}: {}", name, e.what());
@@ -111,6 +153,9 @@ int main(int argc, char** argv) {
       report["sequences"][name]["slam"] = section;
     }
     if (!synthetic.empty()) report["overall"]["slam"] = summarizeSlam(synthetic);
+    if (any_proposals)
+      report["overall"]["proposals"] =
+          proposalSection(synthetic_proposals, (fs::path(out_dir) / "plots" / "suite_proposals.png").string());
     std::ofstream(out) << report.dump(2) << "\n";
     return failures ? 1 : 0;
   } catch (const std::exception& e) {

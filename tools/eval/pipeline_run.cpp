@@ -86,16 +86,6 @@ SE3 poseOf(const double position[3], const double orientation[4]) {
   return se3FromArrays(position, orientation);
 }
 
-template <class Msg>
-bool decodeExactly(const LogRecord& r, Msg* m) {
-  try {
-    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) ==
-           static_cast<int>(r.data.size());
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 }  // namespace
 
 std::vector<PipelineStage> pipelineStages(const Channels& ch) {
@@ -178,11 +168,11 @@ SlamRecording readSlamRecording(const std::string& log_path, const Channels& ch)
   while (auto r = reader.next()) {
     if (r->channel == ch.slam_pose) {
       pose_t m;
-      if (!decodeExactly(*r, &m)) continue;
+      if (!decodeRecord(*r, &m)) continue;
       run.poses[m.seq] = {m.state, poseOf(m.position, m.orientation), m.map_id};
     } else if (r->channel == ch.slam_keyframe) {
       keyframe_t m;
-      if (!decodeExactly(*r, &m)) continue;
+      if (!decodeRecord(*r, &m)) continue;
       SlamRecording::Keyframe& k = run.keyframes[m.id];
       k.seq = m.seq;
       k.map_id = m.map_id;
@@ -190,7 +180,7 @@ SlamRecording readSlamRecording(const std::string& log_path, const Channels& ch)
       if (!m.culled) k.T_world_camera = poseOf(m.position, m.orientation);
     } else if (r->channel == ch.slam_map) {
       point_cloud_t m;
-      if (!decodeExactly(*r, &m)) continue;
+      if (!decodeRecord(*r, &m)) continue;
       std::vector<SlamRecording::Point> pts(m.num_points);
       for (int i = 0; i < m.num_points; ++i)
         pts[i] = {Eigen::Vector3f(m.x[i], m.y[i], m.z[i]), m.keyframe_ids[i], m.depth_std[i]};

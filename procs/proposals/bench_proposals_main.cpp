@@ -1,0 +1,108 @@
+// slamaware-bench-proposals (make bench): the proposals stage's two costs on a synthetic
+// semi-dense map of ~100k points (a table with a dozen objects, 2 mm noise): re-clustering the
+// whole map at every density scale (what a new keyframe costs) and projecting the candidates
+// into a frame with occlusion culling and suppression (what every frame costs). Medians.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "common/config.h"
+#include "procs/proposals/projector.h"
+#include "procs/proposals/synthetic_map.h"
+
+using namespace slamaware;
+using namespace slamaware::synthmap;
+
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+// A camera at `eye` looking at `target` (x right, y down, z forward; world z up).
+SE3 lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - eye).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  SE3 T = SE3::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = eye;
+  return T;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"slamaware-bench-proposals: clustering and projection times of the proposals stage"};
+  std::string out = "build/bench/parts/proposals.json", config;
+  int repeats = 5, frames = 200;
+  app.add_option("--out", out, "JSON fragment to write");
+  app.add_option("--config", config, "proposals options (default: built-in, as config/proposals.yaml)");
+  app.add_option("--repeats", repeats, "re-clusterings timed");
+  app.add_option("--frames", frames, "frames projected");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_pattern("[%H:%M:%S.%e] [bench-proposals] [%^%l%$] %v");
+  try {
+    const ProposalOptions options = loadConfig<ProposalOptions>(config, "proposals", false);
+    // The map: a 1.2 m table and 12 objects, every point jittered by 2 mm.
+    std::vector<MapPoint> map = table(1.2f, 0.005f);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    for (int i = 0; i < 12; ++i) {
+      const float a = static_cast<float>(2 * M_PI * i / 12), rr = 0.2f + 0.25f * (i % 2);
+      map = join(map, cylinder(rr * std::cos(a), rr * std::sin(a), 0.03f + 0.03f * u(rng), 0.06f + 0.14f * u(rng),
+                               0.003f, static_cast<uint8_t>(40 + 15 * i)));
+    }
+    std::normal_distribution<float> noise(0, 0.002f);
+    for (auto& p : map) p.p += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
+    const Eigen::Vector3f eye(0, -0.6f, 0.6f);
+
+    CandidateMap candidates(options);
+    std::vector<double> cluster_ms;
+    for (int r = 0; r < repeats; ++r) {
+      candidates.update(1, true, 0, std::vector<int32_t>(map.size(), 0), map);
+      const auto t0 = std::chrono::steady_clock::now();
+      candidates.recluster(eye);
+      cluster_ms.push_back(msSince(t0));
+    }
+    const ClusterStats& st = candidates.stats();
+
+    const CameraModel camera(640, 480, 525, 525, 319.5, 239.5);
+    std::vector<double> project_ms;
+    size_t boxes = 0;
+    for (int f = 0; f < frames; ++f) {
+      const double a = 2 * M_PI * f / frames;
+      const SE3 T = lookAt(Eigen::Vector3d(0.8 * std::cos(a), 0.8 * std::sin(a), 0.55), Eigen::Vector3d::Zero());
+      const auto t0 = std::chrono::steady_clock::now();
+      boxes += projectCandidates(candidates.candidates(), camera, T, options).size();
+      project_ms.push_back(msSince(t0));
+    }
+    nlohmann::json j;
+    j["proposals_cluster_ms_100k"] = median(cluster_ms);
+    j["proposals_cluster_points"] = static_cast<int64_t>(map.size());
+    j["proposals_cluster_points_after_downsampling"] = st.clustered_points + st.plane_points + st.outliers;
+    j["proposals_candidates"] = st.clusters;
+    j["proposals_project_ms_per_frame"] = median(project_ms);
+    j["proposals_boxes_per_frame_mean"] = static_cast<double>(boxes) / std::max(1, frames);
+    std::ofstream(out) << j.dump(2) << "\n";
+    spdlog::info("{} points ({} after downsampling): clustering at {} scales {:.1f} ms median -> {} candidates; "
+                 "projection {:.3f} ms per frame median, {:.1f} boxes per frame",
+                 map.size(), st.clustered_points + st.plane_points + st.outliers, options.scales, median(cluster_ms),
+                 st.clusters, median(project_ms), static_cast<double>(boxes) / std::max(1, frames));
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+}

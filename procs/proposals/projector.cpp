@@ -1,0 +1,146 @@
+#include "procs/proposals/projector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace slamaware {
+
+double boxIou(const ProposalBox& a, const ProposalBox& b) {
+  const double x0 = std::max(a.x, b.x), y0 = std::max(a.y, b.y);
+  const double x1 = std::min(a.x + a.w, b.x + b.w), y1 = std::min(a.y + a.h, b.y + b.h);
+  const double inter = std::max(0.0, x1 - x0) * std::max(0.0, y1 - y0);
+  const double uni = static_cast<double>(a.w) * a.h + static_cast<double>(b.w) * b.h - inter;
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+namespace {
+
+struct Projected {
+  size_t index;  // into candidates
+  std::vector<Eigen::Vector2f> pixels;
+  std::vector<float> depths;
+};
+
+// Per depth-buffer cell: the two nearest depths with different candidates.
+struct Cell {
+  float d1 = std::numeric_limits<float>::infinity(), d2 = std::numeric_limits<float>::infinity();
+  int32_t c1 = -1;
+  void add(float d, int32_t c) {
+    if (c == c1) {
+      d1 = std::min(d1, d);
+    } else if (d < d1) {
+      d2 = d1;
+      d1 = d;
+      c1 = c;
+    } else if (d < d2) {
+      d2 = d;
+    }
+  }
+  float nearestOther(int32_t c) const { return c == c1 ? d2 : d1; }
+};
+
+}  // namespace
+
+std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates, const CameraModel& camera,
+                                           const SE3& T_world_camera, const ProposalOptions& o,
+                                           ProjectionStats* stats) {
+  ProjectionStats st;
+  const SE3 T_cw = T_world_camera.inverse();
+  const int W = camera.width(), H = camera.height();
+  std::vector<Projected> projected;
+  for (size_t ci = 0; ci < candidates.size(); ++ci) {
+    const Candidate& c = candidates[ci];
+    if (c.points.empty()) continue;
+    const size_t step = std::max<size_t>(1, (c.points.size() + o.max_points_per_candidate - 1) /
+                                                static_cast<size_t>(std::max(1, o.max_points_per_candidate)));
+    Projected p{ci, {}, {}};
+    size_t sampled = 0;
+    for (size_t i = 0; i < c.points.size(); i += step) {
+      ++sampled;
+      const Eigen::Vector3d pc = T_cw * c.points[i].cast<double>();
+      Eigen::Vector2d px;
+      if (!pc.allFinite() || !camera.project(pc, &px, 1e-3)) continue;
+      if (px.x() < 0 || px.y() < 0 || px.x() > W - 1 || px.y() > H - 1) continue;
+      p.pixels.push_back(px.cast<float>());
+      p.depths.push_back(static_cast<float>(pc.z()));
+    }
+    if (p.pixels.empty() || p.pixels.size() < o.min_visible_fraction * static_cast<double>(sampled)) continue;
+    projected.push_back(std::move(p));
+  }
+  st.in_view = static_cast<int>(projected.size());
+  // Depth buffer of every candidate in view.
+  const int cell = std::max(1, o.depth_buffer_cell_px);
+  const int gw = (W + cell - 1) / cell, gh = (H + cell - 1) / cell;
+  std::vector<Cell> zbuf(static_cast<size_t>(gw * gh));
+  auto cellOf = [&](const Eigen::Vector2f& px) {
+    const int gx = std::clamp(static_cast<int>(px.x()) / cell, 0, gw - 1);
+    const int gy = std::clamp(static_cast<int>(px.y()) / cell, 0, gh - 1);
+    return static_cast<size_t>(gy * gw + gx);
+  };
+  for (const auto& p : projected)
+    for (size_t i = 0; i < p.pixels.size(); ++i)
+      zbuf[cellOf(p.pixels[i])].add(p.depths[i], candidates[p.index].id);
+  std::vector<ProposalBox> boxes;
+  for (const auto& p : projected) {
+    const Candidate& c = candidates[p.index];
+    size_t hidden = 0;
+    for (size_t i = 0; i < p.pixels.size(); ++i)
+      if (zbuf[cellOf(p.pixels[i])].nearestOther(c.id) < p.depths[i] * (1 - o.occlusion_margin)) ++hidden;
+    if (hidden > o.occluded_fraction * static_cast<double>(p.pixels.size())) {
+      ++st.occluded;
+      continue;
+    }
+    float x0 = std::numeric_limits<float>::max(), y0 = x0, x1 = -x0, y1 = -x0;
+    for (const auto& px : p.pixels) {
+      x0 = std::min(x0, px.x());
+      y0 = std::min(y0, px.y());
+      x1 = std::max(x1, px.x());
+      y1 = std::max(y1, px.y());
+    }
+    ProposalBox b;
+    b.candidate_id = c.id;
+    b.x = std::floor(x0);
+    b.y = std::floor(y0);
+    b.w = std::floor(x1) - b.x + 1;
+    b.h = std::floor(y1) - b.y + 1;
+    if (b.w < o.min_box_px || b.h < o.min_box_px) {
+      ++st.too_small;
+      continue;
+    }
+    std::vector<float> d = p.depths;
+    std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+    b.median_depth = d[d.size() / 2];
+    b.scale = c.scale;
+    b.stability = c.stability;
+    b.points = static_cast<int>(p.pixels.size());
+    boxes.push_back(b);
+  }
+  // Clusters found alike at several density scales first (isolated objects), then finer ones
+  // (they split what coarser ones merge), then by support.
+  std::stable_sort(boxes.begin(), boxes.end(), [](const ProposalBox& a, const ProposalBox& b) {
+    if (a.stability != b.stability) return a.stability > b.stability;
+    if (a.scale != b.scale) return a.scale < b.scale;
+    if (a.points != b.points) return a.points > b.points;
+    return a.candidate_id < b.candidate_id;
+  });
+  std::vector<ProposalBox> kept;
+  for (const auto& b : boxes) {
+    bool suppressed = false;
+    for (const auto& k : kept)
+      if (boxIou(b, k) > o.nms_iou) {
+        suppressed = true;
+        break;
+      }
+    if (suppressed) {
+      ++st.suppressed;
+      continue;
+    }
+    if (static_cast<int>(kept.size()) >= o.max_boxes) break;
+    kept.push_back(b);
+  }
+  if (stats) *stats = st;
+  return kept;
+}
+
+}  // namespace slamaware

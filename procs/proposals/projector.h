@@ -1,0 +1,33 @@
+#pragma once
+// Candidates of the map -> boxes in one frame (DESIGN.md §3): each candidate's points projected
+// with the frame's pose, its box and median depth; a depth buffer of the candidates culls those
+// hidden behind nearer ones; small boxes are dropped; overlapping boxes are suppressed.
+#include <vector>
+
+#include "common/camera_model.h"
+#include "common/geometry.h"
+#include "procs/proposals/candidate_map.h"
+
+namespace slamaware {
+
+struct ProposalBox {
+  int32_t candidate_id = -1;
+  float x = 0, y = 0, w = 0, h = 0;  ///< px, top-left corner and size
+  float median_depth = 0;            ///< map units
+  int scale = 0;
+  int stability = 1;
+  int points = 0;                    ///< projected points inside the image
+};
+
+struct ProjectionStats {
+  int in_view = 0, occluded = 0, too_small = 0, suppressed = 0;
+};
+
+/// IoU of two boxes.
+double boxIou(const ProposalBox& a, const ProposalBox& b);
+
+std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates, const CameraModel& camera,
+                                           const SE3& T_world_camera, const ProposalOptions& options,
+                                           ProjectionStats* stats = nullptr);
+
+}  // namespace slamaware

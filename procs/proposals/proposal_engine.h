@@ -1,0 +1,41 @@
+#pragma once
+// The proposals stage without the bus: CAMERA_INFO, SLAM_MAP and SLAM_POSE messages in, one
+// PROPOSALS message per pose out. The node feeds it from LCM; the evaluator feeds it from a
+// recorded log to re-run proposals with other options.
+#include <string>
+
+#include "common/camera_model.h"
+#include "procs/proposals/candidate_map.h"
+#include "procs/proposals/projector.h"
+#include "slamaware/camera_info_t.hpp"
+#include "slamaware/point_cloud_t.hpp"
+#include "slamaware/pose_t.hpp"
+#include "slamaware/proposals_t.hpp"
+
+namespace slamaware {
+
+class ProposalEngine {
+ public:
+  explicit ProposalEngine(const ProposalOptions& options) : options_(options), map_(options) {}
+
+  /// False (and *why naming the message) for a camera that cannot be used.
+  bool onCameraInfo(const camera_info_t& info, std::string* why);
+  /// False (and *why) for a cloud whose arrays disagree with num_points.
+  bool onMap(const point_cloud_t& cloud, std::string* why);
+  /// The proposals of one frame: empty when the frame is not localised, its pose is not finite
+  /// (*why is set), no camera is known yet, or nothing is in view. Re-clusters first when the
+  /// map changed (*reclustered = true).
+  proposals_t onPose(const pose_t& pose, std::string* why, bool* reclustered = nullptr);
+
+  const CandidateMap& map() const { return map_; }
+  const ProjectionStats& lastProjection() const { return last_; }
+
+ private:
+  ProposalOptions options_;
+  CandidateMap map_;
+  CameraModel camera_;
+  bool have_camera_ = false;
+  ProjectionStats last_;
+};
+
+}  // namespace slamaware

@@ -1,0 +1,98 @@
+// slamaware-proposals: object candidates from the semi-dense map, projected into every frame.
+// Reads CAMERA_INFO, SLAM_MAP (clusters again when the map changed) and SLAM_POSE; publishes one
+// PROPOSALS per SLAM_POSE (empty when the frame is not localised or nothing is in view).
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <deque>
+
+#include "common/bus/bus.h"
+#include "common/bus/node.h"
+#include "common/bus/shutdown.h"
+#include "common/bus/status.h"
+#include "common/config.h"
+#include "procs/proposals/proposal_engine.h"
+
+using namespace slamaware;
+
+int main(int argc, char** argv) {
+  CLI::App app{"slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE -> PROPOSALS)"};
+  NodeArgs node;
+  addNodeOptions(app, node);
+  CLI11_PARSE(app, argc, argv);
+
+  return runNode("proposals", node, [&]() -> int {
+    const SystemConfig sys = loadSystem(node);
+    const ProposalOptions opts = loadConfig<ProposalOptions>(node.config, "proposals");
+    const bool lockstep = sys.bus.lockstep;
+    const Channels& ch = sys.channels;
+    Bus bus(sys.bus.url);
+    StatusReporter status(bus, node.nameOr("proposals"), ch.statusOf(node.nameOr("proposals")));
+    ProposalEngine engine(opts);
+
+    bus.subscribe<camera_info_t>(
+        ch.camera_info,
+        [&](const camera_info_t& info) {
+          std::string why;
+          if (!engine.onCameraInfo(info, &why)) bus.reject(ch.camera_info, why);
+        },
+        sys.bus.max_message_bytes);
+    bus.subscribe<point_cloud_t>(
+        ch.slam_map,
+        [&](const point_cloud_t& c) {
+          std::string why;
+          if (!engine.onMap(c, &why)) bus.reject(ch.slam_map, why);
+        },
+        sys.bus.max_map_bytes);
+    std::deque<pose_t> pending;
+    bus.subscribe<pose_t>(ch.slam_pose, [&](const pose_t& p) { pending.push_back(p); }, sys.bus.max_message_bytes);
+
+    auto handlePose = [&](const pose_t& pose) {
+      status.noteInput(pose.utime, pose.seq);
+      std::string why;
+      bool reclustered = false;
+      const proposals_t out = engine.onPose(pose, &why, &reclustered);
+      if (!why.empty()) bus.reject(ch.slam_pose, why);
+      if (reclustered) {
+        const ClusterStats& s = engine.map().stats();
+        status.setCounter("map_points", s.input_points);
+        status.setCounter("candidates", s.clusters);
+        status.setCounter("recluster_ms", static_cast<int64_t>(s.ms));
+        status.count("reclusters");
+        spdlog::debug("map {}: {} points, {} outliers, plane {}, {} clustered -> {} candidates in {:.0f} ms",
+                      engine.map().mapId(), s.input_points, s.outliers, s.plane_points, s.clustered_points,
+                      s.clusters, s.ms);
+      }
+      bus.publish(ch.proposals, out);
+      status.setCounter("boxes_last_frame", out.num_boxes);
+      status.addProcessed();
+    };
+
+    status.setState(StatusReporter::State::kRunning);
+    status.publish();
+    spdlog::info("{} on {}", lockstep ? "lockstep" : "real time", sys.bus.url);
+    int rc = 0;
+    while (!shutdownRequested()) {
+      if (bus.handle(pending.empty() ? 20 : 0) < 0 && !shutdownRequested()) {
+        spdlog::error("LCM failed; stopping");
+        rc = 1;
+        break;
+      }
+      if (!lockstep && pending.size() > 1) {
+        status.addDropped(static_cast<int64_t>(pending.size() - 1));
+        pending.erase(pending.begin(), pending.end() - 1);
+      }
+      while (!pending.empty()) {
+        const pose_t p = pending.front();
+        pending.pop_front();
+        handlePose(p);
+        if (!lockstep) break;
+      }
+      status.setQueueDepth(static_cast<int32_t>(pending.size()));
+      status.tick();
+    }
+    status.setState(StatusReporter::State::kStopping);
+    status.publish();
+    return rc;
+  });
+}

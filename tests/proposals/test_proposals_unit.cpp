@@ -1,0 +1,253 @@
+// Proposals without the bus: density clustering at each scale, the map filters (support plane),
+// occlusion culling in the projection, stable candidate ids as the map grows, and degenerate
+// input (empty map, one point, NaN points, LOST or non-finite poses, malformed clouds).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "common/config.h"
+#include "procs/proposals/candidate_map.h"
+#include "procs/proposals/projector.h"
+#include "procs/proposals/proposal_engine.h"
+#include "procs/proposals/synthetic_map.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+using namespace slamaware::synthmap;
+
+namespace {
+
+ProposalOptions metricOptions() {
+  ProposalOptions o;
+  o.relative_lengths = false;  // the tests place things in map units
+  return o;
+}
+
+// Which of the objects (split at x = split) a candidate's points (above the table) come from.
+std::set<int> sidesOf(const Candidate& c, float split) {
+  std::set<int> sides;
+  for (const auto& p : c.points)
+    if (p.z() > 0.01f) sides.insert(p.x() < split ? 0 : 1);
+  return sides;
+}
+
+}  // namespace
+
+// At each density scale alone, two objects whose gap is larger than the scale's radius are two
+// clusters, and no cluster holds points of both.
+TEST(ProposalClustering, SeparatesTwoObjectsAtEveryScale) {
+  const ProposalOptions base = metricOptions();
+  for (int s = 0; s < base.scales; ++s) {
+    ProposalOptions o = base;
+    o.scales = 1;
+    o.radius = base.radius * std::pow(2.0, s);
+    o.max_extent = 1.0;
+    const float r = static_cast<float>(o.radius);
+    const float gap = 1.5f * r;  // larger than the radius
+    const float rad = 0.04f, step = static_cast<float>(base.radius / 2);
+    const float left = -rad - gap / 2, right = rad + gap / 2;  // centres: surfaces `gap` apart
+    const auto points = join(cylinder(left, 0, rad, 0.1f, step), cylinder(right, 0, rad, 0.1f, step));
+    const std::vector<Candidate> found = clusterPoints(points, o);
+    ASSERT_GE(found.size(), 2u) << "scale " << s;
+    std::set<int> seen;
+    for (const auto& c : found) {
+      const auto sides = sidesOf(c, 0.0f);
+      EXPECT_EQ(sides.size(), 1u) << "scale " << s << ": a cluster merges across a gap of " << gap;
+      seen.insert(sides.begin(), sides.end());
+    }
+    EXPECT_EQ(seen, (std::set<int>{0, 1})) << "scale " << s;
+  }
+}
+
+// The same objects touching (gap below the finest radius) are one cluster at the coarsest scale:
+// the separation above is the gap's doing, not a clustering that never merges.
+TEST(ProposalClustering, MergesObjectsCloserThanTheRadius) {
+  ProposalOptions o = metricOptions();
+  o.scales = 1;
+  o.radius = 0.064;
+  o.max_extent = 1.0;
+  const float rad = 0.04f, gap = 0.01f;
+  const auto points =
+      join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f), cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f));
+  const std::vector<Candidate> found = clusterPoints(points, o);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(sidesOf(found[0], 0.0f).size(), 2u);
+}
+
+// The whole map path: a table with two objects on it; the table is removed as the support plane
+// and each object is a candidate spanning its own extent (down to the table) at every scale.
+TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
+  ProposalOptions o = metricOptions();
+  CandidateMap map(o);
+  const auto points =
+      join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f)));
+  map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
+  ASSERT_TRUE(map.recluster(Eigen::Vector3f(0, 0, 1)));
+  EXPECT_TRUE(map.stats().support);
+  EXPECT_EQ(map.stats().planes, 1);
+  int tall = 0, short_ = 0;
+  for (const auto& c : map.candidates()) {
+    EXPECT_EQ(sidesOf(c, 0.0f).size(), 1u) << "a candidate spans both objects";
+    EXPECT_LT(c.max.z(), 0.13f);
+    if (c.min.x() > -0.15f && c.max.x() < -0.05f && c.max.z() > 0.11f && c.min.z() < 0.005f) ++tall;
+    if (c.min.x() > 0.05f && c.max.x() < 0.15f && c.max.z() > 0.07f && c.max.z() < 0.09f && c.min.z() < 0.005f)
+      ++short_;
+  }
+  EXPECT_GE(tall, 1);
+  EXPECT_GE(short_, 1);
+}
+
+// Of two candidates on one line of sight, the far one is culled; moved aside, both are kept.
+TEST(ProposalProjection, FarCandidateBehindANearOneIsCulled) {
+  const ProposalOptions o = metricOptions();
+  auto candidate = [](int id, float x, float z) {
+    Candidate c;
+    c.id = id;
+    for (float u = -0.05f; u <= 0.05f; u += 0.005f)
+      for (float v = -0.05f; v <= 0.05f; v += 0.005f) c.points.emplace_back(x + u, v, z);
+    c.min = c.points.front();
+    c.max = c.points.back();
+    return c;
+  };
+  // Camera at the origin looking along world z.
+  const SE3 T = SE3::Identity();
+  ProjectionStats st;
+  auto boxes = projectCandidates({candidate(1, 0, 1.0f), candidate(2, 0, 2.0f)}, vga(), T, o, &st);
+  ASSERT_EQ(boxes.size(), 1u);
+  EXPECT_EQ(boxes[0].candidate_id, 1);
+  EXPECT_EQ(st.occluded, 1);
+  EXPECT_NEAR(boxes[0].median_depth, 1.0, 1e-3);
+  boxes = projectCandidates({candidate(1, 0, 1.0f), candidate(2, 0.4f, 2.0f)}, vga(), T, o, &st);
+  EXPECT_EQ(boxes.size(), 2u);
+  EXPECT_EQ(st.occluded, 0);
+}
+
+TEST(ProposalProjection, SmallBoxesAreDroppedAndOverlapsSuppressed) {
+  ProposalOptions o = metricOptions();
+  auto square = [](int id, float x, float half, int scale) {
+    Candidate c;
+    c.id = id;
+    c.scale = scale;
+    for (float u = -half; u <= half; u += half / 10)
+      for (float v = -half; v <= half; v += half / 10) c.points.emplace_back(x + u, v, 1.0f);
+    return c;
+  };
+  // 0.01 at 1 m with f = 500: 10 px, under 20 px.
+  auto boxes = projectCandidates({square(1, 0, 0.01f, 0)}, vga(), SE3::Identity(), o);
+  EXPECT_TRUE(boxes.empty());
+  // Two near-identical boxes: one survives, the finer scale.
+  boxes = projectCandidates({square(2, 0, 0.1f, 1), square(3, 0.005f, 0.1f, 0)}, vga(), SE3::Identity(), o);
+  ASSERT_EQ(boxes.size(), 1u);
+  EXPECT_EQ(boxes[0].candidate_id, 3);
+  EXPECT_NEAR(boxes[0].w, 100, 3);
+}
+
+// Ids survive incremental updates: an object seen from more keyframes keeps its id, a new one
+// gets a new id, and a dropped map id starts over.
+TEST(ProposalIds, StableAcrossIncrementalUpdatesOfAGrowingMap) {
+  const ProposalOptions o = metricOptions();
+  CandidateMap map(o);
+  const auto tab = table(0.8f, 0.004f);
+  const auto a = cylinder(-0.15f, 0, 0.04f, 0.1f, 0.004f);
+  const auto b = cylinder(0.15f, 0.1f, 0.03f, 0.08f, 0.004f);
+  // Keyframe 0: the table and the lower half of object a.
+  std::vector<MapPoint> a_low, a_high;
+  for (const auto& p : a) (p.p.z() < 0.05f ? a_low : a_high).push_back(p);
+  const Eigen::Vector3f eye(0, 0, 1);
+  map.update(1, false, 0, {}, join(tab, a_low));
+  ASSERT_TRUE(map.recluster(eye));
+  // The candidates that are a whole object (centred on it, as wide as it).
+  auto idNear = [&](float x) {
+    std::set<int32_t> ids;
+    for (const auto& c : map.candidates())
+      if (std::abs(0.5f * (c.min.x() + c.max.x()) - x) < 0.02f && c.max.x() - c.min.x() > 0.05f) ids.insert(c.id);
+    return ids;
+  };
+  auto shared = [](const std::set<int32_t>& a, const std::set<int32_t>& b) {
+    for (int32_t id : a)
+      if (b.count(id)) return true;
+    return false;
+  };
+  const auto a_ids = idNear(-0.15f);
+  ASSERT_FALSE(a_ids.empty());
+  EXPECT_FALSE(map.recluster(eye)) << "re-clustered without a change";
+  // Keyframe 1 adds the upper half of a; keyframe 2 adds object b.
+  map.update(1, false, 1, {}, a_high);
+  ASSERT_TRUE(map.recluster(eye));
+  const auto a_ids2 = idNear(-0.15f);
+  ASSERT_FALSE(a_ids2.empty());
+  EXPECT_TRUE(shared(a_ids, a_ids2)) << "object a lost its id when its top was added";
+  map.update(1, false, 2, {}, b);
+  ASSERT_TRUE(map.recluster(eye));
+  EXPECT_TRUE(shared(idNear(-0.15f), a_ids2)) << "object a lost its id when b appeared";
+  const auto b_ids = idNear(0.15f);
+  ASSERT_FALSE(b_ids.empty());
+  for (int32_t id : b_ids) EXPECT_FALSE(a_ids2.count(id));
+  // Keyframe 2 re-published (its depths refined): ids stay.
+  map.update(1, false, 2, {}, b);
+  ASSERT_TRUE(map.recluster(eye));
+  EXPECT_EQ(idNear(0.15f), b_ids);
+  // A new map id starts over: nothing of the old map is proposed.
+  map.update(2, false, 0, {}, tab);
+  ASSERT_TRUE(map.recluster(eye));
+  EXPECT_TRUE(map.candidates().empty());
+}
+
+// A map of objects on a table seen from above gives boxes; degenerate input gives none and no
+// crash.
+TEST(ProposalEngineInput, DegenerateInputGivesNoBoxes) {
+  ProposalEngine engine(metricOptions());
+  std::string why;
+  ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
+  const SE3 T = lookingDown(1.0);
+  // Empty map.
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, {}), &why));
+  EXPECT_EQ(engine.onPose(poseMessage(0, pose_t::STATE_TRACKING, T), &why).num_boxes, 0);
+  // One point.
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, {{Eigen::Vector3f(0, 0, 0.05f), 1, 2, 3}}), &why));
+  EXPECT_EQ(engine.onPose(poseMessage(1, pose_t::STATE_TRACKING, T), &why).num_boxes, 0);
+  // Only NaN points.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<MapPoint> nans(500, MapPoint{Eigen::Vector3f(nan, 0, nan), 0, 0, 0});
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, nans), &why));
+  EXPECT_EQ(engine.onPose(poseMessage(2, pose_t::STATE_TRACKING, T), &why).num_boxes, 0);
+  // A real scene with NaN points mixed in: boxes, all finite.
+  auto scene = join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), nans));
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, scene), &why));
+  proposals_t m = engine.onPose(poseMessage(3, pose_t::STATE_TRACKING, T), &why);
+  ASSERT_GE(m.num_boxes, 1);
+  EXPECT_EQ(m.seq, 3);
+  for (const auto& b : m.boxes) EXPECT_TRUE(std::isfinite(b.x) && std::isfinite(b.w) && b.w >= 20 && b.h >= 20);
+  // The same map, but SLAM is lost, initialising, or on another map: no boxes.
+  EXPECT_EQ(engine.onPose(poseMessage(4, pose_t::STATE_LOST, T), &why).num_boxes, 0);
+  EXPECT_EQ(engine.onPose(poseMessage(5, pose_t::STATE_INITIALIZING, T), &why).num_boxes, 0);
+  EXPECT_EQ(engine.onPose(poseMessage(6, pose_t::STATE_TRACKING, T, 7), &why).num_boxes, 0);
+  // A pose that is not finite: no boxes, and the reason names the message.
+  pose_t bad = poseMessage(7, pose_t::STATE_TRACKING, T);
+  bad.position[0] = std::numeric_limits<double>::quiet_NaN();
+  why.clear();
+  EXPECT_EQ(engine.onPose(bad, &why).num_boxes, 0);
+  EXPECT_NE(why.find("SLAM_POSE seq 7"), std::string::npos) << why;
+  // A cloud whose arrays disagree with num_points is refused; the map is kept.
+  point_cloud_t broken = cloudMessage(1, scene);
+  broken.num_points += 10;
+  EXPECT_FALSE(engine.onMap(broken, &why));
+  EXPECT_NE(why.find("SLAM_MAP"), std::string::npos) << why;
+  EXPECT_GE(engine.onPose(poseMessage(8, pose_t::STATE_TRACKING, T), &why).num_boxes, 1);
+  // No camera yet: no boxes.
+  ProposalEngine blind(metricOptions());
+  ASSERT_TRUE(blind.onMap(cloudMessage(1, scene), &why));
+  EXPECT_EQ(blind.onPose(poseMessage(0, pose_t::STATE_TRACKING, T), &why).num_boxes, 0);
+  // A camera that cannot be used is refused.
+  camera_info_t zero = vgaInfo();
+  zero.fx = 0;
+  EXPECT_FALSE(blind.onCameraInfo(zero, &why));
+}
+
+TEST(ShippedConfig, ProposalsYamlEqualsDefaults) {
+  ProposalOptions file =
+      loadConfig<ProposalOptions>(test::sourcePath("config/proposals.yaml"), "proposals", false);
+  ProposalOptions defaults;
+  EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+}

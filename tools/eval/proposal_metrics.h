@@ -1,0 +1,69 @@
+#pragma once
+// The "proposals" section of the eval report (issue: multi-view proposals): recall of the
+// ground-truth boxes on every 5th frame at IoU >= 0.5 and 0.7, boxes per frame, and the
+// single-view baseline (OpenCV selective search on the same frames) at the same box count, plus
+// a PNG of recall against boxes per frame for both. Only the evaluator reads ground truth.
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "common/bus/system_config.h"
+#include "common/dataset.h"
+#include "procs/proposals/proposal_options.h"
+
+namespace slamaware {
+
+struct Box2 {
+  double x = 0, y = 0, w = 0, h = 0;
+};
+double iou(const Box2& a, const Box2& b);
+
+/// What the proposals stage published for one run, by frame seq; `localized` are the frames
+/// SLAM localised (TRACKING or RELOCALIZED).
+struct ProposalRecording {
+  std::map<int32_t, std::vector<Box2>> boxes;  ///< ranked, best first
+  std::map<int32_t, bool> localized;
+};
+
+/// PROPOSALS and SLAM_POSE of a recorded log. Throws LogError for a damaged log.
+ProposalRecording readProposalRecording(const std::string& log_path, const Channels& channels);
+/// Runs the proposals stage offline on the CAMERA_INFO, SLAM_MAP and SLAM_POSE of a recorded log
+/// (to try other options without running SLAM again).
+ProposalRecording rerunProposals(const std::string& log_path, const Channels& channels,
+                                 const ProposalOptions& options);
+
+struct ProposalEvalOptions {
+  int stride = 5;               ///< every stride-th frame is evaluated
+  int baseline_frames = 20;     ///< selective search runs on at most this many of those frames
+  int baseline_width = 320;     ///< px, frames are downscaled to this width for selective search
+  int baseline_max_boxes = 2000;
+  std::string plot_path;        ///< recall-vs-boxes PNG ("" = none)
+  bool baseline = true;
+};
+
+/// Per ground-truth box: the rank (1 = first) of the best-ranked proposal that covers it at the
+/// IoU threshold, 0 when none does. Recall at k boxes is the share of ranks in 1..k.
+struct ProposalScores {
+  std::vector<int> rank50, rank70;              ///< ours, every evaluated frame
+  std::vector<int> rank50_localized;            ///< ours, the evaluated frames SLAM localised
+  std::vector<int> boxes_per_frame;             ///< ours, localised evaluated frames
+  int frames = 0, localized_frames = 0;
+  std::vector<int> ours_on_baseline_frames;     ///< ours at IoU 0.5, the baseline's frames only
+  std::vector<int> baseline_rank50;             ///< selective search, its frames
+  int baseline_frames = 0;
+  double baseline_ms_per_frame = 0;
+};
+
+ProposalScores scoreProposals(const ProposalRecording& run, const SequenceFolder& sequence,
+                              const ProposalEvalOptions& options);
+/// The report section of one sequence or (several scores merged) of the suite; writes the plot.
+nlohmann::json proposalSection(const ProposalScores& scores, const std::string& plot_path = "");
+void mergeScores(ProposalScores* into, const ProposalScores& more);
+
+/// Writes <dir>/<frame>.png for evaluated frames (at most `max_frames`, spread evenly): the
+/// ground-truth boxes in green, our first `top_k` boxes in orange with their rank.
+void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& sequence, const std::string& dir,
+                        int stride, int max_frames, int top_k);
+
+}  // namespace slamaware
