@@ -7,6 +7,7 @@
 #include <deque>
 
 #include "common/bus/bus.h"
+#include "common/bus/input_loop.h"
 #include "common/bus/node.h"
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
@@ -71,26 +72,7 @@ int main(int argc, char** argv) {
     status.setState(StatusReporter::State::kRunning);
     status.publish();
     spdlog::info("{} on {}", lockstep ? "lockstep" : "real time", sys.bus.url);
-    int rc = 0;
-    while (!shutdownRequested()) {
-      if (bus.handle(pending.empty() ? 20 : 0) < 0 && !shutdownRequested()) {
-        spdlog::error("LCM failed; stopping");
-        rc = 1;
-        break;
-      }
-      if (!lockstep && pending.size() > 1) {
-        status.addDropped(static_cast<int64_t>(pending.size() - 1));
-        pending.erase(pending.begin(), pending.end() - 1);
-      }
-      while (!pending.empty()) {
-        const pose_t p = pending.front();
-        pending.pop_front();
-        handlePose(p);
-        if (!lockstep) break;
-      }
-      status.setQueueDepth(static_cast<int32_t>(pending.size()));
-      status.tick();
-    }
+    const int rc = runInputLoop(bus, status, pending, lockstep, handlePose, [] {});
     status.setState(StatusReporter::State::kStopping);
     status.publish();
     return rc;

@@ -11,6 +11,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "common/bus/bus.h"
+#include "common/bus/input_loop.h"
 #include "common/bus/image_msg.h"
 #include "common/bus/node.h"
 #include "common/bus/shutdown.h"
@@ -143,32 +144,18 @@ int main(int argc, char** argv) {
     spdlog::info("{} on {}", lockstep ? "lockstep" : "real time", sys.bus.url);
     int64_t last_utime = 0;
     int32_t last_seq = -1;
-    int rc = 0;
-    while (!shutdownRequested()) {
-      if (bus.handle(pending.empty() ? 20 : 0) < 0 && !shutdownRequested()) {
-        spdlog::error("LCM failed; stopping");
-        rc = 1;
-        break;
-      }
-      if (!lockstep && pending.size() > 1) {
-        // Real time: only the newest frame matters; the others are stale.
-        status.addDropped(static_cast<int64_t>(pending.size() - 1));
-        pending.erase(pending.begin(), pending.end() - 1);
-      }
-      while (!pending.empty()) {
-        const image_t img = std::move(pending.front());
-        pending.pop_front();
-        last_utime = img.utime;
-        last_seq = img.seq;
-        handleFrame(img);
-        if (!lockstep) break;  // look at the bus again before the next one
-      }
-      if (!lockstep && slam.hasCamera())
-        publish(bus, ch, slam.collectBackground(last_utime, last_seq), status);
-      reportStats(slam, status);
-      status.setQueueDepth(static_cast<int32_t>(pending.size()));
-      status.tick();
-    }
+    const int rc = runInputLoop(
+        bus, status, pending, lockstep,
+        [&](const image_t& img) {
+          last_utime = img.utime;
+          last_seq = img.seq;
+          handleFrame(img);
+        },
+        [&] {
+          if (!lockstep && slam.hasCamera())
+            publish(bus, ch, slam.collectBackground(last_utime, last_seq), status);
+          reportStats(slam, status);
+        });
     slam.flush();
     status.setState(StatusReporter::State::kStopping);
     reportStats(slam, status);
