@@ -1,34 +1,18 @@
 #include "procs/recognizer/model.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <array>
-#include <cerrno>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 
-namespace slamaware {
+#include "common/atomic_file.h"
 
-namespace fs = std::filesystem;
+namespace slamaware {
 
 namespace {
 
 constexpr char kMagic[8] = {'S', 'L', 'M', 'R', 'E', 'C', 'O', 'G'};
 constexpr size_t kHeaderSize = 28;
-
-std::array<uint32_t, 256> makeCrcTable() {
-  std::array<uint32_t, 256> t{};
-  for (uint32_t i = 0; i < 256; ++i) {
-    uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    t[i] = c;
-  }
-  return t;
-}
 
 class Writer {
  public:
@@ -187,14 +171,6 @@ uint32_t headerCrc(const uint8_t* header) { return crc32(header + 16, 12, crc32(
 
 }  // namespace
 
-uint32_t crc32(const void* data, size_t size, uint32_t crc) {
-  static const std::array<uint32_t, 256> table = makeCrcTable();
-  const auto* p = static_cast<const uint8_t*>(data);
-  crc = ~crc;
-  for (size_t i = 0; i < size; ++i) crc = table[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
-  return ~crc;
-}
-
 void RecognizerModel::check(const std::string& what) const {
   auto fail = [&](const std::string& why) { throw ModelError(what + ": " + why); };
   try {
@@ -235,43 +211,13 @@ void saveModel(const RecognizerModel& model, const std::string& path) {
   putU32(header + 24, crc32(payload.data(), payload.size()));
   putU32(header + 12, headerCrc(header));
 
-  const fs::path target(path);
-  if (target.has_parent_path()) fs::create_directories(target.parent_path());
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) throw ModelError(path + ": cannot create " + tmp + ": " + std::strerror(errno));
-  auto writeAll = [&](const uint8_t* p, size_t n) {
-    while (n > 0) {
-      const ssize_t k = ::write(fd, p, n);
-      if (k < 0) {
-        if (errno == EINTR) continue;
-        return false;
-      }
-      p += k;
-      n -= static_cast<size_t>(k);
-    }
-    return true;
-  };
-  if (!writeAll(header, kHeaderSize) || !writeAll(payload.data(), payload.size()) ||
-      ::fsync(fd) != 0) {
-    const std::string err = std::strerror(errno);
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw ModelError(path + ": writing failed: " + err);
-  }
-  ::close(fd);
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string err = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw ModelError(path + ": cannot rename the temporary file into place: " + err);
-  }
-  // Make the rename itself durable.
-  const std::string dir =
-      target.has_parent_path() ? target.parent_path().string() : std::string(".");
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
+  std::vector<uint8_t> bytes(kHeaderSize + payload.size());
+  std::memcpy(bytes.data(), header, kHeaderSize);
+  if (!payload.empty()) std::memcpy(bytes.data() + kHeaderSize, payload.data(), payload.size());
+  try {
+    writeFileAtomic(path, bytes.data(), bytes.size());
+  } catch (const std::runtime_error& e) {
+    throw ModelError(e.what());
   }
 }
 

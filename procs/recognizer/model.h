@@ -51,7 +51,4 @@ void saveModel(const RecognizerModel& model, const std::string& path);
 /// corrupt (checksum), of another format version, or inconsistent.
 RecognizerModel loadModel(const std::string& path);
 
-/// CRC-32 (IEEE) of a byte range, continuing from `crc` (0 to start).
-uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);
-
 }  // namespace slamaware

@@ -18,5 +18,7 @@ struct CtlContext {
 void addBusCommand(CLI::App& app, CtlContext& ctx);
 /// `status`, `start`, `stop`, `restart`, `logs`: the supervisors' table and commands.
 void addProcCommands(CLI::App& app, CtlContext& ctx);
+/// `query`: asks the object map (by label, by region) and prints the answer as a table.
+void addQueryCommand(CLI::App& app, CtlContext& ctx);
 
 }  // namespace slamaware

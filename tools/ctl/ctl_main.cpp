@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   slamaware::addBusCommand(app, ctx);
   slamaware::addProcCommands(app, ctx);
+  slamaware::addQueryCommand(app, ctx);
   CLI11_PARSE(app, argc, argv);
   return ctx.exit_code;
 }

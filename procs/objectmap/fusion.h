@@ -1,0 +1,24 @@
+#pragma once
+// Multi-view class fusion (DESIGN.md §3; Pillai & Leonard 2015, Sec. IV-D). With views x_1..x_N
+// of one object taken as independent and a uniform prior p(c), Bayes gives
+//   p(c | x_1..x_N) ∝ p(c) ∏_i p(x_i | c) ∝ ∏_i p(c | x_i) / p(c)^(N-1) ∝ ∏_i p(c | x_i),
+// so the maximum-likelihood label is argmax_c sum_i log p(c | x_i). The object map keeps that sum
+// (the log evidence) per class; the posterior is its softmax.
+#include <cstddef>
+#include <vector>
+
+namespace slamaware {
+
+/// sum_i log p(c | x_i) per class over the views (each a vector of natural-log probabilities, one
+/// per class, num_classes long). Summed in double, in the order given.
+std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
+                                        size_t num_classes);
+
+/// p(c | all views) = softmax of the summed log evidence (shifted by its maximum, so that sums of
+/// hundreds of views do not underflow). Empty in, empty out.
+std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evidence);
+
+/// The class with the highest value; ties go to the lower index; -1 for an empty vector.
+int argmaxClass(const std::vector<double>& values);
+
+}  // namespace slamaware

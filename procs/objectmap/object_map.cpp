@@ -1,0 +1,693 @@
+#include "procs/objectmap/object_map.h"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "common/bus/image_msg.h"
+#include "common/geometry.h"
+#include "procs/objectmap/candidate_voxels.h"
+
+namespace slamaware {
+
+namespace {
+
+using json = nlohmann::json;
+
+/// Log-probabilities are clamped here: e^-100 is zero for every purpose, and sums stay finite.
+constexpr float kMinLogProb = -100.f;
+/// A log-probability above this is not one (rounding in the producer is allowed for).
+constexpr float kMaxLogProb = 1e-3f;
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool localisedState(int8_t state) {
+  return state == pose_t::STATE_TRACKING || state == pose_t::STATE_RELOCALIZED;
+}
+
+const char* stateName(int8_t state) {
+  switch (state) {
+    case pose_t::STATE_INITIALIZING:
+      return "INITIALIZING";
+    case pose_t::STATE_TRACKING:
+      return "TRACKING";
+    case pose_t::STATE_LOST:
+      return "LOST";
+    case pose_t::STATE_RELOCALIZED:
+      return "RELOCALIZED";
+    default:
+      return "unknown";
+  }
+}
+
+/// The double nearest to the shortest decimal that gives back `f`: JSON then stores "0.1", not
+/// "0.10000000149011612", and reading it back gives exactly `f`.
+double compactFloat(float f) {
+  if (!std::isfinite(f)) return static_cast<double>(f);
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), f);
+  double d = static_cast<double>(f);
+  std::from_chars(buf, r.ptr, d);  // locale-independent, unlike strtod
+  return d;
+}
+
+template <class T>
+void trimTo(std::map<int32_t, T>& buffer, int max_size) {
+  while (buffer.size() > static_cast<size_t>(std::max(1, max_size))) buffer.erase(buffer.begin());
+}
+
+json vec3(const Eigen::Vector3d& v) {
+  json a = json::array();
+  for (int i = 0; i < 3; ++i) a.push_back(v[i]);
+  return a;
+}
+
+Eigen::Vector3d vec3From(const json& a) {
+  if (!a.is_array() || a.size() != 3) throw std::runtime_error("expected 3 numbers");
+  return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>());
+}
+
+}  // namespace
+
+Rgb labelColour(const std::string& name) {
+  if (name == kBackgroundClass) return Rgb{70, 70, 70};
+  // The paper's five classes (config/objects/uw5.yaml) get colours that are easy to tell apart in
+  // octovis; any other name a fixed hue from a hash of the name, whatever the map's class order.
+  static const std::map<std::string, Rgb> table = {{"bowl", {230, 25, 75}},
+                                                   {"cap", {60, 180, 75}},
+                                                   {"cereal_box", {255, 225, 25}},
+                                                   {"coffee_mug", {0, 130, 200}},
+                                                   {"soda_can", {245, 130, 48}}};
+  if (auto it = table.find(name); it != table.end()) return it->second;
+  uint32_t h = 2166136261u;  // FNV-1a
+  for (unsigned char ch : name) h = (h ^ ch) * 16777619u;
+  const double hue = (h % 360u) / 60.0, s = 0.85, v = 0.95;
+  const double c = v * s, x = c * (1 - std::fabs(std::fmod(hue, 2.0) - 1)), m = v - c;
+  double r = 0, g = 0, b = 0;
+  switch (static_cast<int>(hue)) {
+    case 0:
+      r = c, g = x;
+      break;
+    case 1:
+      r = x, g = c;
+      break;
+    case 2:
+      g = c, b = x;
+      break;
+    case 3:
+      g = x, b = c;
+      break;
+    case 4:
+      r = x, b = c;
+      break;
+    default:
+      r = c, b = x;
+      break;
+  }
+  auto to8 = [&](double u) { return static_cast<uint8_t>(std::lround(255 * (u + m))); };
+  return Rgb{to8(r), to8(g), to8(b)};
+}
+
+ObjectMapEngine::ObjectMapEngine(const ObjectMapOptions& options) : options_(options) {}
+ObjectMapEngine::ObjectMapEngine(ObjectMapEngine&&) noexcept = default;
+ObjectMapEngine& ObjectMapEngine::operator=(ObjectMapEngine&&) noexcept = default;
+ObjectMapEngine::~ObjectMapEngine() = default;
+
+bool ObjectMapEngine::onCameraInfo(const camera_info_t& info, std::string* why) {
+  CameraModel camera;
+  if (!cameraFromMessage(info, &camera, why)) return false;
+  camera_ = camera;
+  have_camera_ = true;
+  return true;
+}
+
+Segment& ObjectMapEngine::segmentFor(int32_t slam_map_id) {
+  auto it = session_maps_.find(slam_map_id);
+  if (it != session_maps_.end()) return *segments_.at(it->second);
+  int32_t id = slam_map_id;
+  if (id < 0 || segments_.count(id))
+    id = segments_.empty() ? 0 : std::max(0, segments_.rbegin()->first + 1);
+  auto seg = std::make_unique<Segment>(
+      id, slam_map_id, OccupancyMap(options_.occupancy, options_.occupancy.resolution));
+  Segment& ref = *seg;
+  segments_.emplace(id, std::move(seg));
+  session_maps_[slam_map_id] = id;
+  return ref;
+}
+
+bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudReport* report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = static_cast<size_t>(std::max(0, c.num_points));
+  if (c.num_points < 0 || c.x.size() != n || c.y.size() != n || c.z.size() != n ||
+      c.depth_std.size() != n || c.keyframe_ids.size() != n) {
+    *why = "point cloud of seq " + std::to_string(c.seq) + ": arrays disagree with num_points " +
+           std::to_string(c.num_points);
+    return false;
+  }
+  const size_t nk = static_cast<size_t>(std::max(0, c.num_keyframes));
+  if (c.num_keyframes < 0 || c.kf_ids.size() != nk || c.kf_x.size() != nk || c.kf_y.size() != nk ||
+      c.kf_z.size() != nk) {
+    *why = "point cloud of seq " + std::to_string(c.seq) +
+           ": keyframe arrays disagree with num_keyframes " + std::to_string(c.num_keyframes);
+    return false;
+  }
+  Segment& seg = segmentFor(c.map_id);
+  if (c.full) seg.occupancy.clear();
+  std::unordered_map<int32_t, Eigen::Vector3f> origins;
+  for (size_t k = 0; k < nk; ++k) {
+    const Eigen::Vector3f o(c.kf_x[k], c.kf_y[k], c.kf_z[k]);
+    if (o.allFinite()) origins[c.kf_ids[k]] = o;
+  }
+  // One batch per keyframe (its points share the ray origin), in keyframe order.
+  const int max_points = std::max(1, options_.occupancy.max_points);
+  const size_t stride =
+      c.full && n > static_cast<size_t>(max_points) ? (n + max_points - 1) / max_points : 1;
+  std::map<int32_t, std::vector<Eigen::Vector3f>> batches;
+  CloudReport r;
+  r.full = c.full;
+  r.segment = seg.id;
+  for (size_t i = 0; i < n; i += stride) {
+    if (options_.occupancy.max_depth_std > 0 &&
+        !(c.depth_std[i] <= options_.occupancy.max_depth_std)) {
+      ++r.insert.dropped;
+      continue;
+    }
+    batches[c.keyframe_ids[i]].emplace_back(c.x[i], c.y[i], c.z[i]);
+  }
+  for (const auto& [kf, points] : batches) {
+    auto o = origins.find(kf);
+    const InsertStats s = seg.occupancy.insert(points, o == origins.end() ? nullptr : &o->second);
+    r.insert.points += s.points;
+    r.insert.dropped += s.dropped;
+    r.insert.occupied_updates += s.occupied_updates;
+    r.insert.free_updates += s.free_updates;
+  }
+  seg.dirty = true;
+  ++changes_;
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (report) *report = r;
+  return true;
+}
+
+bool ObjectMapEngine::onPose(const pose_t& pose, std::string* why) {
+  bool finite = true;
+  for (double v : pose.position) finite = finite && std::isfinite(v);
+  double qn = 0;
+  for (double v : pose.orientation) {
+    finite = finite && std::isfinite(v);
+    qn += v * v;
+  }
+  if (!finite || (localisedState(pose.state) && qn < 1e-12)) {
+    *why = "pose of seq " + std::to_string(pose.seq) + " is not finite or has a zero quaternion";
+    return false;
+  }
+  if (last_pose_seq_ >= 0 && (pose.seq < last_pose_seq_ || pose.utime < last_pose_utime_)) {
+    // The camera or a replay restarted: SLAM's map ids start again and mean other maps.
+    ++sessions_;
+    session_maps_.clear();
+    poses_.clear();
+    proposals_.clear();
+  }
+  last_pose_seq_ = pose.seq;
+  last_pose_utime_ = pose.utime;
+  if (localisedState(pose.state)) current_segment_ = segmentFor(pose.map_id).id;
+  poses_[pose.seq] = pose;
+  trimTo(poses_, options_.seq_buffer);
+  return true;
+}
+
+bool ObjectMapEngine::onProposals(const proposals_t& p, std::string* why) {
+  const size_t n = static_cast<size_t>(std::max(0, p.num_boxes));
+  if (p.num_boxes < 0 || p.boxes.size() != n || p.candidate_ids.size() != n ||
+      p.median_depth.size() != n) {
+    *why = "proposals of seq " + std::to_string(p.seq) + ": arrays disagree with num_boxes";
+    return false;
+  }
+  proposals_[p.seq] = p;
+  trimTo(proposals_, options_.seq_buffer);
+  return true;
+}
+
+std::vector<int> ObjectMapEngine::mapClasses(const std::vector<std::string>& names) {
+  std::vector<std::string> list = classes_;
+  bool added = false;
+  for (const auto& name : names) {
+    if (std::find(list.begin(), list.end(), name) != list.end()) continue;
+    // "background" stays last, as in DETECTIONS.
+    auto bg = std::find(list.begin(), list.end(), std::string(kBackgroundClass));
+    if (name != kBackgroundClass && bg != list.end())
+      list.insert(bg, name);
+    else
+      list.push_back(name);
+    added = true;
+  }
+  if (added) {
+    std::vector<int> old_to_new(classes_.size());
+    for (size_t i = 0; i < classes_.size(); ++i)
+      old_to_new[i] =
+          static_cast<int>(std::find(list.begin(), list.end(), classes_[i]) - list.begin());
+    for (auto& [id, seg] : segments_) {
+      seg->table.remapClasses(old_to_new, list.size());
+      seg->dirty = true;
+    }
+    classes_ = std::move(list);
+    ++changes_;
+  }
+  std::vector<int> to_map(names.size());
+  for (size_t k = 0; k < names.size(); ++k)
+    to_map[k] =
+        static_cast<int>(std::find(classes_.begin(), classes_.end(), names[k]) - classes_.begin());
+  return to_map;
+}
+
+bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, FrameReport* report) {
+  const size_t nb = static_cast<size_t>(std::max(0, d.num_boxes));
+  const size_t nc = static_cast<size_t>(std::max(0, d.num_classes));
+  const std::string what = "detections of seq " + std::to_string(d.seq);
+  if (d.num_boxes < 0 || d.num_classes < 0 || d.class_names.size() != nc || d.boxes.size() != nb ||
+      d.candidate_ids.size() != nb || d.log_prob.size() != nb) {
+    *why = what + ": arrays disagree with num_boxes / num_classes";
+    return false;
+  }
+  for (const auto& row : d.log_prob)
+    if (row.size() != nc) {
+      *why = what + ": a log_prob row is not num_classes long";
+      return false;
+    }
+  std::set<std::string> unique;
+  for (const auto& name : d.class_names)
+    if (name.empty() || !unique.insert(name).second) {
+      *why = what + ": empty or repeated class name '" + name + "'";
+      return false;
+    }
+  FrameReport r;
+  last_utime_ = d.utime;
+  last_seq_ = d.seq;
+  if (nb == 0 || nc == 0) {
+    if (report) *report = r;
+    return true;
+  }
+  const std::vector<int> to_map = mapClasses(d.class_names);
+  Segment& seg = segmentFor(d.map_id);
+  r.segment = seg.id;
+  current_segment_ = seg.id;
+
+  // The join: the frame's pose and proposals (they arrive before its detections).
+  const pose_t* pose = nullptr;
+  const proposals_t* proposals = nullptr;
+  if (auto it = poses_.find(d.seq); it != poses_.end() && it->second.utime == d.utime)
+    pose = &it->second;
+  if (auto it = proposals_.find(d.seq); it != proposals_.end() && it->second.utime == d.utime)
+    proposals = &it->second;
+  if (!pose)
+    r.no_geometry = "no SLAM_POSE for seq " + std::to_string(d.seq);
+  else if (!localisedState(pose->state))
+    r.no_geometry = std::string("frame not localised (") + stateName(pose->state) + ")";
+  else if (pose->map_id != d.map_id)
+    r.no_geometry = "pose in map " + std::to_string(pose->map_id) + ", detections in map " +
+                    std::to_string(d.map_id);
+  else if (!proposals || proposals->map_id != d.map_id)
+    r.no_geometry =
+        "no PROPOSALS of map " + std::to_string(d.map_id) + " for seq " + std::to_string(d.seq);
+  else if (!have_camera_)
+    r.no_geometry = "no CAMERA_INFO yet";
+  r.localised = r.no_geometry.empty();
+
+  // One box per candidate and frame (the larger, if the recognizer sent two).
+  std::map<int32_t, size_t> box_of;
+  for (size_t i = 0; i < nb; ++i) {
+    const box_t& b = d.boxes[i];
+    bool ok = std::isfinite(b.x) && std::isfinite(b.y) && std::isfinite(b.w) &&
+              std::isfinite(b.h) && b.w > 0 && b.h > 0;
+    for (float lp : d.log_prob[i]) ok = ok && !std::isnan(lp) && lp <= kMaxLogProb;
+    if (!ok) {
+      ++r.boxes_rejected;
+      continue;
+    }
+    auto [it, inserted] = box_of.emplace(d.candidate_ids[i], i);
+    if (!inserted && b.w * b.h > d.boxes[it->second].w * d.boxes[it->second].h) it->second = i;
+  }
+  std::vector<VoteBox> vote_boxes;
+  std::vector<int32_t> vote_candidates;
+  const SE3 T_world_camera =
+      r.localised ? se3FromArrays(pose->position, pose->orientation) : SE3::Identity();
+  for (const auto& [cid, i] : box_of) {
+    const box_t& b = d.boxes[i];
+    View v;
+    v.utime = d.utime;
+    v.seq = d.seq;
+    v.area = b.w * b.h;
+    const auto& row = d.log_prob[i];
+    const float floor = std::max(kMinLogProb, *std::min_element(row.begin(), row.end()));
+    v.log_prob.assign(classes_.size(), floor);
+    for (size_t k = 0; k < nc; ++k)
+      v.log_prob[static_cast<size_t>(to_map[k])] = std::max(kMinLogProb, row[k]);
+    seg.table.addView(cid, std::move(v));
+    ++r.boxes;
+    if (!r.localised) continue;
+    float depth = -1;
+    for (size_t j = 0; j < proposals->candidate_ids.size(); ++j)
+      if (proposals->candidate_ids[j] == cid) depth = proposals->median_depth[j];
+    if (!(depth > 0) || !std::isfinite(depth)) continue;
+    VoteBox vb{b.x, b.y, b.w, b.h, depth};
+    vote_boxes.push_back(vb);
+    vote_candidates.push_back(cid);
+    // Where the box says the candidate is, for as long as it has no voxels.
+    const Eigen::Vector3d ray =
+        camera_.unproject(Eigen::Vector2d(b.x + 0.5 * b.w, b.y + 0.5 * b.h));
+    const double f = 0.5 * (camera_.fx() + camera_.fy());
+    seg.table.addBoxPosition(cid, T_world_camera * (ray * depth), std::max(b.w, b.h) / f * depth);
+  }
+  if (!vote_boxes.empty()) {
+    const auto voxels = voxelsInBoxes(seg.occupancy.occupied(), camera_, T_world_camera, vote_boxes,
+                                      options_.voting);
+    for (size_t k = 0; k < vote_boxes.size(); ++k)
+      seg.table.addVotes(vote_candidates[k], voxels[k], options_.voting);
+    r.boxes_voted = static_cast<int>(vote_boxes.size());
+  }
+  seg.dirty = true;
+  ++changes_;
+  if (report) *report = r;
+  return true;
+}
+
+void ObjectMapEngine::updateObjects() {
+  for (auto& [id, seg] : segments_) {
+    if (!seg->dirty) continue;
+    Segment& s = *seg;
+    s.table.update([&s](VoxelKey k) { return s.occupancy.isOccupied(k); }, options_.voting,
+                   options_.grouping, classes_.size(), [this] { return next_object_id_++; });
+    s.dirty = false;
+  }
+}
+
+size_t ObjectMapEngine::numObjects() {
+  updateObjects();
+  size_t n = 0;
+  for (const auto& [id, seg] : segments_) n += seg->table.objects().size();
+  return n;
+}
+
+size_t ObjectMapEngine::numCandidates() const {
+  size_t n = 0;
+  for (const auto& [id, seg] : segments_) n += seg->table.candidates().size();
+  return n;
+}
+
+size_t ObjectMapEngine::numOccupiedVoxels() const {
+  size_t n = 0;
+  for (const auto& [id, seg] : segments_) n += seg->occupancy.occupied().size();
+  return n;
+}
+
+namespace {
+
+object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::string>& classes) {
+  object_t m;
+  m.id = o.id;
+  m.map_id = segment;
+  m.label = o.label >= 0 ? classes[static_cast<size_t>(o.label)] : "";
+  m.num_classes = static_cast<int32_t>(classes.size());
+  m.posterior.resize(classes.size(), 0.f);
+  m.log_evidence.resize(classes.size(), 0.f);
+  for (size_t c = 0; c < classes.size() && c < o.posterior.size(); ++c) {
+    m.posterior[c] = static_cast<float>(o.posterior[c]);
+    m.log_evidence[c] = static_cast<float>(o.log_evidence[c]);
+  }
+  m.num_views = o.num_views;
+  for (int i = 0; i < 3; ++i) {
+    // Never seen from a localised frame: the position is unknown (NaN), not the origin.
+    m.centroid[i] = o.has_position ? o.centroid[i] : kNaN;
+    m.extent[i] = o.has_position ? o.extent[i] : kNaN;
+  }
+  m.num_voxels = o.num_voxels;
+  m.first_seen_utime = o.first_seen_utime;
+  m.last_seen_utime = o.last_seen_utime;
+  return m;
+}
+
+}  // namespace
+
+object_map_t ObjectMapEngine::objectMap() {
+  updateObjects();
+  object_map_t m;
+  m.utime = last_utime_;
+  m.seq = last_seq_;
+  m.map_id = current_segment_;
+  m.saved_map_path = "";
+  m.saved_utime = 0;
+  m.class_names = classes_;
+  m.num_classes = static_cast<int32_t>(classes_.size());
+  std::map<int32_t, object_t> by_id;
+  for (const auto& [sid, seg] : segments_)
+    for (const auto& [oid, o] : seg->table.objects())
+      by_id.emplace(oid, objectMessage(o, sid, classes_));
+  for (auto& [id, o] : by_id) m.objects.push_back(std::move(o));
+  m.num_objects = static_cast<int32_t>(m.objects.size());
+  return m;
+}
+
+object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) {
+  updateObjects();
+  object_query_reply_t reply;
+  reply.utime = 0;
+  reply.request_id = q.request_id;
+  reply.class_names = classes_;
+  reply.num_classes = static_cast<int32_t>(classes_.size());
+  reply.num_objects = 0;
+  auto fail = [&](const std::string& why) {
+    reply.error = why;
+    return reply;
+  };
+  if (q.kind != object_query_t::KIND_ALL && q.kind != object_query_t::KIND_BY_LABEL &&
+      q.kind != object_query_t::KIND_BY_REGION)
+    return fail("unknown query kind " + std::to_string(q.kind) +
+                " (0: all, 1: by label, 2: by region)");
+  if (q.map_id != -1 && !segments_.count(q.map_id)) {
+    std::string ids;
+    for (const auto& [id, seg] : segments_) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+    return fail("no map segment " + std::to_string(q.map_id) +
+                " (segments: " + (ids.empty() ? "none" : ids) + ")");
+  }
+  int label = -1;
+  if (q.kind == object_query_t::KIND_BY_LABEL) {
+    auto it = std::find(classes_.begin(), classes_.end(), q.label);
+    if (it == classes_.end()) {
+      std::string names;
+      for (const auto& c : classes_) names += (names.empty() ? "" : ", ") + c;
+      return fail("unknown label '" + q.label +
+                  "' (classes: " + (names.empty() ? "none yet" : names) + ")");
+    }
+    label = static_cast<int>(it - classes_.begin());
+  }
+  if (q.kind == object_query_t::KIND_BY_REGION) {
+    for (int i = 0; i < 3; ++i)
+      if (!std::isfinite(q.region_min[i]) || !std::isfinite(q.region_max[i]) ||
+          q.region_min[i] > q.region_max[i])
+        return fail("bad region: every region_min must be finite and <= region_max");
+  }
+  std::map<int32_t, object_t> by_id;
+  for (const auto& [sid, seg] : segments_) {
+    if (q.map_id != -1 && sid != q.map_id) continue;
+    for (const auto& [oid, o] : seg->table.objects()) {
+      if (q.kind == object_query_t::KIND_BY_LABEL && o.label != label) continue;
+      if (q.kind == object_query_t::KIND_BY_REGION) {
+        if (!o.has_position) continue;
+        bool overlaps = true;
+        for (int i = 0; i < 3; ++i)
+          overlaps = overlaps && o.centroid[i] - 0.5 * o.extent[i] <= q.region_max[i] &&
+                     o.centroid[i] + 0.5 * o.extent[i] >= q.region_min[i];
+        if (!overlaps) continue;
+      }
+      by_id.emplace(oid, objectMessage(o, sid, classes_));
+    }
+  }
+  for (auto& [id, o] : by_id) reply.objects.push_back(std::move(o));
+  reply.num_objects = static_cast<int32_t>(reply.objects.size());
+  return reply;
+}
+
+MapSnapshot ObjectMapEngine::snapshot() {
+  updateObjects();
+  MapSnapshot snap;
+  json& c = snap.content;
+  c["classes"] = classes_;
+  json colours = json::object();
+  for (const auto& name : classes_) {
+    const Rgb rgb = labelColour(name);
+    colours[name] = {rgb.r, rgb.g, rgb.b};
+  }
+  colours["(unassigned)"] = {kUnassignedColour.r, kUnassignedColour.g, kUnassignedColour.b};
+  c["colours"] = colours;
+  c["next_object_id"] = next_object_id_;
+  c["sessions"] = sessions_;
+  json maps = json::array();
+  for (const auto& [slam, seg] : session_maps_) maps.push_back({slam, seg});
+  c["session"] = {
+      {"last_pose_utime", last_pose_utime_}, {"last_pose_seq", last_pose_seq_}, {"maps", maps}};
+  c["last_frame"] = {{"utime", last_utime_}, {"seq", last_seq_}};
+  c["current_segment"] = current_segment_;
+  c["segments"] = json::array();
+  c["objects"] = json::array();
+  for (auto& [sid, seg] : segments_) {
+    // Colours of the .ot: each object's voxels in its label's colour (the lower id wins a voxel
+    // two objects share), other occupied voxels grey.
+    std::unordered_map<VoxelKey, Rgb> colour_of;
+    for (const auto& [oid, o] : seg->table.objects()) {
+      const Rgb rgb =
+          o.label >= 0 ? labelColour(classes_[static_cast<size_t>(o.label)]) : kUnassignedColour;
+      for (int32_t cid : o.candidates)
+        for (VoxelKey k : seg->table.candidates().at(cid).voxels) colour_of.emplace(k, rgb);
+    }
+    snap.segment_files[sid] = seg->occupancy.serialize([&](VoxelKey k) {
+      auto it = colour_of.find(k);
+      return it == colour_of.end() ? kUnassignedColour : it->second;
+    });
+    c["segments"].push_back({{"id", sid},
+                             {"slam_map_id", seg->slam_map_id},
+                             {"resolution", seg->occupancy.resolution()},
+                             {"occupied_voxels", seg->occupancy.occupied().size()}});
+    for (const auto& [oid, o] : seg->table.objects()) {
+      json jo;
+      jo["id"] = oid;
+      jo["segment"] = sid;
+      // Summary for readers of the file; recomputed on load.
+      jo["label"] = o.label >= 0 ? classes_[static_cast<size_t>(o.label)] : "";
+      jo["num_views"] = o.num_views;
+      jo["num_voxels"] = o.num_voxels;
+      if (o.has_position) {
+        jo["centroid"] = vec3(o.centroid);
+        jo["extent"] = vec3(o.extent);
+      }
+      jo["candidates"] = json::array();
+      for (int32_t cid : o.candidates) {
+        const Candidate& cand = seg->table.candidates().at(cid);
+        json jc;
+        jc["id"] = cid;
+        jc["voting_views"] = cand.voting_views;
+        std::vector<std::pair<VoxelKey, int32_t>> votes(cand.votes.begin(), cand.votes.end());
+        std::sort(votes.begin(), votes.end());
+        json flat = json::array();  // kx, ky, kz, votes per voxel
+        for (const auto& [k, n] : votes) {
+          for (int a = 0; a < 3; ++a) flat.push_back(voxelKeyAxis(k, a));
+          flat.push_back(n);
+        }
+        jc["votes"] = std::move(flat);
+        jc["box_position_sum"] = vec3(cand.box_position_sum);
+        jc["box_positions"] = cand.box_positions;
+        jc["box_size"] = cand.box_size;
+        json views = json::array();  // utime, seq, area, log p per class
+        for (const auto& [key, v] : cand.views) {
+          json jv = {v.utime, v.seq, compactFloat(v.area)};
+          for (float lp : v.log_prob) jv.push_back(compactFloat(lp));
+          views.push_back(std::move(jv));
+        }
+        jc["views"] = std::move(views);
+        jo["candidates"].push_back(std::move(jc));
+      }
+      c["objects"].push_back(std::move(jo));
+    }
+  }
+  return snap;
+}
+
+void ObjectMapEngine::restore(const MapSnapshot& snap) {
+  ObjectMapEngine fresh(options_);
+  const json& c = snap.content;
+  std::string where = "object table";
+  try {
+    where = "classes";
+    fresh.classes_ = c.at("classes").get<std::vector<std::string>>();
+    std::set<std::string> unique(fresh.classes_.begin(), fresh.classes_.end());
+    if (unique.size() != fresh.classes_.size() || unique.count(""))
+      throw std::runtime_error("empty or repeated class names");
+    const size_t nc = fresh.classes_.size();
+    where = "header fields";
+    fresh.next_object_id_ = c.at("next_object_id").get<int32_t>();
+    fresh.sessions_ = c.at("sessions").get<int64_t>();
+    fresh.last_pose_utime_ = c.at("session").at("last_pose_utime").get<int64_t>();
+    fresh.last_pose_seq_ = c.at("session").at("last_pose_seq").get<int32_t>();
+    fresh.last_utime_ = c.at("last_frame").at("utime").get<int64_t>();
+    fresh.last_seq_ = c.at("last_frame").at("seq").get<int32_t>();
+    fresh.current_segment_ = c.at("current_segment").get<int32_t>();
+    for (const auto& s : c.at("segments")) {
+      const int32_t id = s.at("id").get<int32_t>();
+      where = "segment " + std::to_string(id);
+      auto bytes = snap.segment_files.find(id);
+      if (bytes == snap.segment_files.end()) throw std::runtime_error("no .ot file");
+      if (fresh.segments_.count(id)) throw std::runtime_error("listed twice");
+      OccupancyMap map =
+          OccupancyMap::deserialize(bytes->second, options_.occupancy, "its .ot file");
+      fresh.segments_.emplace(
+          id, std::make_unique<Segment>(id, s.at("slam_map_id").get<int32_t>(), std::move(map)));
+    }
+    where = "session maps";
+    for (const auto& m : c.at("session").at("maps")) {
+      const int32_t seg = m.at(1).get<int32_t>();
+      if (!fresh.segments_.count(seg))
+        throw std::runtime_error("unknown segment " + std::to_string(seg));
+      fresh.session_maps_[m.at(0).get<int32_t>()] = seg;
+    }
+    std::set<int32_t> object_ids;
+    for (const auto& jo : c.at("objects")) {
+      const int32_t oid = jo.at("id").get<int32_t>();
+      where = "object " + std::to_string(oid);
+      if (!object_ids.insert(oid).second) throw std::runtime_error("listed twice");
+      if (oid >= fresh.next_object_id_) throw std::runtime_error("id not below next_object_id");
+      auto seg = fresh.segments_.find(jo.at("segment").get<int32_t>());
+      if (seg == fresh.segments_.end()) throw std::runtime_error("unknown segment");
+      ObjectTable& table = seg->second->table;
+      std::vector<int32_t> cids;
+      for (const auto& jc : jo.at("candidates")) {
+        const int32_t cid = jc.at("id").get<int32_t>();
+        where = "object " + std::to_string(oid) + " candidate " + std::to_string(cid);
+        if (table.findCandidate(cid)) throw std::runtime_error("listed twice");
+        Candidate& cand = table.restoreCandidate(cid);
+        cand.id = cid;
+        cand.voting_views = jc.at("voting_views").get<int32_t>();
+        const auto flat = jc.at("votes").get<std::vector<int64_t>>();
+        if (flat.size() % 4) throw std::runtime_error("votes are not groups of 4");
+        for (size_t i = 0; i < flat.size(); i += 4) {
+          for (size_t a = 0; a < 3; ++a)
+            if (flat[i + a] < 0 || flat[i + a] > 0xffff)
+              throw std::runtime_error("voxel key out of range");
+          cand.votes[packVoxelKey(
+              static_cast<uint32_t>(flat[i]), static_cast<uint32_t>(flat[i + 1]),
+              static_cast<uint32_t>(flat[i + 2]))] = static_cast<int32_t>(flat[i + 3]);
+        }
+        cand.box_position_sum = vec3From(jc.at("box_position_sum"));
+        cand.box_positions = jc.at("box_positions").get<int32_t>();
+        cand.box_size = jc.at("box_size").get<double>();
+        for (const auto& jv : jc.at("views")) {
+          if (!jv.is_array() || jv.size() != 3 + nc)
+            throw std::runtime_error("a view is not 3 + classes numbers");
+          View v;
+          v.utime = jv[0].get<int64_t>();
+          v.seq = jv[1].get<int32_t>();
+          v.area = jv[2].get<float>();
+          for (size_t k = 0; k < nc; ++k) v.log_prob.push_back(jv[3 + k].get<float>());
+          const ViewKey key{v.utime, v.seq};
+          cand.views[key] = std::move(v);
+        }
+        cids.push_back(cid);
+      }
+      table.restoreObject(oid, std::move(cids));
+    }
+  } catch (const json::exception& e) {
+    throw std::runtime_error(where + ": " + e.what());
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(where + ": " + e.what());
+  }
+  fresh.camera_ = camera_;
+  fresh.have_camera_ = have_camera_;
+  fresh.updateObjects();
+  fresh.changes_ = 0;
+  *this = std::move(fresh);
+}
+
+}  // namespace slamaware

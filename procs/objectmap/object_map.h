@@ -1,0 +1,146 @@
+#pragma once
+// The object map without the bus: SLAM_MAP, SLAM_POSE, CAMERA_INFO, PROPOSALS and DETECTIONS
+// messages in; the OBJECT_MAP message, query replies and a snapshot for saving out. The node
+// (objectmap_main.cpp) feeds it from LCM; tests feed it directly.
+//
+// Segments: each SLAM map (map id) is a segment with its own occupancy and objects; a new map id
+// starts a new segment and the others stay as they are (queryable, saved). SLAM map ids are
+// unique only within one run of the pipeline, so the segment of a map id is looked up in the
+// current session; a new session starts when the pose stream goes back in seq or time (the
+// camera or a replay restarted), and its map ids get new segments. A segment's id is its SLAM map
+// id unless an earlier session used that id.
+//
+// Per frame (the join on seq of SLAM_POSE, PROPOSALS and DETECTIONS): every box adds a view of
+// its candidate with the box's class log-probabilities; in a localised frame it also votes for the
+// occupied voxels it covers near the candidate's median depth (candidate_voxels.h). Objects are
+// regrouped lazily, when the map is read (objectMap(), answer(), snapshot()).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/camera_model.h"
+#include "procs/objectmap/map_store.h"
+#include "procs/objectmap/object_table.h"
+#include "procs/objectmap/objectmap_options.h"
+#include "procs/objectmap/occupancy_map.h"
+#include "slamaware/camera_info_t.hpp"
+#include "slamaware/detections_t.hpp"
+#include "slamaware/object_map_t.hpp"
+#include "slamaware/object_query_reply_t.hpp"
+#include "slamaware/object_query_t.hpp"
+#include "slamaware/point_cloud_t.hpp"
+#include "slamaware/pose_t.hpp"
+#include "slamaware/proposals_t.hpp"
+
+namespace slamaware {
+
+/// The name of the class that means "no object" (the recognizer's last class).
+constexpr const char* kBackgroundClass = "background";
+
+/// Colour of a class's voxels in the saved .ot: fixed per class name (a table for the paper's five
+/// classes, else a hue from a hash of the name), dark grey for background; kUnassignedColour for
+/// occupied voxels of no object. The JSON lists the colours of its classes ("colours").
+Rgb labelColour(const std::string& class_name);
+constexpr Rgb kUnassignedColour{170, 170, 170};
+
+struct Segment {
+  int32_t id = -1;           ///< object_t.map_id
+  int32_t slam_map_id = -1;  ///< SLAM's map id in the session that created it
+  OccupancyMap occupancy;
+  ObjectTable table;
+  bool dirty = true;  ///< objects need regrouping
+  Segment(int32_t id, int32_t slam_map_id, OccupancyMap map)
+      : id(id),
+        slam_map_id(slam_map_id),
+        occupancy(std::move(map)),
+        table(occupancy.resolution()) {}
+};
+
+struct CloudReport {
+  int32_t segment = -1;
+  bool full = false;
+  InsertStats insert;
+  double ms = 0;
+};
+
+struct FrameReport {
+  int32_t segment = -1;
+  int boxes = 0;            ///< boxes fused (views added)
+  int boxes_rejected = 0;   ///< non-finite box or log-probabilities
+  int boxes_voted = 0;      ///< boxes that voted for voxels
+  bool localised = false;   ///< the frame had a usable pose, camera and proposals
+  std::string no_geometry;  ///< why the frame's boxes did not vote ("" if they did)
+};
+
+class ObjectMapEngine {
+ public:
+  explicit ObjectMapEngine(const ObjectMapOptions& options);
+  ObjectMapEngine(ObjectMapEngine&&) noexcept;
+  ObjectMapEngine& operator=(ObjectMapEngine&&) noexcept;
+  ~ObjectMapEngine();
+
+  /// False (and *why) for a camera that cannot be used.
+  bool onCameraInfo(const camera_info_t& info, std::string* why);
+  /// Inserts a cloud into its segment's occupancy (a full cloud replaces it). False (and *why)
+  /// when the arrays disagree with the counts.
+  bool onMap(const point_cloud_t& cloud, std::string* why, CloudReport* report = nullptr);
+  /// Keeps the pose for the join (bounded); a pose going back in seq or time starts a new session.
+  /// False (and *why) for a non-finite pose (it is not kept).
+  bool onPose(const pose_t& pose, std::string* why);
+  /// Keeps the proposals for the join (bounded). False (and *why) when the arrays disagree.
+  bool onProposals(const proposals_t& proposals, std::string* why);
+  /// Fuses one frame's detections. False (and *why) for a malformed message (arrays that disagree,
+  /// repeated class names): nothing of it is used. Bad boxes are skipped and counted in the report.
+  bool onDetections(const detections_t& detections, std::string* why,
+                    FrameReport* report = nullptr);
+
+  /// The OBJECT_MAP message (saved_map_path and saved_utime are the node's business).
+  object_map_t objectMap();
+  /// The reply to a query (error set for an unknown kind, label or map id, or a bad region).
+  object_query_reply_t answer(const object_query_t& query);
+
+  /// Everything needed to continue after a restart (regroups first; colours the trees by label).
+  MapSnapshot snapshot();
+  /// Replaces the state by a saved one. Throws std::runtime_error when the content is
+  /// inconsistent; the state is then unchanged.
+  void restore(const MapSnapshot& snapshot);
+
+  /// Increments whenever objects or occupancy may have changed (publish and save on change).
+  int64_t changes() const { return changes_; }
+  const std::vector<std::string>& classes() const { return classes_; }
+  /// Segments by id.
+  const std::map<int32_t, std::unique_ptr<Segment>>& segments() const { return segments_; }
+  /// The segment the last localised pose or detections were in, -1 before any.
+  int32_t currentSegment() const { return current_segment_; }
+  int64_t sessions() const { return sessions_; }
+  size_t numObjects();
+  size_t numCandidates() const;
+  size_t numOccupiedVoxels() const;
+  /// Regroups the segments whose voxels or evidence changed.
+  void updateObjects();
+
+ private:
+  Segment& segmentFor(int32_t slam_map_id);
+  std::vector<int> mapClasses(const std::vector<std::string>& names);
+
+  ObjectMapOptions options_;
+  CameraModel camera_;
+  bool have_camera_ = false;
+  std::vector<std::string> classes_;
+  std::map<int32_t, std::unique_ptr<Segment>> segments_;
+  std::map<int32_t, int32_t> session_maps_;  ///< SLAM map id -> segment id, this session
+  int64_t sessions_ = 1;
+  int64_t last_pose_utime_ = 0;
+  int32_t last_pose_seq_ = -1;
+  std::map<int32_t, pose_t> poses_;
+  std::map<int32_t, proposals_t> proposals_;
+  int32_t next_object_id_ = 1;
+  int32_t current_segment_ = -1;
+  int64_t last_utime_ = 0;
+  int32_t last_seq_ = -1;
+  int64_t changes_ = 0;
+};
+
+}  // namespace slamaware

@@ -1,0 +1,229 @@
+#include "procs/objectmap/object_table.h"
+
+#include <algorithm>
+#include <iterator>
+#include <numeric>
+#include <set>
+#include <tuple>
+
+#include "procs/objectmap/fusion.h"
+
+namespace slamaware {
+
+namespace {
+
+struct UnionFind {
+  std::vector<size_t> parent;
+  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  size_t find(size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void unite(size_t a, size_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+}  // namespace
+
+void ObjectTable::addView(int32_t candidate, View view) {
+  Candidate& c = candidates_[candidate];
+  c.id = candidate;
+  const ViewKey key{view.utime, view.seq};
+  c.views[key] = std::move(view);
+}
+
+void ObjectTable::addVotes(int32_t candidate, const std::vector<VoxelKey>& keys,
+                           const VotingOptions& options) {
+  Candidate& c = candidates_[candidate];
+  c.id = candidate;
+  ++c.voting_views;
+  for (VoxelKey k : keys) ++c.votes[k];
+  if (options.forget_share > 0 && c.voting_views % 10 == 0) {
+    const double keep = options.forget_share * c.voting_views;
+    for (auto it = c.votes.begin(); it != c.votes.end();)
+      it = it->second < keep ? c.votes.erase(it) : std::next(it);
+  }
+}
+
+void ObjectTable::addBoxPosition(int32_t candidate, const Eigen::Vector3d& p_world, double size) {
+  Candidate& c = candidates_[candidate];
+  c.id = candidate;
+  c.box_position_sum += p_world;
+  ++c.box_positions;
+  c.box_size = size;
+}
+
+Candidate* ObjectTable::findCandidate(int32_t id) {
+  auto it = candidates_.find(id);
+  return it == candidates_.end() ? nullptr : &it->second;
+}
+
+void ObjectTable::restoreObject(int32_t id, std::vector<int32_t> candidates) {
+  std::sort(candidates.begin(), candidates.end());
+  Object& o = objects_[id];
+  o.id = id;
+  o.candidates = std::move(candidates);
+}
+
+void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size) {
+  for (auto& [id, c] : candidates_)
+    for (auto& [key, v] : c.views) {
+      const float floor =
+          v.log_prob.empty() ? 0.f : *std::min_element(v.log_prob.begin(), v.log_prob.end());
+      std::vector<float> out(new_size, floor);
+      for (size_t i = 0; i < v.log_prob.size() && i < old_to_new.size(); ++i)
+        if (old_to_new[i] >= 0 && static_cast<size_t>(old_to_new[i]) < new_size)
+          out[static_cast<size_t>(old_to_new[i])] = v.log_prob[i];
+      v.log_prob = std::move(out);
+    }
+}
+
+void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
+                         const VotingOptions& options, const GroupingOptions& grouping,
+                         size_t num_classes, const std::function<int32_t()>& new_id) {
+  // 1. Each candidate's voxels: voted often enough, and occupied now.
+  std::vector<Candidate*> cands;
+  for (auto& [id, c] : candidates_) {
+    cands.push_back(&c);
+    c.voxels.clear();
+    const double need =
+        std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
+    for (const auto& [key, n] : c.votes)
+      if (n >= need && occupied(key)) c.voxels.push_back(key);
+    std::sort(c.voxels.begin(), c.voxels.end());
+  }
+  // 2. Groups: pairs of candidates sharing voxels, most overlapping (IoU) first; two groups merge
+  // when their voxel unions pass the test, so a chain of small overlaps cannot grow a group that
+  // swallows what lies in it.
+  std::unordered_map<VoxelKey, std::vector<size_t>> owners;
+  for (size_t i = 0; i < cands.size(); ++i)
+    for (VoxelKey k : cands[i]->voxels) owners[k].push_back(i);
+  std::map<std::pair<size_t, size_t>, size_t> shared;
+  for (const auto& [key, list] : owners)
+    for (size_t a = 0; a < list.size(); ++a)
+      for (size_t b = a + 1; b < list.size(); ++b) ++shared[{list[a], list[b]}];
+  auto passes = [&](size_t inter, size_t na, size_t nb) {
+    const double small = static_cast<double>(std::min(na, nb));
+    const double large = static_cast<double>(std::max(na, nb));
+    return small > 0 && static_cast<double>(inter) >= grouping.merge_overlap * small &&
+           small >= grouping.merge_size_ratio * large;
+  };
+  std::vector<std::tuple<double, size_t, size_t>> pairs;  // (-IoU, i, j)
+  for (const auto& [pair, n] : shared) {
+    const size_t na = cands[pair.first]->voxels.size(), nb = cands[pair.second]->voxels.size();
+    if (passes(n, na, nb))
+      pairs.emplace_back(-static_cast<double>(n) / static_cast<double>(na + nb - n), pair.first,
+                         pair.second);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  UnionFind uf(cands.size());
+  std::map<size_t, std::vector<VoxelKey>> group_voxels;  // by root, sorted
+  auto voxelsOf = [&](size_t root) -> std::vector<VoxelKey>& {
+    auto it = group_voxels.find(root);
+    if (it == group_voxels.end()) it = group_voxels.emplace(root, cands[root]->voxels).first;
+    return it->second;
+  };
+  for (const auto& [neg_iou, i, j] : pairs) {
+    const size_t ri = uf.find(i), rj = uf.find(j);
+    if (ri == rj) continue;
+    std::vector<VoxelKey>& a = voxelsOf(ri);
+    std::vector<VoxelKey>& b = voxelsOf(rj);
+    std::vector<VoxelKey> both;
+    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
+    if (!passes(both.size(), a.size(), b.size())) continue;
+    std::vector<VoxelKey> merged;
+    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
+    group_voxels.erase(ri);
+    group_voxels.erase(rj);
+    uf.unite(ri, rj);
+    group_voxels[uf.find(ri)] = std::move(merged);
+  }
+  std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index = lowest candidate id
+  for (size_t i = 0; i < cands.size(); ++i) by_root[uf.find(i)].push_back(cands[i]->id);
+  std::vector<std::vector<int32_t>> groups;
+  for (auto& [root, members] : by_root) groups.push_back(std::move(members));
+
+  // 3. Stable ids: greedily give each previous object's id to the group sharing most of its
+  // candidates (ties: lower previous id, then earlier group); the other groups get new ids.
+  std::unordered_map<int32_t, int32_t> previous_of;  // candidate -> previous object id
+  for (const auto& [id, o] : objects_)
+    for (int32_t c : o.candidates) previous_of[c] = id;
+  std::map<std::pair<int32_t, size_t>, int> overlap;  // (previous id, group) -> shared candidates
+  for (size_t g = 0; g < groups.size(); ++g)
+    for (int32_t c : groups[g]) {
+      auto it = previous_of.find(c);
+      if (it != previous_of.end()) ++overlap[{it->second, g}];
+    }
+  std::vector<std::tuple<int, int32_t, size_t>> matches;
+  for (const auto& [key, n] : overlap) matches.emplace_back(-n, key.first, key.second);
+  std::sort(matches.begin(), matches.end());
+  std::vector<int32_t> group_id(groups.size(), -1);
+  std::set<int32_t> used;
+  for (const auto& [neg, prev, g] : matches) {
+    if (group_id[g] >= 0 || used.count(prev)) continue;
+    group_id[g] = prev;
+    used.insert(prev);
+  }
+  for (size_t g = 0; g < groups.size(); ++g)
+    if (group_id[g] < 0) group_id[g] = new_id();
+
+  // 4. Evidence and geometry of each object.
+  std::map<int32_t, Object> objects;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    Object o;
+    o.id = group_id[g];
+    o.candidates = groups[g];
+    std::map<ViewKey, const View*> views;  // one per frame: the larger box
+    std::set<VoxelKey> voxels;
+    Eigen::Vector3d box_sum = Eigen::Vector3d::Zero();
+    int32_t box_n = 0;
+    double box_size = 0;
+    for (int32_t cid : o.candidates) {
+      const Candidate& c = candidates_.at(cid);
+      for (const auto& [key, v] : c.views) {
+        auto [it, inserted] = views.emplace(key, &v);
+        if (!inserted && v.area > it->second->area) it->second = &v;
+      }
+      voxels.insert(c.voxels.begin(), c.voxels.end());
+      box_sum += c.box_position_sum;
+      box_n += c.box_positions;
+      box_size = std::max(box_size, c.box_size);
+    }
+    std::vector<const std::vector<float>*> evidence;
+    for (const auto& [key, v] : views) evidence.push_back(&v->log_prob);
+    o.log_evidence = sumLogProbabilities(evidence, num_classes);
+    o.posterior = posteriorFromLogEvidence(o.log_evidence);
+    o.label = argmaxClass(o.log_evidence);
+    o.num_views = static_cast<int32_t>(views.size());
+    if (!views.empty()) {
+      o.first_seen_utime = views.begin()->first.first;
+      o.last_seen_utime = views.rbegin()->first.first;
+    }
+    o.num_voxels = static_cast<int32_t>(voxels.size());
+    if (!voxels.empty()) {
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo,
+                      sum = Eigen::Vector3d::Zero();
+      for (VoxelKey k : voxels) {
+        const Eigen::Vector3d p = voxelCentre(k, resolution_);
+        sum += p;
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      o.centroid = sum / static_cast<double>(voxels.size());
+      o.extent = ((hi - lo).array() + resolution_)
+                     .matrix();  // voxel centres span one voxel less than the voxels
+      o.has_position = true;
+    } else if (box_n > 0) {
+      o.centroid = box_sum / box_n;
+      o.extent = Eigen::Vector3d::Constant(box_size);
+      o.has_position = true;
+    }
+    objects.emplace(o.id, std::move(o));
+  }
+  objects_ = std::move(objects);
+}
+
+}  // namespace slamaware

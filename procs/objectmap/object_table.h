@@ -1,0 +1,108 @@
+#pragma once
+// The objects of one map segment. A candidate is a 3D cluster of the proposals stage (its id is
+// stable across frames); it collects, view after view, the class evidence of its boxes and votes
+// for the occupied voxels its boxes cover (candidate_voxels.h). An object is a group of
+// candidates whose voxels overlap strongly and are of similar size (GroupingOptions): the
+// proposals stage over-segments at several scales and its clusters split, merge and change ids as
+// the map grows, so candidates are grouped again whenever their voxels change, and object ids are
+// kept stable across regroupings (an object keeps the id of the previous object it shares most
+// candidates with).
+//
+// An object's class evidence is the sum of log p(class | view) over the union of its candidates'
+// views (fusion.h); a frame in which two candidates of one object have a box counts once (the
+// larger box), so merging never counts a view twice and splitting gives each part exactly its
+// own candidates' views.
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "procs/objectmap/objectmap_options.h"
+#include "procs/objectmap/voxel_key.h"
+
+namespace slamaware {
+
+/// A frame's evidence about one candidate.
+struct View {
+  int64_t utime = 0;            ///< µs, capture time of the frame
+  int32_t seq = -1;             ///< seq of the frame
+  float area = 0;               ///< px², area of the box
+  std::vector<float> log_prob;  ///< natural log p(class | box), classes in the map's order
+};
+/// Views are identified by their frame: (utime, seq).
+using ViewKey = std::pair<int64_t, int32_t>;
+
+struct Candidate {
+  int32_t id = -1;
+  std::map<ViewKey, View> views;
+  std::unordered_map<VoxelKey, int32_t> votes;  ///< voxel -> views that voted it
+  int32_t voting_views = 0;                     ///< views that voted (localised, with a depth)
+  /// Where its boxes put it (box centres back-projected at their median depth), for objects that
+  /// have no voxels yet: sum, count, and the last box's larger side in map units.
+  Eigen::Vector3d box_position_sum = Eigen::Vector3d::Zero();
+  int32_t box_positions = 0;
+  double box_size = 0;
+  std::vector<VoxelKey> voxels;  ///< derived by ObjectTable::update(), sorted
+};
+
+struct Object {
+  int32_t id = -1;
+  std::vector<int32_t> candidates;  ///< sorted candidate ids
+  // Derived by ObjectTable::update():
+  std::vector<double> log_evidence;  ///< per class, sum over the union of views
+  std::vector<double> posterior;     ///< softmax of log_evidence
+  int label = -1;                    ///< argmax class, -1 without classes
+  int32_t num_views = 0;
+  bool has_position = false;                           ///< false: never seen from a localised frame
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< map units
+  Eigen::Vector3d extent = Eigen::Vector3d::Zero();    ///< map units, axis-aligned size
+  int32_t num_voxels = 0;
+  int64_t first_seen_utime = 0, last_seen_utime = 0;
+};
+
+class ObjectTable {
+ public:
+  explicit ObjectTable(double resolution) : resolution_(resolution) {}
+
+  double resolution() const { return resolution_; }
+
+  /// Adds (or replaces: same frame) a view of a candidate, creating the candidate.
+  void addView(int32_t candidate, View view);
+  /// One view's votes for a candidate's voxels. Every 10 voting views, voxels voted in less than
+  /// forget_share of them are forgotten (bounded memory; they come back if voted again).
+  void addVotes(int32_t candidate, const std::vector<VoxelKey>& keys, const VotingOptions& options);
+  /// Where a box of the candidate puts it (see Candidate::box_position_sum).
+  void addBoxPosition(int32_t candidate, const Eigen::Vector3d& p_world, double size);
+
+  /// Recomputes the candidates' voxels (voted in >= min_votes and >= min_vote_share of the voting
+  /// views, and occupied now), the groups (GroupingOptions: pairs of candidates are tried from the
+  /// most overlapping, and two groups merge when their voxel unions pass the test), the object ids
+  /// (new_id() for groups that continue no previous object) and every object's evidence and
+  /// geometry.
+  void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
+              const GroupingOptions& grouping, size_t num_classes,
+              const std::function<int32_t()>& new_id);
+
+  const std::map<int32_t, Candidate>& candidates() const { return candidates_; }
+  Candidate* findCandidate(int32_t id);
+  /// Objects by id (as of the last update()).
+  const std::map<int32_t, Object>& objects() const { return objects_; }
+
+  /// Classes changed: the view value of old class i moves to index old_to_new[i]; classes a
+  /// view did not have get the view's lowest log-probability (see README).
+  void remapClasses(const std::vector<int>& old_to_new, size_t new_size);
+
+  /// Restores a candidate and a previous grouping (loading a saved map); update() follows.
+  Candidate& restoreCandidate(int32_t id) { return candidates_[id]; }
+  void restoreObject(int32_t id, std::vector<int32_t> candidates);
+
+ private:
+  double resolution_;
+  std::map<int32_t, Candidate> candidates_;
+  std::map<int32_t, Object> objects_;
+};
+
+}  // namespace slamaware

@@ -1,0 +1,325 @@
+// slamaware-objectmap: the object map server. Reads SLAM_MAP (occupancy), CAMERA_INFO, SLAM_POSE,
+// PROPOSALS and DETECTIONS (joined on seq: per-object evidence fusion) and OBJECT_QUERY; publishes
+// OBJECT_MAP and OBJECT_QUERY_REPLY; saves the map (OctoMap .ot + JSON object table) every
+// save_period_s and at shutdown, and loads it at start (procs/objectmap/README.md).
+//
+// Lockstep: exactly one OBJECT_MAP per DETECTIONS message, whose content depends only on the
+// inputs (no wall-clock or save information). Real time: OBJECT_MAP whenever the map changed and
+// every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and never stops the process; a
+// damaged map file is refused with a message naming it, and the previous good generation is used.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <optional>
+
+#include "common/bus/bus.h"
+#include "common/bus/node.h"
+#include "common/bus/shutdown.h"
+#include "common/bus/status.h"
+#include "common/config.h"
+#include "procs/objectmap/map_store.h"
+#include "procs/objectmap/object_map.h"
+#include "procs/objectmap/objectmap_options.h"
+
+using namespace slamaware;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+class ObjectMapNode {
+ public:
+  ObjectMapNode(Bus& bus, StatusReporter& status, const SystemConfig& sys,
+                const ObjectMapOptions& options)
+      : bus_(bus),
+        status_(status),
+        ch_(sys.channels),
+        lockstep_(sys.bus.lockstep),
+        options_(options),
+        engine_(options),
+        store_(options.persistence.dir) {
+    const size_t max_msg = static_cast<size_t>(sys.bus.max_message_bytes);
+    bus_.subscribe<camera_info_t>(
+        ch_.camera_info,
+        [this](const camera_info_t& m) {
+          std::string why;
+          if (!engine_.onCameraInfo(m, &why)) bus_.reject(ch_.camera_info, why);
+        },
+        max_msg);
+    bus_.subscribe<point_cloud_t>(
+        ch_.slam_map, [this](const point_cloud_t& m) { onMap(m); },
+        static_cast<size_t>(sys.bus.max_map_bytes));
+    bus_.subscribe<pose_t>(
+        ch_.slam_pose,
+        [this](const pose_t& m) {
+          std::string why;
+          if (!engine_.onPose(m, &why)) bus_.reject(ch_.slam_pose, why);
+        },
+        max_msg);
+    bus_.subscribe<proposals_t>(
+        ch_.proposals,
+        [this](const proposals_t& m) {
+          std::string why;
+          if (!engine_.onProposals(m, &why)) bus_.reject(ch_.proposals, why);
+        },
+        max_msg);
+    bus_.subscribe<detections_t>(
+        ch_.detections, [this](const detections_t& m) { onDetections(m); }, max_msg);
+    bus_.subscribe<object_query_t>(
+        ch_.object_query, [this](const object_query_t& m) { onQuery(m); }, max_msg);
+  }
+
+  /// Takes the folder, removes what interrupted saves left, and loads the newest good map.
+  void start(bool load) {
+    std::string why;
+    can_save_ = store_.lock(&why);
+    status_.setState(StatusReporter::State::kRunning);
+    if (!can_save_) {
+      spdlog::error("{}: the map will not be saved", why);
+      status_.setMessage(why + ": not saving");
+      status_.setState(StatusReporter::State::kDegraded);
+    } else if (const size_t n = store_.removeTemporaryFiles()) {
+      spdlog::info("{}: removed {} temporary file(s) of an interrupted save", store_.dir(), n);
+    }
+    if (!load) {
+      spdlog::info("starting from an empty map; saving into {}", store_.dir());
+      return;
+    }
+    const auto t0 = Clock::now();
+    std::optional<ObjectMapEngine> loaded;
+    const LoadReport report = store_.load([&](const MapSnapshot& snapshot) {
+      ObjectMapEngine e(options_);
+      e.restore(snapshot);
+      loaded = std::move(e);
+    });
+    for (const auto& f : report.failures) spdlog::error("refused {}", f);
+    if (!report.failures.empty()) {
+      status_.count("load_failures", static_cast<int64_t>(report.failures.size()));
+      status_.setMessage("refused " + report.failures.front());
+    }
+    if (report.generation < 0) {
+      spdlog::info("no usable map in {}: starting from an empty map", store_.dir());
+      return;
+    }
+    engine_ = std::move(*loaded);
+    saved_changes_ = engine_.changes();
+    status_.setCounter("loaded_generation", report.generation);
+    status_.setCounter("load_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
+    spdlog::info("loaded {} in {:.0f} ms: {} objects in {} segment(s), {} occupied voxels{}",
+                 report.json_path, secondsSince(t0) * 1000, engine_.numObjects(),
+                 engine_.segments().size(), engine_.numOccupiedVoxels(),
+                 report.failures.empty() ? "" : " (newer generations were refused, see above)");
+  }
+
+  /// Periodic work: OBJECT_MAP (real time), saving, counters.
+  void tick() {
+    if (!lockstep_ && (engine_.changes() != published_changes_ ||
+                       secondsSince(last_publish_) >= options_.publish_period_s))
+      publishMap();
+    if (options_.persistence.save_period_s > 0 &&
+        secondsSince(last_save_) >= options_.persistence.save_period_s &&
+        engine_.changes() != saved_changes_)
+      save("periodic");
+    if (secondsSince(last_counters_) >= 1.0) updateCounters();
+  }
+
+  /// Saves what changed since the last save (at shutdown).
+  void finish() {
+    if (engine_.changes() != saved_changes_) save("shutdown");
+    updateCounters();
+  }
+
+ private:
+  void onMap(const point_cloud_t& m) {
+    std::string why;
+    CloudReport r;
+    if (!engine_.onMap(m, &why, &r)) {
+      bus_.reject(ch_.slam_map, why);
+      return;
+    }
+    status_.count("clouds");
+    if (r.full) status_.count("clouds_full");
+    status_.count("cloud_points", static_cast<int64_t>(r.insert.points));
+    status_.setCounter("map_insert_ms", static_cast<int64_t>(r.ms));
+    spdlog::debug("{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped) in {:.0f} ms",
+                  r.full ? "full" : "incremental", m.seq, m.map_id, r.segment, r.insert.points,
+                  r.insert.dropped, r.ms);
+  }
+
+  void onDetections(const detections_t& m) {
+    status_.noteInput(m.utime, m.seq);
+    std::string why;
+    FrameReport r;
+    if (!engine_.onDetections(m, &why, &r)) {
+      bus_.reject(ch_.detections, why);
+    } else {
+      status_.addProcessed();
+      status_.count("boxes_fused", r.boxes);
+      status_.count("boxes_voted", r.boxes_voted);
+      if (r.boxes_rejected) status_.count("boxes_rejected", r.boxes_rejected);
+      if (r.boxes > 0 && !r.localised) {
+        status_.count("frames_without_geometry");
+        spdlog::debug("seq {}: boxes fused without geometry: {}", m.seq, r.no_geometry);
+      }
+    }
+    // Lockstep: one answer per DETECTIONS, whatever it held (the source waits for its seq).
+    if (lockstep_) publishMap(m.utime, m.seq);
+  }
+
+  void onQuery(const object_query_t& q) {
+    object_query_reply_t reply = engine_.answer(q);
+    reply.utime = wallUtime();
+    status_.count("queries");
+    if (!reply.error.empty()) {
+      status_.count("query_errors");
+      spdlog::info("query {}: {}", q.request_id, reply.error);
+    }
+    bus_.publish(ch_.object_query_reply, reply);
+  }
+
+  void publishMap(std::optional<int64_t> utime = std::nullopt,
+                  std::optional<int32_t> seq = std::nullopt) {
+    object_map_t m = engine_.objectMap();
+    if (utime) m.utime = *utime;
+    if (seq) m.seq = *seq;
+    // Lockstep outputs carry nothing that depends on the wall clock or on when saves happened, so
+    // that a log replayed twice gives the same bytes.
+    if (!lockstep_) {
+      m.saved_map_path = saved_path_;
+      m.saved_utime = saved_utime_;
+    }
+    bus_.publish(ch_.object_map, m);
+    published_changes_ = engine_.changes();
+    last_publish_ = Clock::now();
+  }
+
+  void save(const char* why) {
+    last_save_ = Clock::now();
+    if (!can_save_) return;
+    const int64_t changes = engine_.changes();
+    try {
+      const auto t0 = Clock::now();
+      const MapSnapshot snapshot = engine_.snapshot();
+      const SaveReport r = store_.save(snapshot);
+      const double ms = secondsSince(t0) * 1000;
+      saved_changes_ = changes;
+      auto seg = r.segment_paths.find(engine_.currentSegment());
+      saved_path_ = seg != r.segment_paths.end() ? seg->second
+                    : r.segment_paths.empty()    ? r.json_path
+                                                 : r.segment_paths.rbegin()->second;
+      saved_utime_ = wallUtime();
+      status_.count("saves");
+      status_.setCounter("save_ms", static_cast<int64_t>(ms));
+      status_.setCounter("save_bytes", static_cast<int64_t>(r.bytes_written));
+      status_.setCounter("generation", r.generation);
+      spdlog::debug("{} save: {} ({} bytes written, {} old files removed) in {:.0f} ms", why,
+                    r.json_path, r.bytes_written, r.files_removed, ms);
+      if (save_failed_) {
+        save_failed_ = false;
+        status_.setMessage("");
+        status_.setState(StatusReporter::State::kRunning);
+      }
+    } catch (const std::exception& e) {
+      status_.count("save_failures");
+      status_.setMessage(std::string("save failed: ") + e.what());
+      status_.setState(StatusReporter::State::kDegraded);
+      save_failed_ = true;
+      spdlog::error("{} save failed (the previous generation stays): {}", why, e.what());
+    }
+  }
+
+  void updateCounters() {
+    last_counters_ = Clock::now();
+    status_.setCounter("objects", static_cast<int64_t>(engine_.numObjects()));
+    status_.setCounter("segments", static_cast<int64_t>(engine_.segments().size()));
+    status_.setCounter("candidates", static_cast<int64_t>(engine_.numCandidates()));
+    status_.setCounter("voxels", static_cast<int64_t>(engine_.numOccupiedVoxels()));
+    status_.setCounter("sessions", engine_.sessions());
+    status_.setCounter("classes", static_cast<int64_t>(engine_.classes().size()));
+  }
+
+  Bus& bus_;
+  StatusReporter& status_;
+  Channels ch_;
+  bool lockstep_;
+  ObjectMapOptions options_;
+  ObjectMapEngine engine_;
+  MapStore store_;
+  bool can_save_ = false;
+  bool save_failed_ = false;
+  int64_t published_changes_ = -1;
+  int64_t saved_changes_ = 0;
+  std::string saved_path_;
+  int64_t saved_utime_ = 0;
+  Clock::time_point last_publish_{}, last_save_ = Clock::now(), last_counters_{};
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "slamaware-objectmap: OctoMap occupancy + per-object evidence fusion (SLAM_MAP, SLAM_POSE, "
+      "PROPOSALS, "
+      "DETECTIONS -> OBJECT_MAP; OBJECT_QUERY -> OBJECT_QUERY_REPLY); saves and reloads the map"};
+  NodeArgs node;
+  addNodeOptions(app, node);
+  std::string map_dir;
+  bool fresh = false;
+  app.add_option("--map-dir", map_dir,
+                 "folder of the map files (overrides objectmap.persistence.dir)");
+  app.add_flag(
+      "--fresh", fresh,
+      "start from an empty map, whatever the folder holds (its map is replaced at the first save)");
+  CLI11_PARSE(app, argc, argv);
+
+  return runNode("objectmap", node, [&]() -> int {
+    const SystemConfig sys = loadSystem(node);
+    ObjectMapOptions options = loadConfig<ObjectMapOptions>(node.config, "objectmap");
+    if (!map_dir.empty()) options.persistence.dir = map_dir;
+    const std::string& load = options.persistence.load_at_start;
+    if (load != "auto" && load != "always" && load != "never")
+      throw ConfigError(
+          (node.config.empty() ? std::string("defaults") : node.config) +
+          ": key 'objectmap.persistence.load_at_start': expected auto, always or never, got '" +
+          load + "'");
+    const bool load_map = !fresh && (load == "always" || (load == "auto" && !sys.bus.lockstep));
+    Bus bus(sys.bus.url);
+    const std::string name = node.nameOr("objectmap");
+    StatusReporter status(bus, name, sys.channels.statusOf(name));
+    status.publish();  // starting: loading a large map may take a moment
+    ObjectMapNode map(bus, status, sys, options);
+    map.start(load_map);
+    status.publish();
+    spdlog::info("{}, {} -> {}; map folder {}",
+                 sys.bus.lockstep ? "lockstep: one OBJECT_MAP per DETECTIONS" : "real time",
+                 sys.channels.detections, sys.channels.object_map, options.persistence.dir);
+    int lcm_failures = 0;
+    int rc = 0;
+    while (!shutdownRequested()) {
+      if (bus.handle(20) < 0) {
+        if (shutdownRequested()) break;
+        if (++lcm_failures >= 50) {
+          spdlog::error("LCM keeps failing; exiting");
+          rc = 1;
+          break;
+        }
+        continue;
+      }
+      lcm_failures = 0;
+      // Drain what else is waiting before the periodic work.
+      for (int i = 0; i < 1000 && bus.handle(0) > 0; ++i) {
+      }
+      map.tick();
+      status.tick();
+    }
+    status.setState(StatusReporter::State::kStopping);
+    status.publish();
+    map.finish();
+    status.publish();
+    return rc;
+  });
+}

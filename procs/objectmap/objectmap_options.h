@@ -1,0 +1,123 @@
+#pragma once
+// Options of the object map (config/objectmap.yaml, section "objectmap"). Lengths are in SLAM map
+// units: a monocular map has no metric scale, its unit is about the median scene depth of the
+// first keyframe (for a camera about 1 m from a table, 0.01 is about 1 cm).
+#include <string>
+
+namespace slamaware {
+
+/// The OctoMap occupancy of one map segment.
+struct OccupancyOptions {
+  double resolution = 0.01;  ///< map units, voxel edge (new segments; a loaded one keeps its own)
+  double prob_hit = 0.7;     ///< OctoMap sensor model: a point in a voxel
+  double prob_miss = 0.4;    ///< ... a ray through a voxel
+  double clamp_min = 0.12;   ///< OctoMap clamping of the occupancy probability
+  double clamp_max = 0.97;
+  /// Map units: free space is carved only over this last stretch of each ray, in front of its
+  /// point (<= 0: the whole ray from the keyframe; see occupancy_map.h for the cost).
+  double free_band = 0.1;
+  /// Map units, points farther from their keyframe are dropped (<= 0: all kept).
+  double max_range = 5.0;
+  /// Map units, points with a less certain depth are dropped (<= 0: all kept).
+  double max_depth_std = 0;
+  int max_points = 300000;  ///< a full map with more points is evenly subsampled to this many
+
+  template <class V>
+  void visit(V& v) {
+    v("resolution", resolution, "map units, voxel edge of new segments");
+    v("prob_hit", prob_hit, "occupancy update of a voxel holding a point");
+    v("prob_miss", prob_miss, "occupancy update of a voxel a ray crosses");
+    v("clamp_min", clamp_min, "lower clamping of the occupancy probability");
+    v("clamp_max", clamp_max, "upper clamping of the occupancy probability");
+    v("free_band", free_band,
+      "map units, free space carved in front of each point (<= 0: whole ray)");
+    v("max_range", max_range,
+      "map units, points farther from their keyframe are dropped (<= 0: all)");
+    v("max_depth_std", max_depth_std,
+      "map units, points with a less certain depth are dropped (<= 0: all)");
+    v("max_points", max_points, "a full map with more points is evenly subsampled");
+  }
+};
+
+/// Which occupied voxels belong to a candidate: those that fall in its boxes, view after view.
+struct VotingOptions {
+  /// A voxel votes for a box if its depth is within depth_band x the box's median depth of it, or
+  /// within depth_band_box x the box's larger side at that depth (map units; an object is about
+  /// as deep as it is wide), whichever is larger.
+  double depth_band = 0.05;
+  double depth_band_box = 0.5;
+  int min_votes = 3;            ///< a candidate's voxel was voted in at least this many views ...
+  double min_vote_share = 0.5;  ///< ... and in at least this share of the views that voted
+  double forget_share = 0.1;    ///< voxels voted in less than this share of the views are forgotten
+  int grid_cell_px = 16;        ///< px, cell of the image grid that buckets projected voxels
+
+  template <class V>
+  void visit(V& v) {
+    v("depth_band", depth_band, "relative depth band around a box's median depth");
+    v("depth_band_box", depth_band_box,
+      "depth band in box sizes at that depth (the larger band wins)");
+    v("min_votes", min_votes, "views a voxel must be voted in to belong to a candidate");
+    v("min_vote_share", min_vote_share, "share of a candidate's views a voxel must be voted in");
+    v("forget_share", forget_share,
+      "voxels voted in less than this share of the views are forgotten");
+    v("grid_cell_px", grid_cell_px, "px, image grid cell for bucketing projected voxels");
+  }
+};
+
+/// Which candidates are one object. The proposals stage over-segments at several scales and gives
+/// a cluster a new id when it changes, so one object is often several candidates with nearly the
+/// same voxels; but a coarse candidate also contains the fine ones of the objects on it, and a
+/// candidate seen in few views holds much of the background of its boxes. Two groups of
+/// candidates merge when their voxels overlap by merge_overlap of the smaller group AND the smaller
+/// is at least merge_size_ratio of the larger (a part is not merged into a whole it lies in).
+struct GroupingOptions {
+  double merge_overlap = 0.5;     ///< share of the smaller group's voxels the two share
+  double merge_size_ratio = 0.5;  ///< smaller group / larger group, in voxels
+
+  template <class V>
+  void visit(V& v) {
+    v("merge_overlap", merge_overlap, "share of the smaller group's voxels both must share");
+    v("merge_size_ratio", merge_size_ratio,
+      "the smaller group has at least this share of the larger's voxels");
+  }
+};
+
+/// Where and how often the map is saved (DESIGN.md §6).
+struct PersistenceOptions {
+  /// Folder of the map files (relative to the working directory); --map-dir overrides it.
+  std::string dir = "build/objectmap";
+  double save_period_s = 10.0;  ///< s of wall time between saves (<= 0: only at shutdown)
+  /// auto: load in real time, not in lockstep (a log must give the same bytes whatever the folder
+  /// holds); always; never (--fresh: never).
+  std::string load_at_start = "auto";
+
+  template <class V>
+  void visit(V& v) {
+    v("dir", dir, "folder of the map files (relative to the working directory)");
+    v("save_period_s", save_period_s, "s between saves (<= 0: only at shutdown)");
+    v("load_at_start", load_at_start, "auto (real time yes, lockstep no), always or never");
+  }
+};
+
+struct ObjectMapOptions {
+  OccupancyOptions occupancy;
+  VotingOptions voting;
+  GroupingOptions grouping;
+  double publish_period_s = 1.0;  ///< s, OBJECT_MAP also goes out this often (real time)
+  /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
+  int seq_buffer = 64;
+  PersistenceOptions persistence;
+
+  template <class V>
+  void visit(V& v) {
+    v.section("occupancy", occupancy);
+    v.section("voting", voting);
+    v.section("grouping", grouping);
+    v("publish_period_s", publish_period_s, "s between periodic OBJECT_MAP messages (real time)");
+    v("seq_buffer", seq_buffer,
+      "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
+    v.section("persistence", persistence);
+  }
+};
+
+}  // namespace slamaware

@@ -1,0 +1,208 @@
+#include "procs/objectmap/occupancy_map.h"
+
+#include <octomap/ColorOcTree.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace slamaware {
+
+namespace {
+
+VoxelKey pack(const octomap::OcTreeKey& k) { return packVoxelKey(k[0], k[1], k[2]); }
+octomap::OcTreeKey unpack(VoxelKey key) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(voxelKeyAxis(key, 0)),
+                            static_cast<octomap::key_type>(voxelKeyAxis(key, 1)),
+                            static_cast<octomap::key_type>(voxelKeyAxis(key, 2)));
+}
+
+void applySensorModel(octomap::ColorOcTree& tree, const OccupancyOptions& o) {
+  tree.setProbHit(o.prob_hit);
+  tree.setProbMiss(o.prob_miss);
+  tree.setClampingThresMin(o.clamp_min);
+  tree.setClampingThresMax(o.clamp_max);
+  tree.setOccupancyThres(0.5);
+}
+
+}  // namespace
+
+struct OccupancyMap::Impl {
+  OccupancyOptions options;
+  octomap::ColorOcTree tree;
+  mutable bool cache_valid = false;
+  mutable std::vector<OccupiedVoxel> occupied;
+
+  Impl(const OccupancyOptions& o, double resolution) : options(o), tree(resolution) {
+    applySensorModel(tree, o);
+  }
+
+  void buildCache() const {
+    occupied.clear();
+    const double res = tree.getResolution();
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+      if (!tree.isNodeOccupied(*it)) continue;
+      const unsigned depth = it.getDepth();
+      const octomap::OcTreeKey& k = it.getKey();
+      if (depth >= tree.getTreeDepth()) {
+        occupied.push_back({pack(k), voxelCentre(pack(k), res).cast<float>()});
+        continue;
+      }
+      // A pruned node (a loaded file may have them): every finest voxel it covers. A node at
+      // depth d with key k spans keys [k - h, k + h) with h = 2^(15 - d) on each axis.
+      const int h = 1 << (tree.getTreeDepth() - 1 - depth);
+      for (int dx = -h; dx < h; ++dx)
+        for (int dy = -h; dy < h; ++dy)
+          for (int dz = -h; dz < h; ++dz) {
+            const VoxelKey v =
+                packVoxelKey(static_cast<uint32_t>(k[0] + dx), static_cast<uint32_t>(k[1] + dy),
+                             static_cast<uint32_t>(k[2] + dz));
+            occupied.push_back({v, voxelCentre(v, res).cast<float>()});
+          }
+    }
+    std::sort(occupied.begin(), occupied.end(),
+              [](const OccupiedVoxel& a, const OccupiedVoxel& b) { return a.key < b.key; });
+    cache_valid = true;
+  }
+};
+
+OccupancyMap::OccupancyMap(const OccupancyOptions& options, double resolution)
+    : impl_(std::make_unique<Impl>(options, resolution)) {}
+OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+OccupancyMap::~OccupancyMap() = default;
+OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
+
+double OccupancyMap::resolution() const { return impl_->tree.getResolution(); }
+
+InsertStats OccupancyMap::insert(const std::vector<Eigen::Vector3f>& points,
+                                 const Eigen::Vector3f* origin) {
+  InsertStats stats;
+  octomap::ColorOcTree& tree = impl_->tree;
+  const OccupancyOptions& o = impl_->options;
+  octomap::KeySet occupied, free;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    octomap::OcTreeKey key;
+    if (!p.allFinite() || (origin && o.max_range > 0 && (p - *origin).norm() > o.max_range) ||
+        !tree.coordToKeyChecked(octomap::point3d(p.x(), p.y(), p.z()), key)) {
+      ++stats.dropped;
+      continue;
+    }
+    occupied.insert(key);
+    ++stats.points;
+  }
+  if (origin && origin->allFinite()) {
+    // One ray per occupied voxel, to its centre (OctoMap's "discretize"): points sharing a voxel
+    // would cast nearly the same ray.
+    octomap::KeyRay ray;
+    for (const auto& key : occupied) {
+      const octomap::point3d end = tree.keyToCoord(key);
+      const Eigen::Vector3f p(end.x(), end.y(), end.z());
+      Eigen::Vector3f from = *origin;
+      const float length = (p - from).norm();
+      if (o.free_band > 0 && length > o.free_band)
+        from = p - (p - from) * static_cast<float>(o.free_band / length);
+      // Keys from the start voxel up to, not including, the point's voxel.
+      if (!tree.computeRayKeys(octomap::point3d(from.x(), from.y(), from.z()), end, ray)) continue;
+      for (const auto& k : ray)
+        if (!occupied.count(k)) free.insert(k);
+    }
+  }
+  // Lazy updates never prune, so the tree (and the .ot bytes) do not depend on the hash order.
+  for (const auto& k : free) tree.updateNode(k, false, true);
+  for (const auto& k : occupied) tree.updateNode(k, true, true);
+  // Lazy updates: inner nodes are brought up to date only before writing (serialize()); the
+  // leaves, which every query here reads, are exact. (A whole-tree pass per keyframe batch made a
+  // 40-keyframe rebuild twice as slow.)
+  stats.occupied_updates = occupied.size();
+  stats.free_updates = free.size();
+  impl_->cache_valid = false;
+  return stats;
+}
+
+void OccupancyMap::clear() {
+  impl_->tree.clear();
+  impl_->cache_valid = false;
+}
+
+OccupancyMap::Cell OccupancyMap::cell(const Eigen::Vector3d& p) const {
+  octomap::OcTreeKey key;
+  if (!impl_->tree.coordToKeyChecked(
+          octomap::point3d(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                           static_cast<float>(p.z())),
+          key))
+    return Cell::kUnknown;
+  return cell(pack(key));
+}
+
+OccupancyMap::Cell OccupancyMap::cell(VoxelKey key) const {
+  const octomap::ColorOcTreeNode* n = impl_->tree.search(unpack(key));
+  if (!n) return Cell::kUnknown;
+  return impl_->tree.isNodeOccupied(n) ? Cell::kOccupied : Cell::kFree;
+}
+
+const std::vector<OccupiedVoxel>& OccupancyMap::occupied() const {
+  if (!impl_->cache_valid) impl_->buildCache();
+  return impl_->occupied;
+}
+
+bool OccupancyMap::isOccupied(VoxelKey key) const {
+  const auto& v = occupied();
+  auto it = std::lower_bound(v.begin(), v.end(), key,
+                             [](const OccupiedVoxel& a, VoxelKey k) { return a.key < k; });
+  return it != v.end() && it->key == key;
+}
+
+size_t OccupancyMap::numLeaves() const { return impl_->tree.getNumLeafNodes(); }
+size_t OccupancyMap::memoryBytes() const { return impl_->tree.memoryUsage(); }
+
+std::string OccupancyMap::serialize(const std::function<Rgb(VoxelKey)>& colour) {
+  octomap::ColorOcTree& tree = impl_->tree;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    // A pruned node takes the colour of the voxel at its key.
+    const Rgb c = colour(pack(it.getKey()));
+    it->setColor(c.r, c.g, c.b);
+  }
+  tree.updateInnerOccupancy();  // ColorOcTree: inner nodes take the mean colour of their children
+  std::ostringstream out;
+  if (!tree.write(out)) throw std::runtime_error("OctoMap could not serialise the tree");
+  return out.str();
+}
+
+OccupancyMap OccupancyMap::deserialize(const std::string& bytes, const OccupancyOptions& options,
+                                       const std::string& what) {
+  std::istringstream in(bytes);
+  // OctoMap reports progress and problems on std::cerr: keep them for the error message only.
+  std::ostringstream chatter;
+  std::streambuf* cerr_buf = std::cerr.rdbuf(chatter.rdbuf());
+  std::unique_ptr<octomap::AbstractOcTree> tree;
+  try {
+    tree.reset(octomap::AbstractOcTree::read(in));
+  } catch (...) {
+    std::cerr.rdbuf(cerr_buf);
+    throw;
+  }
+  std::cerr.rdbuf(cerr_buf);
+  auto* color = dynamic_cast<octomap::ColorOcTree*>(tree.get());
+  if (!color)
+    throw std::runtime_error(what + ": not an OctoMap ColorOcTree (" + chatter.str() + ")");
+  if (!(color->getResolution() > 0))
+    throw std::runtime_error(what + ": resolution is not positive");
+  auto impl = std::make_unique<Impl>(options, color->getResolution());
+  impl->tree.swapContent(*color);
+  return OccupancyMap(std::move(impl));
+}
+
+bool OccupancyMap::colourOf(VoxelKey key, Rgb* colour) const {
+  const octomap::ColorOcTreeNode* n = impl_->tree.search(unpack(key));
+  if (!n) return false;
+  const auto c = n->getColor();
+  *colour = Rgb{c.r, c.g, c.b};
+  return true;
+}
+
+}  // namespace slamaware

@@ -1,0 +1,334 @@
+// slamaware-objectmap as a process, each case in a private network namespace: the query round
+// trip over LCM (and through slamaware-ctl query), malformed messages on every input channel
+// counted while it keeps running, and lockstep: one OBJECT_MAP per DETECTIONS, byte-identical
+// over two replays, with saves going on.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+
+#include "common/bus/bus.h"
+#include "procs/objectmap/map_store.h"
+#include "procs/objectmap/object_map.h"
+#include "slamaware/object_map_t.hpp"
+#include "slamaware/object_query_reply_t.hpp"
+#include "slamaware/object_query_t.hpp"
+#include "slamaware/status_t.hpp"
+#include "tests/objectmap/synthetic_world.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+using namespace std::chrono_literals;
+
+namespace {
+
+std::string writeConfig(const std::string& dir, double save_period_s) {
+  const std::string path = dir + "/objectmap.yaml";
+  std::ofstream f(path);
+  f << "objectmap:\n  persistence:\n    dir: " << dir
+    << "/map\n    save_period_s: " << save_period_s << "\n";
+  return path;
+}
+
+int64_t counter(const status_t& s, const std::string& name) {
+  for (int i = 0; i < s.num_counters; ++i)
+    if (s.counter_names[static_cast<size_t>(i)] == name)
+      return s.counter_values[static_cast<size_t>(i)];
+  return 0;
+}
+
+std::vector<uint8_t> encode(const object_map_t& m) {
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
+}
+
+struct Client {
+  Bus bus{test::testUrl()};
+  std::vector<object_map_t> maps;
+  std::map<int64_t, object_query_reply_t> replies;
+  std::optional<status_t> status;
+  Client() {
+    bus.subscribe<object_map_t>("OBJECT_MAP", [this](const object_map_t& m) { maps.push_back(m); });
+    bus.subscribe<object_query_reply_t>(
+        "OBJECT_QUERY_REPLY", [this](const object_query_reply_t& r) { replies[r.request_id] = r; });
+    bus.subscribe<status_t>("OBJECTMAP_STATUS", [this](const status_t& s) { status = s; });
+  }
+  bool pump(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+    return test::waitUntil(
+        [&] {
+          bus.handle(10);
+          return done();
+        },
+        timeout);
+  }
+  bool waitRunning() {
+    return pump([&] { return status && status->state == status_t::STATE_RUNNING; }, 10s);
+  }
+  /// Sends a query and waits for its reply.
+  std::optional<object_query_reply_t> ask(object_query_t q) {
+    static int64_t next_id = 1000;
+    q.request_id = ++next_id;
+    bus.publish("OBJECT_QUERY", q);
+    if (!pump([&] { return replies.count(q.request_id) > 0; }, 5s)) return std::nullopt;
+    return replies.at(q.request_id);
+  }
+  /// Frame f of the world: its clouds, pose, proposals, detections (what the pipeline sends).
+  void sendFrame(const test::SyntheticWorld& w, int f, const std::vector<point_cloud_t>& clouds) {
+    for (const auto& c : clouds)
+      if (c.seq == f) bus.publish("SLAM_MAP", c);
+    bus.publish("SLAM_POSE", w.poseMessage(f, 1));
+    bus.publish("PROPOSALS", w.proposals(f, 1));
+    bus.publish("DETECTIONS", w.detections(f, 1));
+  }
+};
+
+object_query_t query(int8_t kind) {
+  object_query_t q{};
+  q.kind = kind;
+  q.map_id = -1;
+  return q;
+}
+
+std::string run(const std::string& command, int* rc) {
+  std::string out;
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof(buf), p)) > 0) out.append(buf, n);
+  const int status = pclose(p);
+  *rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return out;
+}
+
+}  // namespace
+
+TEST(ObjectMapNode, AnswersQueriesByLabelAndRegionOverLcm) {
+  const std::string dir = test::tempDir("objectmap_node_query");
+  Client c;
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config", writeConfig(dir, 60),
+                           "--lcm-url", test::testUrl()},
+                          dir + "/node.log");
+  ASSERT_TRUE(c.waitRunning()) << node.log();
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  c.bus.publish("CAMERA_INFO", w.cameraInfo());
+  const auto clouds = w.keyframeClouds(1);
+  for (int f = 0; f < 30; ++f) {
+    c.sendFrame(w, f, clouds);
+    c.bus.handle(5);
+  }
+  ASSERT_TRUE(c.pump(
+      [&] { return !c.maps.empty() && c.maps.back().seq == 29 && c.maps.back().num_objects == 3; },
+      10s))
+      << (c.maps.empty() ? std::string("no OBJECT_MAP")
+                         : "last seq " + std::to_string(c.maps.back().seq))
+      << "\n"
+      << node.log();
+
+  object_query_t q = query(object_query_t::KIND_BY_LABEL);
+  q.label = "coffee_mug";
+  auto r = c.ask(q);
+  ASSERT_TRUE(r) << "no reply\n" << node.log();
+  EXPECT_EQ(r->error, "");
+  ASSERT_EQ(r->num_objects, 1);
+  EXPECT_EQ(r->objects[0].label, "coffee_mug");
+  const Eigen::Vector3d mug = w.objects()[0].centre;
+  EXPECT_LT((Eigen::Vector3d(r->objects[0].centroid[0], r->objects[0].centroid[1],
+                             r->objects[0].centroid[2]) -
+             mug)
+                .norm(),
+            0.02);
+  EXPECT_EQ(r->num_classes, 5);
+
+  q = query(object_query_t::KIND_BY_REGION);
+  const Eigen::Vector3d bowl = w.objects()[1].centre;
+  for (int i = 0; i < 3; ++i) q.region_min[i] = bowl[i] - 0.01, q.region_max[i] = bowl[i] + 0.01;
+  r = c.ask(q);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->num_objects, 1);
+  EXPECT_EQ(r->objects[0].label, "bowl");
+
+  r = c.ask(query(object_query_t::KIND_ALL));
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->num_objects, 3);
+
+  q = query(object_query_t::KIND_BY_LABEL);
+  q.label = "giraffe";
+  r = c.ask(q);
+  ASSERT_TRUE(r);
+  EXPECT_NE(r->error.find("unknown label 'giraffe'"), std::string::npos) << r->error;
+  r = c.ask(query(7));
+  ASSERT_TRUE(r);
+  EXPECT_NE(r->error.find("unknown query kind"), std::string::npos) << r->error;
+  EXPECT_TRUE(node.running()) << node.log();
+
+  // The operator's view: slamaware-ctl query prints the table, fails with a message on an error.
+  const std::string ctl =
+      test::binPath("slamaware-ctl") + " --lcm-url '" + test::testUrl() + "' query";
+  int rc = -1;
+  std::string out = run(ctl + " --label coffee_mug", &rc);
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("LABEL"), std::string::npos) << out;
+  EXPECT_NE(out.find("coffee_mug"), std::string::npos) << out;
+  EXPECT_EQ(out.find("bowl"), std::string::npos) << out;
+  char region[200];
+  std::snprintf(region, sizeof(region), " --region %f %f %f %f %f %f", bowl.x() - 0.01,
+                bowl.y() - 0.01, bowl.z() - 0.01, bowl.x() + 0.01, bowl.y() + 0.01,
+                bowl.z() + 0.01);
+  out = run(ctl + region, &rc);
+  EXPECT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("bowl"), std::string::npos) << out;
+  out = run(ctl + " --label giraffe", &rc);
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("unknown label 'giraffe'"), std::string::npos) << out;
+  out = run(ctl + " --map-id 5", &rc);
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("no map segment 5"), std::string::npos) << out;
+
+  // Stopping saves the map; a fresh load of the folder has the three objects.
+  EXPECT_EQ(node.stop(), 0) << node.log();
+  MapStore store(dir + "/map");
+  std::optional<ObjectMapEngine> loaded;
+  const LoadReport lr = store.load([&](const MapSnapshot& s) {
+    ObjectMapEngine e{ObjectMapOptions{}};
+    e.restore(s);
+    loaded = std::move(e);
+  });
+  ASSERT_GE(lr.generation, 1) << node.log();
+  EXPECT_EQ(loaded->numObjects(), 3u);
+
+  // A restarted server answers from the saved map at once; with --fresh it starts empty.
+  for (const bool fresh : {false, true}) {
+    std::vector<std::string> argv = {test::binPath("slamaware-objectmap"), "--config",
+                                     dir + "/objectmap.yaml", "--lcm-url", test::testUrl()};
+    if (fresh) argv.push_back("--fresh");
+    test::ChildProcess again(argv, dir + "/node2.log");
+    c.status.reset();
+    ASSERT_TRUE(c.pump(
+        [&] {
+          return c.status && c.status->pid == again.pid() &&
+                 c.status->state == status_t::STATE_RUNNING;
+        },
+        10s))
+        << again.log();
+    r = c.ask(query(object_query_t::KIND_ALL));
+    ASSERT_TRUE(r) << again.log();
+    EXPECT_EQ(r->num_objects, fresh ? 0 : 3) << (fresh ? "--fresh" : "reloaded");
+    EXPECT_EQ(again.stop(), 0) << again.log();
+  }
+}
+
+TEST(ObjectMapNode, CountsMalformedMessagesOnEveryInputAndKeepsRunning) {
+  const std::string dir = test::tempDir("objectmap_node_bad");
+  Client c;
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config", writeConfig(dir, 60),
+                           "--lcm-url", test::testUrl()},
+                          dir + "/node.log");
+  ASSERT_TRUE(c.waitRunning()) << node.log();
+  const std::vector<uint8_t> junk(64, 0x5A);
+  const std::vector<std::string> inputs = {"CAMERA_INFO", "SLAM_MAP",   "SLAM_POSE",
+                                           "PROPOSALS",   "DETECTIONS", "OBJECT_QUERY"};
+  for (const auto& ch : inputs) c.bus.publishRaw(ch, junk.data(), junk.size());
+  // Well-formed messages with unusable content.
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  camera_info_t cam = w.cameraInfo();
+  cam.fx = -1;
+  c.bus.publish("CAMERA_INFO", cam);
+  pose_t pose = w.poseMessage(0, 1);
+  pose.orientation[0] = NAN;
+  c.bus.publish("SLAM_POSE", pose);
+  detections_t d = w.detections(0, 1);
+  d.class_names[0] = d.class_names[1];
+  c.bus.publish("DETECTIONS", d);
+  // A cloud whose keyframe list names no keyframe of its points: inserted without rays, not
+  // refused.
+  point_cloud_t cloud = w.keyframeClouds(1)[0];
+  cloud.num_keyframes = 0;
+  cloud.kf_ids.clear(), cloud.kf_x.clear(), cloud.kf_y.clear(), cloud.kf_z.clear();
+  c.bus.publish("SLAM_MAP", cloud);
+
+  ASSERT_TRUE(c.pump(
+      [&] {
+        if (!c.status) return false;
+        for (const auto& ch : inputs)
+          if (counter(*c.status, "rejected." + ch) < 1) return false;
+        return counter(*c.status, "rejected.DETECTIONS") >= 2 && counter(*c.status, "clouds") >= 1;
+      },
+      10s))
+      << node.log();
+  const status_t& s = *c.status;
+  EXPECT_EQ(counter(s, "rejected.CAMERA_INFO"), 2);
+  EXPECT_EQ(counter(s, "rejected.SLAM_MAP"), 1);
+  EXPECT_EQ(counter(s, "rejected.SLAM_POSE"), 2);
+  EXPECT_EQ(counter(s, "rejected.PROPOSALS"), 1);
+  EXPECT_EQ(counter(s, "rejected.DETECTIONS"), 2);
+  EXPECT_EQ(counter(s, "rejected.OBJECT_QUERY"), 1);
+  EXPECT_EQ(s.rejected, 9);
+  EXPECT_TRUE(node.running()) << node.log();
+  // Still answering.
+  auto r = c.ask(query(object_query_t::KIND_ALL));
+  ASSERT_TRUE(r) << node.log();
+  EXPECT_EQ(r->error, "");
+  EXPECT_EQ(node.stop(), 0) << node.log();
+}
+
+namespace {
+
+// Plays the world lockstep through a node: frame f goes out when OBJECT_MAP f - 1 came back.
+// Frame 5 has no boxes and frame 7's detections are refused (repeated class names): both are
+// still answered. Returns the OBJECT_MAP messages.
+std::vector<object_map_t> playLockstep(const std::string& dir, int frames) {
+  Client c;
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config",
+                           writeConfig(dir, 0.005), "--lcm-url", test::testUrl(), "--lockstep"},
+                          dir + "/node.log");
+  EXPECT_TRUE(c.waitRunning()) << node.log();
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  c.bus.publish("CAMERA_INFO", w.cameraInfo());
+  const auto clouds = w.keyframeClouds(1);
+  for (int f = 0; f < frames; ++f) {
+    for (const auto& cl : clouds)
+      if (cl.seq == f) c.bus.publish("SLAM_MAP", cl);
+    c.bus.publish("SLAM_POSE", w.poseMessage(f, 1));
+    c.bus.publish("PROPOSALS", w.proposals(f, 1));
+    detections_t d = w.detections(f, 1);
+    if (f == 5) {
+      d.num_boxes = 0;
+      d.boxes.clear(), d.candidate_ids.clear(), d.log_prob.clear();
+    }
+    if (f == 7) d.class_names[0] = d.class_names[1];
+    c.bus.publish("DETECTIONS", d);
+    const bool answered = c.pump([&] { return !c.maps.empty() && c.maps.back().seq >= f; }, 5s);
+    EXPECT_TRUE(answered) << "no OBJECT_MAP for seq " << f << "\n" << node.log();
+    if (!answered) break;
+  }
+  c.pump([] { return false; }, 300ms);  // nothing more may come
+  EXPECT_TRUE(node.running()) << node.log();
+  EXPECT_EQ(node.stop(), 0) << node.log();
+  return c.maps;
+}
+
+}  // namespace
+
+TEST(ObjectMapNode, LockstepAnswersEachDetectionsOnceWithTheSameBytesEveryReplay) {
+  const int frames = 30;
+  const std::string dir_a = test::tempDir("objectmap_node_lockstep_a");
+  const auto first = playLockstep(dir_a, frames);
+  ASSERT_EQ(first.size(), static_cast<size_t>(frames)) << "exactly one OBJECT_MAP per DETECTIONS";
+  for (int f = 0; f < frames; ++f) {
+    EXPECT_EQ(first[static_cast<size_t>(f)].seq, f);
+    EXPECT_EQ(first[static_cast<size_t>(f)].saved_map_path, "");
+    EXPECT_EQ(first[static_cast<size_t>(f)].saved_utime, 0);
+  }
+  EXPECT_EQ(first.back().num_objects, 3);
+  // Saves went on (every 5 ms: between most frames), yet the outputs do not show them.
+  MapStore store(dir_a + "/map");
+  EXPECT_GE(store.nextGeneration(), 3) << "at least one periodic save and the one at shutdown";
+  const auto second = playLockstep(test::tempDir("objectmap_node_lockstep_b"), frames);
+  ASSERT_EQ(second.size(), first.size());
+  for (size_t i = 0; i < first.size(); ++i)
+    EXPECT_EQ(encode(second[i]), encode(first[i])) << "OBJECT_MAP " << i;
+}

@@ -1,0 +1,515 @@
+// The object map's algorithm without the bus: the fusion equation on hand-made views, candidate
+// voxels from boxes over a synthetic cloud, merge and split of candidates with stable ids,
+// segments per SLAM map, OctoMap ray casting, the whole engine on a synthetic scene, and the
+// shipped config.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "common/config.h"
+#include "procs/objectmap/candidate_voxels.h"
+#include "procs/objectmap/fusion.h"
+#include "procs/objectmap/object_map.h"
+#include "procs/objectmap/object_table.h"
+#include "procs/objectmap/occupancy_map.h"
+#include "tests/objectmap/synthetic_world.h"
+#include "tests/support/test_support.h"
+
+using namespace slamaware;
+
+namespace {
+
+std::vector<float> logs(std::initializer_list<double> p) {
+  std::vector<float> out;
+  for (double x : p) out.push_back(static_cast<float>(std::log(x)));
+  return out;
+}
+
+std::vector<uint8_t> encode(const object_map_t& m) {
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
+}
+
+// Feeds frames [first, last) of a world (clouds first) to an engine.
+void feed(ObjectMapEngine& e, const test::SyntheticWorld& w, int32_t map_id, int first, int last,
+          int32_t seq_offset = 0) {
+  std::string why;
+  ASSERT_TRUE(e.onCameraInfo(w.cameraInfo(), &why)) << why;
+  const auto clouds = w.keyframeClouds(map_id);
+  for (int f = first; f < last; ++f) {
+    for (auto c : clouds)
+      if (c.seq == f) {
+        c.seq += seq_offset;
+        c.utime = w.utime(c.seq);
+        ASSERT_TRUE(e.onMap(c, &why)) << why;
+      }
+    ASSERT_TRUE(e.onPose(w.poseMessage(f, map_id, seq_offset), &why)) << why;
+    ASSERT_TRUE(e.onProposals(w.proposals(f, map_id, seq_offset), &why)) << why;
+    ASSERT_TRUE(e.onDetections(w.detections(f, map_id, seq_offset), &why)) << why;
+  }
+}
+
+const object_t* findLabel(const object_map_t& m, const std::string& label) {
+  for (const auto& o : m.objects)
+    if (o.label == label) return &o;
+  return nullptr;
+}
+
+}  // namespace
+
+// ---- Fusion -----------------------------------------------------------------------------------
+
+// Three views whose single-view argmaxes disagree (two say A weakly, one says B strongly): the
+// summed log-probabilities pick what the product of probabilities picks (B), not the majority.
+TEST(Fusion, SummedLogProbabilitiesPickTheArgmaxOfTheProduct) {
+  const std::vector<std::vector<double>> p = {
+      {0.40, 0.35, 0.25}, {0.40, 0.35, 0.25}, {0.05, 0.90, 0.05}};
+  std::vector<std::vector<float>> views;
+  for (const auto& v : p) views.push_back(logs({v[0], v[1], v[2]}));
+  std::vector<const std::vector<float>*> ptrs;
+  for (const auto& v : views) ptrs.push_back(&v);
+  const std::vector<double> sum = sumLogProbabilities(ptrs, 3);
+
+  // Independently: the product over views, normalised (the paper's ML over N views, uniform prior).
+  std::vector<double> product(3, 1.0);
+  for (const auto& v : p)
+    for (int c = 0; c < 3; ++c) product[c] *= v[c];
+  const double z = product[0] + product[1] + product[2];
+  int best = 0;
+  for (int c = 1; c < 3; ++c)
+    if (product[c] > product[best]) best = c;
+  EXPECT_EQ(best, 1);
+  EXPECT_EQ(argmaxClass(sum), best);
+  for (const auto& v : p)
+    EXPECT_EQ(std::max_element(v.begin(), v.end()) - v.begin(), &v == &p[2] ? 1 : 0);
+  const std::vector<double> post = posteriorFromLogEvidence(sum);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(sum[c], std::log(product[c]), 1e-6);
+    EXPECT_NEAR(post[c], product[c] / z, 1e-6);
+  }
+}
+
+// A single confidently wrong view (p = 0.98 for the wrong class, 0.01 for the right one: the
+// recognizer's probability floor) is outvoted by five moderately right ones.
+TEST(Fusion, AConfidentlyWrongViewIsOutvoted) {
+  std::vector<std::vector<float>> views(5, logs({0.6, 0.2, 0.2}));
+  views.push_back(logs({0.01, 0.98, 0.01}));
+  std::vector<const std::vector<float>*> ptrs;
+  for (const auto& v : views) ptrs.push_back(&v);
+  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3)), 0);
+  // Without the five, the wrong view alone wins: the evidence is what changed the answer.
+  EXPECT_EQ(argmaxClass(sumLogProbabilities({ptrs.back()}, 3)), 1);
+}
+
+TEST(Fusion, ThousandsOfViewsDoNotUnderflowAndTiesGoToTheLowerClass) {
+  std::vector<std::vector<float>> views(5000, logs({0.3, 0.3, 0.4}));
+  std::vector<const std::vector<float>*> ptrs;
+  for (const auto& v : views) ptrs.push_back(&v);
+  const auto post = posteriorFromLogEvidence(sumLogProbabilities(ptrs, 3));
+  EXPECT_NEAR(post[0] + post[1] + post[2], 1.0, 1e-12);
+  EXPECT_NEAR(post[2], 1.0, 1e-9);
+  EXPECT_EQ(argmaxClass({1.0, 2.0, 2.0}), 1);
+  EXPECT_EQ(argmaxClass({}), -1);
+}
+
+// ---- Occupancy ----------------------------------------------------------------------------------
+
+TEST(Occupancy, RayCastingMarksPointsOccupiedAndTheRaysInFrontFree) {
+  OccupancyOptions o;
+  o.resolution = 0.02;
+  o.free_band = 0.2;
+  OccupancyMap map(o, o.resolution);
+  std::vector<Eigen::Vector3f> wall;
+  for (int i = -10; i <= 10; ++i)
+    for (int j = -10; j <= 10; ++j) wall.emplace_back(0.01f * i, 0.01f * j, 1.0f);
+  const Eigen::Vector3f origin(0, 0, 0);
+  const InsertStats s = map.insert(wall, &origin);
+  EXPECT_EQ(s.points, wall.size());
+  EXPECT_GT(s.free_updates, 0u);
+  for (const auto& p : wall) EXPECT_EQ(map.cell(p.cast<double>()), OccupancyMap::Cell::kOccupied);
+  // Along the central ray: free within the band in front of the wall, unknown before it.
+  EXPECT_EQ(map.cell(Eigen::Vector3d(0.001, 0.001, 0.9)), OccupancyMap::Cell::kFree);
+  EXPECT_EQ(map.cell(Eigen::Vector3d(0.001, 0.001, 0.5)), OccupancyMap::Cell::kUnknown);
+  EXPECT_EQ(map.cell(Eigen::Vector3d(0.001, 0.001, 1.2)),
+            OccupancyMap::Cell::kUnknown);  // behind: unseen
+
+  // Whole rays (free_band <= 0): free from the keyframe up to the points.
+  o.free_band = 0;
+  OccupancyMap whole(o, o.resolution);
+  whole.insert(wall, &origin);
+  EXPECT_EQ(whole.cell(Eigen::Vector3d(0.001, 0.001, 0.5)), OccupancyMap::Cell::kFree);
+  EXPECT_EQ(whole.cell(Eigen::Vector3d(0.001, 0.001, 0.1)), OccupancyMap::Cell::kFree);
+
+  // The occupied list is sorted, its keys are OctoMap's and the centres follow voxel_key.h.
+  const auto& occ = whole.occupied();
+  ASSERT_FALSE(occ.empty());
+  for (size_t i = 1; i < occ.size(); ++i) EXPECT_LT(occ[i - 1].key, occ[i].key);
+  for (const auto& v : occ) {
+    EXPECT_TRUE(v.centre.cast<double>().isApprox(voxelCentre(v.key, 0.02), 1e-6));
+    VoxelKey k;
+    ASSERT_TRUE(voxelKeyOf(v.centre.cast<double>(), 0.02, &k));
+    EXPECT_EQ(k, v.key);
+    EXPECT_TRUE(whole.isOccupied(v.key));
+  }
+  // A second batch with points in front of the wall: a ray through an occupied voxel frees it
+  // once; hits from two batches keep a voxel occupied.
+  whole.insert(wall, &origin);
+  EXPECT_EQ(whole.cell(Eigen::Vector3d(0.0, 0.0, 1.0)), OccupancyMap::Cell::kOccupied);
+}
+
+TEST(Occupancy, PointsBeyondMaxRangeOrNotFiniteAreDropped) {
+  OccupancyOptions o;
+  o.max_range = 2.0;
+  OccupancyMap map(o, o.resolution);
+  const Eigen::Vector3f origin(0, 0, 0);
+  const InsertStats s = map.insert({{0, 0, 1}, {0, 0, 3}, {NAN, 0, 1}}, &origin);
+  EXPECT_EQ(s.points, 1u);
+  EXPECT_EQ(s.dropped, 2u);
+  EXPECT_EQ(map.occupied().size(), 1u);
+}
+
+// ---- Candidate voxels -----------------------------------------------------------------------
+
+// A cube of points 1 unit in front of the camera and a wall 0.5 behind it, seen from an arc of
+// views; the box of each view is the cube's projection with a 15 px margin (boxes are never
+// tight). Over the views the candidate keeps the cube's voxels and none of the wall's.
+TEST(CandidateVoxels, AnObjectInFrontOfAWallKeepsItsVoxelsAndNotTheWall) {
+  test::SyntheticWorldOptions wo;
+  wo.table = false;
+  wo.frames = 30;
+  const test::SyntheticObject cube{5, Eigen::Vector3d(0, 0.0, 0), Eigen::Vector3d(0.05, 0.05, 0.05),
+                                   0};
+  const test::SyntheticWorld world(wo, {cube});
+  OccupancyOptions oo;
+  OccupancyMap map(oo, oo.resolution);
+  for (const auto& c : world.keyframeClouds(1)) {
+    std::vector<Eigen::Vector3f> pts;
+    for (int i = 0; i < c.num_points; ++i) pts.emplace_back(c.x[i], c.y[i], c.z[i]);
+    const Eigen::Vector3f origin(c.kf_x.back(), c.kf_y.back(), c.kf_z.back());
+    map.insert(pts, &origin);
+  }
+  VotingOptions vo;
+  ObjectTable table(map.resolution());
+  size_t wall_votes_in_one_view = 0;
+  for (int f = 0; f < wo.frames; ++f) {
+    const proposals_t p = world.proposals(f, 1);
+    ASSERT_EQ(p.num_boxes, 1);
+    VoteBox b{p.boxes[0].x - 15, p.boxes[0].y - 15, p.boxes[0].w + 30, p.boxes[0].h + 30,
+              p.median_depth[0]};
+    const auto keys = voxelsInBoxes(map.occupied(), world.camera(), world.pose(f), {b}, vo)[0];
+    for (VoxelKey k : keys) wall_votes_in_one_view += voxelCentre(k, map.resolution()).z() > 0.3;
+    table.addVotes(5, keys, vo);
+    table.addView(5, View{world.utime(f), f, b.w * b.h, logs({0.9, 0.1})});
+  }
+  EXPECT_EQ(wall_votes_in_one_view, 0u) << "the depth band keeps the wall out of every view";
+  table.update([&](VoxelKey k) { return map.isOccupied(k); }, vo, GroupingOptions{}, 2,
+               [] { return 1; });
+  const Candidate& c = table.candidates().at(5);
+  std::set<VoxelKey> cube_voxels;
+  for (const auto& p : world.objectPoints(0)) {
+    VoxelKey k;
+    if (voxelKeyOf(p, map.resolution(), &k) && map.isOccupied(k)) cube_voxels.insert(k);
+  }
+  size_t inside = 0;
+  for (VoxelKey k : c.voxels) {
+    const Eigen::Vector3d p = voxelCentre(k, map.resolution());
+    EXPECT_LT((p - cube.centre).cwiseAbs().maxCoeff(), 0.05 + map.resolution())
+        << "voxel outside the cube";
+    inside += cube_voxels.count(k);
+  }
+  EXPECT_GE(inside, cube_voxels.size() * 9 / 10)
+      << "most of the cube's occupied voxels are the candidate's";
+  const Object& o = table.objects().begin()->second;
+  EXPECT_LT((o.centroid - cube.centre).norm(), 0.01);
+  EXPECT_NEAR(o.extent.x(), 0.1, 0.025);
+}
+
+// ---- Merge, split, stable ids ----------------------------------------------------------------
+
+TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStayStable) {
+  VotingOptions vo;
+  vo.min_votes = 2;
+  vo.min_vote_share = 0.5;
+  ObjectTable t(0.01);
+  auto keys = [](int from, int to) {
+    std::vector<VoxelKey> k;
+    for (int i = from; i < to; ++i) k.push_back(packVoxelKey(40000 + i, 40000, 40000));
+    return k;
+  };
+  // Candidate 1: voxels 0..19, candidate 2: voxels 10..29 (the shared 10..19 are half of each).
+  for (int v = 0; v < 3; ++v) t.addVotes(1, keys(0, 20), vo), t.addVotes(2, keys(10, 30), vo);
+  // A voxel voted once in three views is below the share and min_votes: not the candidate's.
+  t.addVotes(1, keys(100, 101), vo);
+  t.addView(1, View{100, 1, 50, logs({0.7, 0.2, 0.1})});
+  t.addView(1, View{200, 2, 50, logs({0.6, 0.3, 0.1})});  // frame 2: the smaller box
+  t.addView(1, View{300, 3, 50, logs({0.5, 0.4, 0.1})});
+  t.addView(2, View{200, 2, 80, logs({0.1, 0.8, 0.1})});  // frame 2: the larger box
+  t.addView(2, View{400, 4, 80, logs({0.2, 0.7, 0.1})});
+  int32_t next = 7;
+  auto new_id = [&] { return next++; };
+  std::set<VoxelKey> free;
+  auto occupied = [&](VoxelKey k) { return !free.count(k); };
+
+  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  ASSERT_EQ(t.objects().size(), 1u);
+  const Object merged = t.objects().begin()->second;
+  EXPECT_EQ(merged.id, 7);
+  EXPECT_EQ(merged.candidates, (std::vector<int32_t>{1, 2}));
+  EXPECT_EQ(merged.num_views, 4) << "frame 2 counts once";
+  EXPECT_EQ(merged.num_voxels, 30);
+  EXPECT_EQ(t.candidates().at(1).voxels.size(), 20u);
+  const double want_c1 =
+      std::log(0.2) + std::log(0.8) + std::log(0.4) + std::log(0.7);  // frame 2 from the larger box
+  EXPECT_NEAR(merged.log_evidence[1], want_c1, 1e-5);
+  EXPECT_EQ(merged.label, 1);
+  EXPECT_EQ(merged.first_seen_utime, 100);
+  EXPECT_EQ(merged.last_seen_utime, 400);
+
+  // The shared voxels turn free (a full SLAM map moved them): the candidates split. The part with
+  // the lower candidate keeps the id, the other gets a new one, each with its own views only.
+  for (VoxelKey k : keys(10, 20)) free.insert(k);
+  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  ASSERT_EQ(t.objects().size(), 2u);
+  const Object& a = t.objects().at(7);
+  EXPECT_EQ(a.candidates, (std::vector<int32_t>{1}));
+  EXPECT_EQ(a.num_views, 3);
+  EXPECT_NEAR(a.log_evidence[0], std::log(0.7) + std::log(0.6) + std::log(0.5), 1e-5);
+  ASSERT_TRUE(t.objects().count(8));
+  const Object& b = t.objects().at(8);
+  EXPECT_EQ(b.candidates, (std::vector<int32_t>{2}));
+  EXPECT_EQ(b.num_views, 2);
+  EXPECT_NEAR(b.log_evidence[1], std::log(0.8) + std::log(0.7), 1e-5);
+
+  // Nothing changes: nothing is renumbered.
+  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  EXPECT_TRUE(t.objects().count(7) && t.objects().count(8));
+  EXPECT_EQ(next, 9);
+
+  // They merge again: the lower previous id survives with the union of the evidence.
+  free.clear();
+  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  ASSERT_EQ(t.objects().size(), 1u);
+  EXPECT_EQ(t.objects().begin()->first, 7);
+  EXPECT_EQ(t.objects().begin()->second.num_views, 4);
+  EXPECT_NEAR(t.objects().begin()->second.log_evidence[1], want_c1, 1e-5);
+}
+
+// A coarse candidate (a cluster of the table top, or one seen in few views that kept much of its
+// boxes' background) contains the voxels of two small objects: each small one overlaps it fully,
+// but a part is not merged into the whole it lies in, so three objects stay three.
+TEST(ObjectTable, APartIsNotMergedIntoTheWholeItLiesIn) {
+  VotingOptions vo;
+  ObjectTable t(0.01);
+  auto keys = [](int from, int to) {
+    std::vector<VoxelKey> k;
+    for (int i = from; i < to; ++i) k.push_back(packVoxelKey(40000 + i, 40000, 40000));
+    return k;
+  };
+  for (int v = 0; v < 3; ++v) {
+    t.addVotes(1, keys(0, 200), vo);    // the whole
+    t.addVotes(2, keys(10, 40), vo);    // a mug on it
+    t.addVotes(3, keys(100, 130), vo);  // a bowl on it
+    t.addVotes(4, keys(12, 42), vo);    // the mug again, under a new id (re-clustered)
+  }
+  for (int32_t c = 1; c <= 4; ++c) t.addView(c, View{100, 1, 10, logs({0.5, 0.5})});
+  int32_t next = 1;
+  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 2, [&] { return next++; });
+  ASSERT_EQ(t.objects().size(), 3u);
+  std::set<std::vector<int32_t>> groups;
+  for (const auto& [id, o] : t.objects()) groups.insert(o.candidates);
+  EXPECT_EQ(groups, (std::set<std::vector<int32_t>>{{1}, {2, 4}, {3}}));
+}
+
+TEST(ObjectTable, RarelyVotedVoxelsAreForgotten) {
+  VotingOptions vo;
+  vo.forget_share = 0.1;
+  ObjectTable t(0.01);
+  const VoxelKey once = packVoxelKey(1, 2, 3), always = packVoxelKey(4, 5, 6);
+  t.addVotes(1, {once, always}, vo);
+  for (int i = 0; i < 19; ++i) t.addVotes(1, {always}, vo);
+  EXPECT_EQ(t.candidates().at(1).votes.count(once), 0u) << "1 vote in 20 views < 10%";
+  EXPECT_EQ(t.candidates().at(1).votes.at(always), 20);
+}
+
+// ---- The engine -----------------------------------------------------------------------------
+
+TEST(ObjectMapEngine, FusesASyntheticSceneIntoLabelledObjectsAtTheirPlaces) {
+  ObjectMapOptions o;
+  ObjectMapEngine e(o);
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  feed(e, w, 1, 0, 40);
+  const object_map_t m = e.objectMap();
+  EXPECT_EQ(m.seq, 39);
+  EXPECT_EQ(m.map_id, 1);
+  EXPECT_EQ(m.class_names, test::SyntheticWorld::classNames());
+  ASSERT_EQ(m.num_objects, 3);
+  for (const auto& truth : w.objects()) {
+    const std::string label = test::SyntheticWorld::classNames()[static_cast<size_t>(truth.cls)];
+    const object_t* ob = findLabel(m, label);
+    ASSERT_TRUE(ob) << "no " << label;
+    EXPECT_EQ(ob->map_id, 1);
+    EXPECT_EQ(ob->num_views, 40);
+    EXPECT_GT(ob->num_voxels, 50);
+    const Eigen::Vector3d c(ob->centroid[0], ob->centroid[1], ob->centroid[2]);
+    EXPECT_LT((c - truth.centre).norm(), 0.015) << label << " at " << c.transpose();
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GT(ob->extent[a], 2 * truth.half_size[a] - 0.02) << label << " axis " << a;
+      EXPECT_LT(ob->extent[a], 2 * truth.half_size[a] + 0.06) << label << " axis " << a;
+    }
+    const float* top = &*std::max_element(ob->posterior.begin(), ob->posterior.end());
+    EXPECT_EQ(top - ob->posterior.data(), truth.cls);
+    EXPECT_EQ(ob->first_seen_utime, w.utime(0));
+    EXPECT_EQ(ob->last_seen_utime, w.utime(39));
+  }
+  // The same input gives the same bytes (lockstep replays rely on it).
+  ObjectMapEngine again(o);
+  feed(again, w, 1, 0, 40);
+  EXPECT_EQ(encode(again.objectMap()), encode(m));
+}
+
+TEST(ObjectMapEngine, ANewMapIdStartsANewSegmentAndTheOldOneIsUnchanged) {
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w1({}, test::SyntheticWorld::defaultObjects());
+  feed(e, w1, 1, 0, 20);
+  const object_map_t before = e.objectMap();
+  ASSERT_EQ(before.num_objects, 3);
+
+  // SLAM re-initialises: map 2, another frame of reference, the same candidate ids reused.
+  auto moved = test::SyntheticWorld::defaultObjects();
+  for (auto& o : moved) o.centre += Eigen::Vector3d(0.1, 0, 0.1);
+  const test::SyntheticWorld w2({}, moved);
+  feed(e, w2, 2, 0, 20, 20);
+  const object_map_t after = e.objectMap();
+  EXPECT_EQ(after.map_id, 2);
+  EXPECT_EQ(e.segments().size(), 2u);
+  ASSERT_EQ(after.num_objects, 6);
+  std::vector<object_t> seg1;
+  for (const auto& o : after.objects)
+    if (o.map_id == 1) seg1.push_back(o);
+  ASSERT_EQ(seg1.size(), before.objects.size());
+  for (size_t i = 0; i < seg1.size(); ++i) {
+    object_map_t a{}, b{};  // compare the encoded objects
+    a.objects = {seg1[i]};
+    b.objects = {before.objects[i]};
+    a.num_objects = b.num_objects = 1;
+    EXPECT_EQ(encode(a), encode(b)) << "object " << seg1[i].id << " of segment 1 changed";
+  }
+
+  // The camera restarts (seq goes back): SLAM's map 1 of the new session is a new segment.
+  feed(e, w2, 1, 0, 5);
+  EXPECT_EQ(e.sessions(), 2);
+  EXPECT_EQ(e.segments().size(), 3u);
+  EXPECT_EQ(e.currentSegment(), 3);
+  const object_map_t restarted = e.objectMap();
+  int in_seg1 = 0;
+  for (const auto& o : restarted.objects) in_seg1 += o.map_id == 1;
+  EXPECT_EQ(in_seg1, 3);
+
+  // Queries by map id.
+  object_query_t q{};
+  q.kind = object_query_t::KIND_ALL;
+  q.map_id = 2;
+  const auto r2 = e.answer(q);
+  EXPECT_EQ(r2.error, "");
+  EXPECT_EQ(r2.num_objects, 3);
+  q.map_id = 42;
+  EXPECT_NE(e.answer(q).error.find("no map segment 42"), std::string::npos);
+}
+
+TEST(ObjectMapEngine, QueriesByLabelAndRegionAndBadQueriesGetAnError) {
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  feed(e, w, 1, 0, 30);
+  object_query_t q{};
+  q.request_id = 77;
+  q.map_id = -1;
+  q.kind = object_query_t::KIND_BY_LABEL;
+  q.label = "coffee_mug";
+  auto r = e.answer(q);
+  EXPECT_EQ(r.request_id, 77);
+  EXPECT_EQ(r.error, "");
+  ASSERT_EQ(r.num_objects, 1);
+  EXPECT_EQ(r.objects[0].label, "coffee_mug");
+  // A region around the soda can only.
+  q.kind = object_query_t::KIND_BY_REGION;
+  const Eigen::Vector3d can = w.objects()[2].centre;
+  for (int i = 0; i < 3; ++i) q.region_min[i] = can[i] - 0.02, q.region_max[i] = can[i] + 0.02;
+  r = e.answer(q);
+  ASSERT_EQ(r.num_objects, 1);
+  EXPECT_EQ(r.objects[0].label, "soda_can");
+  // Everything.
+  for (int i = 0; i < 3; ++i) q.region_min[i] = -10, q.region_max[i] = 10;
+  EXPECT_EQ(e.answer(q).num_objects, 3);
+  q.region_min[0] = 11;
+  EXPECT_NE(e.answer(q).error.find("bad region"), std::string::npos);
+  q.kind = object_query_t::KIND_BY_LABEL;
+  q.label = "giraffe";
+  r = e.answer(q);
+  EXPECT_NE(r.error.find("unknown label 'giraffe'"), std::string::npos) << r.error;
+  EXPECT_EQ(r.num_objects, 0);
+  q.kind = 9;
+  EXPECT_NE(e.answer(q).error.find("unknown query kind 9"), std::string::npos);
+}
+
+TEST(ObjectMapEngine, MalformedInputIsRefusedWithAReason) {
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  std::string why;
+  camera_info_t bad_camera = w.cameraInfo();
+  bad_camera.width = 0;
+  EXPECT_FALSE(e.onCameraInfo(bad_camera, &why));
+  point_cloud_t cloud = w.keyframeClouds(1)[0];
+  cloud.num_points += 1;
+  EXPECT_FALSE(e.onMap(cloud, &why));
+  EXPECT_NE(why.find("num_points"), std::string::npos);
+  pose_t pose = w.poseMessage(0, 1);
+  pose.position[0] = NAN;
+  EXPECT_FALSE(e.onPose(pose, &why));
+  detections_t d = w.detections(0, 1);
+  d.class_names[1] = d.class_names[0];
+  EXPECT_FALSE(e.onDetections(d, &why));
+  EXPECT_NE(why.find("repeated class name"), std::string::npos) << why;
+  d = w.detections(0, 1);
+  d.log_prob[0].pop_back();
+  EXPECT_FALSE(e.onDetections(d, &why));
+  // A box with NaN probabilities is skipped, the others are fused.
+  d = w.detections(0, 1);
+  d.log_prob[0][0] = NAN;
+  FrameReport r;
+  EXPECT_TRUE(e.onDetections(d, &why, &r));
+  EXPECT_EQ(r.boxes_rejected, 1);
+  EXPECT_EQ(r.boxes, d.num_boxes - 1);
+  EXPECT_FALSE(r.localised);  // no pose, no camera: evidence only
+  EXPECT_EQ(e.objectMap().num_objects, d.num_boxes - 1);
+}
+
+TEST(ObjectMapEngine, ANewClassFromAnotherModelIsAddedBeforeBackground) {
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  std::string why;
+  ASSERT_TRUE(e.onDetections(w.detections(0, 1), &why));
+  detections_t d = w.detections(1, 1);
+  // Another model: a class more, in another order.
+  d.class_names = {"soda_can", "giraffe", "coffee_mug", "bowl", "cap", "background"};
+  d.num_classes = 6;
+  for (auto& row : d.log_prob) row = logs({0.1, 0.1, 0.5, 0.1, 0.1, 0.1});
+  ASSERT_TRUE(e.onDetections(d, &why)) << why;
+  EXPECT_EQ(e.classes(), (std::vector<std::string>{"bowl", "cap", "coffee_mug", "soda_can",
+                                                   "giraffe", "background"}));
+  const object_map_t m = e.objectMap();
+  for (const auto& o : m.objects) {
+    EXPECT_EQ(o.num_classes, 6);
+    EXPECT_EQ(o.num_views, 2);
+  }
+}
+
+// ---- Config ---------------------------------------------------------------------------------
+
+TEST(ObjectMapConfig, ShippedYamlEqualsDefaults) {
+  ObjectMapOptions file =
+      loadConfig<ObjectMapOptions>(test::sourcePath("config/objectmap.yaml"), "objectmap", false);
+  ObjectMapOptions defaults;
+  EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+}
