@@ -386,6 +386,13 @@ void ObjectMapEngine::updateObjects() {
   }
 }
 
+const Object* ObjectMapEngine::objectOfCandidate(int32_t slam_map_id, int32_t candidate) {
+  updateObjects();
+  const auto it = session_maps_.find(slam_map_id);
+  if (it == session_maps_.end()) return nullptr;
+  return segments_.at(it->second)->table.objectOfCandidate(candidate);
+}
+
 size_t ObjectMapEngine::numObjects() {
   updateObjects();
   size_t n = 0;

@@ -120,6 +120,10 @@ class ObjectMapEngine {
   size_t numOccupiedVoxels() const;
   /// Regroups the segments whose voxels or evidence changed.
   void updateObjects();
+  /// The object that a candidate of a SLAM map (of the current session) belongs to now, after
+  /// regrouping; nullptr when the map or the candidate is unknown. Read-only use (the evaluator's
+  /// multi-view labels); the pointer is valid until the next input.
+  const Object* objectOfCandidate(int32_t slam_map_id, int32_t candidate);
 
  private:
   Segment& segmentFor(int32_t slam_map_id);

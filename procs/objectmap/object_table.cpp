@@ -61,6 +61,12 @@ Candidate* ObjectTable::findCandidate(int32_t id) {
   return it == candidates_.end() ? nullptr : &it->second;
 }
 
+const Object* ObjectTable::objectOfCandidate(int32_t candidate) const {
+  for (const auto& [id, o] : objects_)
+    if (std::binary_search(o.candidates.begin(), o.candidates.end(), candidate)) return &o;
+  return nullptr;
+}
+
 void ObjectTable::restoreObject(int32_t id, std::vector<int32_t> candidates) {
   std::sort(candidates.begin(), candidates.end());
   Object& o = objects_[id];

@@ -90,6 +90,9 @@ class ObjectTable {
   Candidate* findCandidate(int32_t id);
   /// Objects by id (as of the last update()).
   const std::map<int32_t, Object>& objects() const { return objects_; }
+  /// The object a candidate belongs to (as of the last update()); nullptr for a candidate that no
+  /// object holds (unknown, or added since).
+  const Object* objectOfCandidate(int32_t candidate) const;
 
   /// Classes changed: the view value of old class i moves to index old_to_new[i]; classes a
   /// view did not have get the view's lowest log-probability (see README).

@@ -167,7 +167,9 @@ std::string OccupancyMap::serialize(const std::function<Rgb(VoxelKey)>& colour) 
     const Rgb c = colour(pack(it.getKey()));
     it->setColor(c.r, c.g, c.b);
   }
-  tree.updateInnerOccupancy();  // ColorOcTree: inner nodes take the mean colour of their children
+  // ColorOcTree: inner nodes take the mean colour of their children. Its updateInnerOccupancy()
+  // (OctoMap 1.9) does not check for an empty tree: a segment whose SLAM map sent no points yet.
+  if (tree.getRoot()) tree.updateInnerOccupancy();
   std::ostringstream out;
   if (!tree.write(out)) throw std::runtime_error("OctoMap could not serialise the tree");
   return out.str();

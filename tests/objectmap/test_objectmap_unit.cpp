@@ -4,6 +4,7 @@
 // shipped config.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -168,6 +169,25 @@ TEST(Occupancy, PointsBeyondMaxRangeOrNotFiniteAreDropped) {
   EXPECT_EQ(s.points, 1u);
   EXPECT_EQ(s.dropped, 2u);
   EXPECT_EQ(map.occupied().size(), 1u);
+}
+
+// A segment whose SLAM map has no points yet (SLAM started a map and lost it before its first
+// cloud): saving it must not crash (OctoMap's ColorOcTree cannot update an empty tree), and the
+// bytes read back as an empty map.
+TEST(Occupancy, AnEmptyMapSerializesAndReadsBack) {
+  OccupancyOptions o;
+  OccupancyMap map(o, o.resolution);
+  const std::string bytes = map.serialize([](VoxelKey) { return Rgb{1, 2, 3}; });
+  EXPECT_FALSE(bytes.empty());
+  const OccupancyMap back = OccupancyMap::deserialize(bytes, o, "empty");
+  EXPECT_TRUE(back.occupied().empty());
+  // The engine: a pose in a map that never sent a cloud makes an empty segment; a snapshot saves it.
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  std::string why;
+  ASSERT_TRUE(e.onPose(w.poseMessage(0, 3), &why)) << why;
+  const MapSnapshot snap = e.snapshot();
+  EXPECT_EQ(snap.segment_files.size(), 1u);
 }
 
 // ---- Candidate voxels -----------------------------------------------------------------------
@@ -367,6 +387,35 @@ TEST(ObjectMapEngine, FusesASyntheticSceneIntoLabelledObjectsAtTheirPlaces) {
   ObjectMapEngine again(o);
   feed(again, w, 1, 0, 40);
   EXPECT_EQ(encode(again.objectMap()), encode(m));
+}
+
+// The evaluator's accessor: a candidate id (of a SLAM map) leads to the object holding it now.
+TEST(ObjectMapEngine, ACandidateLeadsToTheObjectThatHoldsIt) {
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  feed(e, w, 1, 0, 40);
+  for (const auto& truth : w.objects()) {
+    const Object* o = e.objectOfCandidate(1, truth.candidate);
+    ASSERT_TRUE(o) << "candidate " << truth.candidate;
+    EXPECT_TRUE(std::count(o->candidates.begin(), o->candidates.end(), truth.candidate));
+    EXPECT_EQ(o->label, truth.cls);
+    EXPECT_EQ(o->num_views, 40);
+    const auto& objects = e.segments().at(1)->table.objects();
+    ASSERT_TRUE(objects.count(o->id));
+    EXPECT_EQ(&objects.at(o->id), o);
+  }
+  EXPECT_EQ(e.objectOfCandidate(1, 999), nullptr) << "unknown candidate";
+  EXPECT_EQ(e.objectOfCandidate(2, w.objects()[0].candidate), nullptr) << "unknown map";
+  // A view added after the last regrouping is seen: the accessor regroups first.
+  std::string why;
+  detections_t d = w.detections(39, 1);
+  ASSERT_GT(d.num_boxes, 0);
+  d.candidate_ids[0] = 77;
+  ASSERT_TRUE(e.onDetections(d, &why)) << why;
+  const Object* added = e.objectOfCandidate(1, 77);
+  ASSERT_TRUE(added);
+  EXPECT_EQ(added->candidates, (std::vector<int32_t>{77}));
+  EXPECT_EQ(added->num_views, 1);
 }
 
 TEST(ObjectMapEngine, ANewMapIdStartsANewSegmentAndTheOldOneIsUnchanged) {

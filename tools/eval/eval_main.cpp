@@ -1,14 +1,16 @@
 // slamaware-eval: runs the pipeline (the processes that exist: camera -> slam -> ...) lockstep on
 // each sequence folder, records the bus, and computes the report sections of the stages from the
-// recording and the ground truth (DESIGN.md §7): the "slam" and "proposals" sections of every
-// sequence, and "overall" over the synthetic suite, plus plots per sequence (trajectory, recall
-// against boxes). Runs inside a private network namespace (scripts/eval). --offline runs the SLAM
-// library in-process instead (no bus; for development); --from-logs scores earlier recordings
-// and --proposals-config re-runs the proposals stage on them with other options.
+// recording and the ground truth (DESIGN.md §7): the "slam", "proposals", "single_view" and
+// "multi_view" sections of every sequence, and "overall" over the synthetic suite, plus plots per
+// sequence (trajectory, recall against boxes, precision-recall per class). Runs inside a private
+// network namespace (scripts/eval). --offline runs the SLAM library in-process instead (no bus;
+// for development); --from-logs scores earlier recordings and --proposals-config re-runs the
+// proposals stage on them with other options.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -22,6 +24,7 @@
 #include "tools/eval/offline_run.h"
 #include "tools/eval/pipeline_run.h"
 #include "tools/eval/proposal_metrics.h"
+#include "tools/eval/recognition_metrics.h"
 #include "tools/eval/slam_metrics.h"
 
 using namespace slamaware;
@@ -35,6 +38,38 @@ std::string selfDir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
+// The single_view and multi_view sections of a sequence (into `out`) and its precision-recall
+// plot, from the DETECTIONS of its recording and the object map replayed; no classes in the
+// result when the sequence has none to evaluate.
+RecognitionResult recognitionSections(const std::string& name, const SequenceFolder& seq, const std::string& log,
+                                      const Channels& channels, const ObjectMapOptions& objectmap_options,
+                                      const std::string& out_dir, nlohmann::json& out) {
+  const RecognitionRecording rr = readRecognitionRecording(log, channels, objectmap_options);
+  if (rr.empty()) {
+    spdlog::info("{}: no DETECTIONS in the recording: no single_view / multi_view", name);
+    return {};
+  }
+  RecognitionResult res = scoreRecognition(rr, seq, RecognitionEvalOptions{});
+  if (res.classes.empty()) {
+    spdlog::info("{}: none of the model's classes is in the sequence: no single_view / multi_view", name);
+    return res;
+  }
+  out["single_view"] = recognitionSection(res.single);
+  out["multi_view"] = recognitionSection(res.multi);
+  out["multi_view"]["objects"] = rr.objects;
+  out["multi_view"]["candidates"] = rr.candidates;
+  out["multi_view"]["replay_matches_node"] =
+      rr.matches_node < 0 ? nlohmann::json(nullptr) : nlohmann::json(rr.matches_node == 1);
+  const std::string plot = (fs::path(out_dir) / "plots" / (name + "_pr.png")).string();
+  drawPrCurves(res.single, res.multi, name + ": precision-recall at IoU 0.5, every 5th frame", plot);
+  out["single_view"]["plot"] = out["multi_view"]["plot"] = plot;
+  auto pct = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
+  spdlog::info("{}: mAP single view {:.1f}%, multi-view {:.1f}%; recall {:.1f}% / {:.1f}% ({} boxes, {} objects)",
+               name, pct(out["single_view"]["mAP"]), pct(out["multi_view"]["mAP"]), pct(out["single_view"]["recall"]),
+               pct(out["multi_view"]["recall"]), res.single.boxes, rr.objects);
+  return res;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -42,7 +77,7 @@ int main(int argc, char** argv) {
       "slamaware-eval: the pipeline on sequence folders, lockstep, scored against ground truth"};
   std::string out, out_dir = "build/eval", system_path, slam_config, stages, log_level = "info";
   std::vector<std::string> sequences;
-  std::string proposals_config;
+  std::string proposals_config, objectmap_config;
   int draw_frames = 0;
   bool offline = false, verbose = false, from_logs = false;
   ProposalEvalOptions peo;
@@ -62,6 +97,8 @@ int main(int argc, char** argv) {
   app.add_flag("--from-logs", from_logs, "score the recordings already in <out-dir>/logs (no run)");
   app.add_option("--proposals-config", proposals_config,
                  "re-run the proposals stage on the recording with this options file");
+  app.add_option("--objectmap-config", objectmap_config,
+                 "multi-view labels: object map options (default: <config-dir>/objectmap.yaml)");
   app.add_option("--draw-proposals", draw_frames,
                  "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
   app.add_option("--baseline-frames", peo.baseline_frames,
@@ -84,6 +121,13 @@ int main(int argc, char** argv) {
         slam_config = (fs::path(pipeline.config_dir) / "slam.yaml").string();
       slam_options = loadConfig<SlamOptions>(slam_config, "slam", false);
     }
+
+    // The multi-view labels replay the objectmap stage with the options the node was given.
+    if (objectmap_config.empty() && fs::exists(fs::path(pipeline.config_dir) / "objectmap.yaml"))
+      objectmap_config = (fs::path(pipeline.config_dir) / "objectmap.yaml").string();
+    const ObjectMapOptions objectmap_options = loadConfig<ObjectMapOptions>(objectmap_config, "objectmap", false);
+    RecognitionScores suite_single, suite_multi;
+    bool any_recognition = false;
 
     nlohmann::json report = nlohmann::json::object();
     std::vector<nlohmann::json> synthetic;
@@ -108,7 +152,10 @@ int main(int argc, char** argv) {
           run = runSlamOffline(seq, slam_options, verbose);
         } else {
           spdlog::info("{}: running the pipeline, recording {}", name, log);
-          const PipelineRun pr = runPipeline(dir, log, system, pipeline);
+          PipelineRunOptions po = pipeline;
+          po.objectmap_dir = (fs::path(out_dir) / "objectmap" / name).string();
+          fs::remove_all(po.objectmap_dir);
+          const PipelineRun pr = runPipeline(dir, log, system, po);
           section["pipeline_stages"] = pr.stages;
           for (const auto& st : pr.stages) have_proposals = have_proposals || st == "proposals";
           if (!pr.ok) {
@@ -145,6 +192,15 @@ int main(int argc, char** argv) {
           spdlog::info("{}: proposals recall {:.1f}% at IoU 0.5 ({:.1f}% at 0.7), {} boxes per frame", name,
                        p.value("recall_iou50", 0.0), p.value("recall_iou70", 0.0), p.value("boxes_per_frame", 0.0));
         }
+        if (!offline && seq.hasBoxes()) {
+          const RecognitionResult res =
+              recognitionSections(name, seq, log, system.channels, objectmap_options, out_dir, report["sequences"][name]);
+          if (!res.classes.empty() && isSyntheticSequence(seq)) {
+            mergeRecognition(&suite_single, res.single);
+            mergeRecognition(&suite_multi, res.multi);
+            any_recognition = true;
+          }
+        }
       } catch (const std::exception& e) {
         section["error"] = e.what();
         spdlog::error("{}: {}", name, e.what());
@@ -156,6 +212,13 @@ int main(int argc, char** argv) {
     if (any_proposals)
       report["overall"]["proposals"] =
           proposalSection(synthetic_proposals, (fs::path(out_dir) / "plots" / "suite_proposals.png").string());
+    if (any_recognition) {
+      report["overall"]["single_view"] = recognitionSection(suite_single);
+      report["overall"]["multi_view"] = recognitionSection(suite_multi);
+      const std::string plot = (fs::path(out_dir) / "plots" / "suite_pr.png").string();
+      drawPrCurves(suite_single, suite_multi, "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
+      report["overall"]["single_view"]["plot"] = report["overall"]["multi_view"]["plot"] = plot;
+    }
     std::ofstream(out) << report.dump(2) << "\n";
     return failures ? 1 : 0;
   } catch (const std::exception& e) {

@@ -135,6 +135,12 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
       argv.push_back("--config");
       argv.push_back(config.string());
     }
+    if (s.name == "objectmap" && !options.objectmap_dir.empty()) {
+      // Each sequence its own map folder (lockstep starts empty anyway; the saves stay apart).
+      fs::create_directories(options.objectmap_dir);
+      argv.push_back("--map-dir");
+      argv.push_back(options.objectmap_dir);
+    }
     procs.push_back(std::make_unique<Child>(argv, log_path + "." + s.name + ".txt"));
   }
   Child camera({(fs::path(options.bin_dir) / "slamaware-camera").string(), "--source", sequence_dir,

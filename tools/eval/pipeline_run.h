@@ -24,6 +24,7 @@ struct PipelineRunOptions {
   std::string config_dir = "config";  ///< <name>.yaml passed as --config when it exists
   std::string lcm_url;
   std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
+  std::string objectmap_dir;      ///< --map-dir of the objectmap stage: a fresh folder per sequence
   double timeout_per_frame_s = 20.0;
 };
 

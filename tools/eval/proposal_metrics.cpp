@@ -11,6 +11,7 @@
 #include "common/bus/log_reader.h"
 #include "common/image_codec.h"
 #include "procs/proposals/proposal_engine.h"
+#include "tools/eval/plot.h"
 
 namespace slamaware {
 
@@ -74,42 +75,24 @@ std::vector<Box2> selectiveSearch(const cv::Mat& bgr, int width, int max_boxes) 
 }
 
 void drawPlot(const ProposalScores& sc, const std::string& path) {
-  const int W = 640, H = 420, left = 60, right = 20, top = 30, bottom = 50;
-  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  const int W = 640, H = 420;
   const double kmax = 2000;
-  auto px = [&](double k, double recall) {
-    const double fx = std::log10(std::max(1.0, k)) / std::log10(kmax);
-    return cv::Point(left + static_cast<int>(fx * (W - left - right)),
-                     H - bottom - static_cast<int>(recall / 100.0 * (H - top - bottom)));
-  };
-  for (int r = 0; r <= 100; r += 20) {
-    cv::line(img, px(1, r), px(kmax, r), cv::Scalar(225, 225, 225));
-    cv::putText(img, std::to_string(r), px(1, r) + cv::Point(-35, 5), cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                cv::Scalar(0, 0, 0));
-  }
-  for (int k : {1, 10, 100, 1000}) {
-    cv::line(img, px(k, 0), px(k, 100), cv::Scalar(225, 225, 225));
-    cv::putText(img, std::to_string(k), px(k, 0) + cv::Point(-5, 18), cv::FONT_HERSHEY_SIMPLEX, 0.4,
-                cv::Scalar(0, 0, 0));
-  }
-  auto curve = [&](const std::vector<int>& ranks, const cv::Scalar& colour, const std::string& label, int row) {
-    if (ranks.empty()) return;
-    cv::Point prev = px(1, recallAt(ranks, 1));
-    for (int k = 2; k <= kmax; k = std::max(k + 1, static_cast<int>(k * 1.05))) {
-      const cv::Point p = px(k, recallAt(ranks, k));
-      cv::line(img, prev, p, colour, 2, cv::LINE_AA);
-      prev = p;
-    }
-    cv::putText(img, label, cv::Point(left + 10, top + 18 * row), cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1,
-                cv::LINE_AA);
-  };
-  curve(sc.rank50, cv::Scalar(200, 80, 0), "multi-view (SLAM map), every 5th frame", 1);
-  curve(sc.ours_on_baseline_frames, cv::Scalar(230, 170, 110), "multi-view, the baseline's frames", 2);
-  curve(sc.baseline_rank50, cv::Scalar(0, 0, 200), "selective search (single view)", 3);
-  cv::putText(img, "boxes per frame (log)", cv::Point(W / 2 - 70, H - 12), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-              cv::Scalar(0, 0, 0));
-  cv::putText(img, "recall of ground-truth boxes at IoU 0.5 (%)", cv::Point(left, 18), cv::FONT_HERSHEY_SIMPLEX,
-              0.45, cv::Scalar(0, 0, 0));
+  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  {
+    PlotPanel panel(img, cv::Rect(0, 0, W, H), PlotAxis{1, kmax, true, {1, 10, 100, 1000}, "boxes per frame (log)"},
+                    PlotAxis{0, 100, false, {0, 20, 40, 60, 80, 100}, ""},
+                    "recall of ground-truth boxes at IoU 0.5 (%)");
+    auto curve = [&](const std::vector<int>& ranks, const cv::Scalar& colour, const std::string& label) {
+      if (ranks.empty()) return;
+      std::vector<cv::Point2d> points{{1, recallAt(ranks, 1)}};
+      for (int k = 2; k <= kmax; k = std::max(k + 1, static_cast<int>(k * 1.05)))
+        points.emplace_back(k, recallAt(ranks, k));
+      panel.curve(points, colour, label);
+    };
+    curve(sc.rank50, plot_colour::kBlue, "multi-view (SLAM map), every 5th frame");
+    curve(sc.ours_on_baseline_frames, plot_colour::kLightBlue, "multi-view, the baseline's frames");
+    curve(sc.baseline_rank50, plot_colour::kRed, "selective search (single view)");
+  }  // the legend is drawn here
   writeImage(path, img);
 }
 

@@ -33,17 +33,119 @@ void flatten(const nlohmann::json& obj, const std::string& prefix, std::map<std:
   }
 }
 
+// Sections with tables of their own (below), left out of the generic per-section tables.
+const std::set<std::string> kOwnTables = {"single_view", "multi_view"};
+
+// The paper's numbers that we can cite: Pillai & Leonard, RSS 2015, on UW RGB-D Scenes v2.
+constexpr double kPaperSingleViewMap = 81.5, kPaperMultiViewMap = 89.8;
+
+const nlohmann::json& at(const nlohmann::json& j, const std::string& a, const std::string& b = "",
+                         const std::string& c = "") {
+  static const nlohmann::json none;
+  const nlohmann::json* p = &j;
+  for (const std::string* k : {&a, &b, &c}) {
+    if (k->empty()) break;
+    if (!p->is_object() || !p->contains(*k)) return none;
+    p = &(*p)[*k];
+  }
+  return *p;
+}
+
+// A percentage with one decimal, "–" when absent.
+std::string pct(const nlohmann::json& v) {
+  if (!v.is_number()) return "–";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.1f", v.get<double>());
+  return buf;
+}
+
+// A plot written by the eval into <out-dir>/plots/, linked from <out-dir>/report.md.
+std::string plotLink(const nlohmann::json& path, const std::string& alt) {
+  if (!path.is_string()) return "";
+  const std::string p = path.get<std::string>();
+  return "![" + alt + "](plots/" + p.substr(p.find_last_of('/') + 1) + ")\n\n";
+}
+
+// Recognition in the paper's style: per class AP, precision and recall, single view against
+// multi-view, the mAP rows, and the paper's mAPs beside ours; then one row per sequence.
+void recognitionTables(const nlohmann::json& report, std::ostringstream& md) {
+  const nlohmann::json& single = at(report, "overall", "single_view");
+  const nlohmann::json& multi = at(report, "overall", "multi_view");
+  bool any_sequence = false;
+  for (auto& [name, seq] : at(report, "sequences").items())
+    any_sequence = any_sequence || seq.contains("single_view");
+  if (single.is_null() && !any_sequence) return;
+  md << "## Recognition: single view and multi-view\n\n"
+        "Every 5th frame, each proposal box is a detection of every class, scored by p(class | box) from "
+        "that frame alone (single view) or from every view of its object in the object map at the end of "
+        "the sequence (multi-view); true positive at IoU >= 0.5 with an unmatched ground-truth box of the "
+        "class; AP = VOC all-point area under the precision-recall curve; precision and recall at the "
+        "label the system gives (argmax, background included). Distractor objects (classes outside the "
+        "model) are not ground truth. Details: tools/eval/README.md.\n\n";
+  if (!single.is_null()) {
+    md << "### Synthetic suite (detections of every scene pooled)\n\n"
+          "| class | ground-truth boxes | AP single | AP multi | precision single | precision multi | "
+          "recall single | recall multi |\n|---|---|---|---|---|---|---|---|\n";
+    for (auto& [cls, c] : at(single, "per_class").items()) {
+      const nlohmann::json& m = at(multi, "per_class", cls);
+      md << "| " << cls << " | " << cell(at(c, "ground_truth_boxes")) << " | " << pct(at(c, "AP")) << " | "
+         << pct(at(m, "AP")) << " | " << pct(at(c, "precision")) << " | " << pct(at(m, "precision")) << " | "
+         << pct(at(c, "recall")) << " | " << pct(at(m, "recall")) << " |\n";
+    }
+    md << "| **mAP** (classes with ground truth) | " << cell(at(single, "ground_truth_boxes")) << " | **"
+       << pct(at(single, "mAP")) << "** | **" << pct(at(multi, "mAP")) << "** | | | " << pct(at(single, "recall"))
+       << " | " << pct(at(multi, "recall")) << " |\n";
+    char paper[160];
+    std::snprintf(paper, sizeof(paper),
+                  "| Pillai & Leonard 2015, UW RGB-D Scenes v2 (their numbers), mAP | | %.1f | %.1f | | | | |\n",
+                  kPaperSingleViewMap, kPaperMultiViewMap);
+    md << paper << "\n";
+    md << plotLink(at(single, "plot"), "precision-recall per class, synthetic suite");
+  }
+  if (any_sequence) {
+    md << "### Per sequence\n\n| sequence | ground-truth boxes | boxes | mAP single | mAP multi | recall single | "
+          "recall multi | correct label on boxes over an object, single / multi | objects in the map |\n"
+          "|---|---|---|---|---|---|---|---|---|\n";
+    for (auto& [name, seq] : report["sequences"].items()) {
+      const nlohmann::json& s = at(seq, "single_view");
+      const nlohmann::json& m = at(seq, "multi_view");
+      if (s.is_null()) continue;
+      md << "| " << name << " | " << cell(at(s, "ground_truth_boxes")) << " | " << cell(at(s, "boxes")) << " | "
+         << pct(at(s, "mAP")) << " | " << pct(at(m, "mAP")) << " | " << pct(at(s, "recall")) << " | "
+         << pct(at(m, "recall")) << " | " << pct(at(s, "diagnostics", "accuracy_on_objects")) << " / "
+         << pct(at(m, "diagnostics", "accuracy_on_objects")) << " | " << cell(at(m, "objects")) << " |\n";
+    }
+    md << "\n";
+  }
+}
+
+// The recognizer's time against the number of classes (make bench), when the report has it.
+void classesRuntimeTable(const nlohmann::json& report, std::ostringstream& md) {
+  const nlohmann::json& t5 = at(report, "recognizer_ms_per_frame");
+  const nlohmann::json& t51 = at(report, "recognizer_ms_per_frame_51_classes");
+  if (!t5.is_number() || !t51.is_number()) return;
+  char buf[256];
+  md << "## Recognizer runtime against the number of classes\n\n"
+        "640x480 frame, 30 boxes, 1 thread (features, encoding and scoring).\n\n"
+        "| classes (+ background) | ms per frame | relative to 5 |\n|---|---|---|\n";
+  std::snprintf(buf, sizeof(buf), "| 5 | %.1f | 1.00 |\n| 51 | %.1f | %.2f |\n\n", t5.get<double>(),
+                t51.get<double>(), t5.get<double>() > 0 ? t51.get<double>() / t5.get<double>() : 0.0);
+  md << buf;
+}
+
 }  // namespace
 
 std::string renderMarkdown(const nlohmann::json& report) {
   std::ostringstream md;
   md << "# slamaware report\n\n";
+  recognitionTables(report, md);
+  classesRuntimeTable(report, md);
   // Per-sequence sections: one table per section name, a row per sequence.
   if (report.contains("sequences") && report["sequences"].is_object()) {
     std::set<std::string> sections;
     for (auto& [name, seq] : report["sequences"].items())
       for (auto& [section, v] : seq.items())
-        if (v.is_object()) sections.insert(section);
+        if (v.is_object() && !kOwnTables.count(section)) sections.insert(section);
     for (const auto& section : sections) {
       std::map<std::string, std::map<std::string, nlohmann::json>> rows;
       std::set<std::string> columns;

@@ -1,0 +1,180 @@
+#pragma once
+// The "single_view" and "multi_view" sections of the eval report (DESIGN.md §7): detection of the
+// object classes on every 5th frame, each proposal box of DETECTIONS labelled from its frame alone
+// (single view) or with the fused evidence of its object at the end of the sequence (multi view),
+// scored against the ground-truth boxes by VOC average precision, plus precision and recall at the
+// label the system reports (argmax over the classes, background included). Definitions in
+// tools/eval/README.md. Only the evaluator reads ground truth.
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/bus/system_config.h"
+#include "common/dataset.h"
+#include "procs/objectmap/object_map.h"
+#include "tools/eval/proposal_metrics.h"
+
+namespace slamaware {
+
+// ---- Average precision ------------------------------------------------------------------------
+
+struct ScoredDetection {
+  double score = 0;  ///< any monotone confidence (we use log p)
+  bool true_positive = false;
+};
+struct PrPoint {
+  double recall = 0, precision = 0;  ///< 0..1
+};
+
+/// VOC all-point interpolated average precision (0..1) of detections against `num_truth` ground-
+/// truth objects: the area under the precision-recall curve after precision is made monotone
+/// (precision at recall r = the best precision at any recall >= r). Detections of equal score are
+/// one step of the curve (the curve's points are taken after each group of ties), so the result
+/// does not depend on their order. NaN when num_truth is 0. `curve` gets the raw points.
+double averagePrecision(std::vector<ScoredDetection> detections, int num_truth, std::vector<PrPoint>* curve = nullptr);
+
+// ---- Scoring boxes against ground truth --------------------------------------------------------
+
+/// A box of a frame with its class scores: log p(class | evidence), in the order of the model's
+/// classes (background last).
+struct LabelledBox {
+  Box2 box;
+  std::vector<double> log_p;
+};
+
+/// Tallies of one evaluated class.
+struct ClassTally {
+  std::vector<ScoredDetection> ranked;  ///< every box, scored by the log-odds of p(class), TP when matched
+  int truth = 0;                        ///< ground-truth boxes of the class
+  int labelled = 0;                     ///< boxes whose argmax is the class
+  int labelled_tp = 0;                  ///< of those, matched to a ground-truth box of the class
+};
+
+/// Detection scores of one sequence or (merged) of a suite.
+struct RecognitionScores {
+  std::map<std::string, ClassTally> classes;  ///< the evaluated classes
+  int frames = 0;                             ///< frames evaluated
+  int boxes = 0;                              ///< boxes labelled
+  // Where the boxes are (best IoU with any ground-truth box >= 0.5) and what they were called:
+  int boxes_on_objects = 0, correct_on_objects = 0, background_on_objects = 0;
+  int boxes_on_distractors = 0, background_on_distractors = 0;
+  int boxes_elsewhere = 0, background_elsewhere = 0;
+  std::map<std::string, std::map<std::string, int>> confusion;  ///< truth -> label -> boxes on objects
+  int fallback_boxes = 0;  ///< multi view: boxes labelled by their own candidate (see README)
+};
+
+/// Scores without tallies for the evaluated classes.
+RecognitionScores emptyScores(const std::vector<std::string>& evaluated_classes);
+
+/// Adds one frame: `model_classes` names the entries of every box's log_p (background last);
+/// `truth` is every ground-truth box of the frame (boxes of classes that are not evaluated are
+/// distractors: not ground truth, and a box on one is not a true positive of any class). Matching
+/// per class: boxes in descending score, each to the unmatched ground-truth box of the class with
+/// the highest IoU >= iou_threshold. A box's score for class c is the log-odds of p(c),
+/// log p(c) - log(1 - p(c)): the order of p(c) without the ties that rounding makes of saturated
+/// fused posteriors.
+void scoreFrame(const std::vector<std::string>& model_classes, const std::vector<LabelledBox>& boxes,
+                const std::vector<GroundTruthBox>& truth, double iou_threshold, RecognitionScores* scores);
+
+/// Pools the detections of another sequence (AP of the pool, not a mean of APs).
+void mergeRecognition(RecognitionScores* into, const RecognitionScores& more);
+
+/// The report section: {"mAP", "recall", "per_class": {c: {"AP", "precision", "recall"}}} in %
+/// (null where undefined: AP and recall of a class without ground truth, precision of a class
+/// never reported), plus counts and the diagnostics.
+nlohmann::json recognitionSection(const RecognitionScores& scores);
+
+/// Precision-recall curves per class (classes with ground truth), single and multi view, one
+/// panel per class, into a PNG.
+void drawPrCurves(const RecognitionScores& single, const RecognitionScores& multi, const std::string& title,
+                  const std::string& path);
+
+// ---- Multi-view labels ------------------------------------------------------------------------
+
+/// Replays the messages the objectmap node gets (CAMERA_INFO, SLAM_MAP, SLAM_POSE, PROPOSALS,
+/// DETECTIONS, in the order it got them) through the object map library, and then labels a box by
+/// the object its candidate belongs to at the end: the object's posterior (softmax of the summed
+/// log-evidence of all its views). A candidate the object map does not hold (its boxes were all
+/// refused) falls back to its own evidence: the sum over the sequence of its boxes' log p (one box
+/// per frame, the larger; each clamped to [-100, 0] as the object map clamps), softmax. (A
+/// candidate without voxels is an object of its own in the map, so its label is its own evidence
+/// too.)
+class MultiViewLabeller {
+ public:
+  explicit MultiViewLabeller(const ObjectMapOptions& options);
+
+  void onCameraInfo(const camera_info_t& m);
+  void onMap(const point_cloud_t& m);
+  void onPose(const pose_t& m);
+  void onProposals(const proposals_t& m);
+  void onDetections(const detections_t& m);
+
+  /// log p(class | every view of the candidate's object) for `classes` (a class the object map
+  /// lacks gets -inf); *from_object is false when the fallback was used.
+  std::vector<double> logPosterior(int32_t map_id, int32_t candidate, const std::vector<std::string>& classes,
+                                   bool* from_object = nullptr);
+
+  ObjectMapEngine& engine() { return engine_; }
+  /// Messages the object map refused (with the reason logged at debug level).
+  int refused() const { return refused_; }
+
+ private:
+  struct OwnView {
+    float area = 0;
+    std::vector<float> log_p;  ///< in own_classes_ order
+  };
+  ObjectMapEngine engine_;
+  std::vector<std::string> own_classes_;
+  std::map<std::pair<int32_t, int32_t>, std::map<int32_t, OwnView>> own_;  ///< (map, candidate) -> seq -> view
+  int refused_ = 0;
+};
+
+// ---- A sequence ------------------------------------------------------------------------------
+
+/// The boxes of DETECTIONS by frame seq, with single-view and multi-view scores.
+struct RecognitionRecording {
+  struct Box {
+    LabelledBox single, multi;
+    int32_t map_id = -1, candidate = -1;
+    bool multi_from_object = true;
+  };
+  std::vector<std::string> classes;  ///< the model's, background last
+  std::map<int32_t, std::vector<Box>> frames;
+  int objects = 0;  ///< objects of the object map at the end
+  int candidates = 0;
+  /// The replay against the node: 1 when the replayed map's objects (labels, views, voxels) equal
+  /// those of the last OBJECT_MAP the objectmap node published, 0 when not, -1 when the recording
+  /// has no OBJECT_MAP.
+  int matches_node = -1;
+
+  bool empty() const { return classes.empty(); }
+};
+
+/// Reads DETECTIONS of a recorded log and replays it through MultiViewLabeller (`options`: the
+/// objectmap stage's). Throws LogError for a damaged log. Empty when the log has no DETECTIONS.
+RecognitionRecording readRecognitionRecording(const std::string& log_path, const Channels& channels,
+                                              const ObjectMapOptions& options);
+
+struct RecognitionEvalOptions {
+  int stride = 5;  ///< every stride-th frame (the proposals section's frames)
+  double iou = 0.5;
+};
+
+struct RecognitionResult {
+  RecognitionScores single, multi;
+  std::vector<std::string> classes;  ///< evaluated: the model's (background excluded) that the sequence lists
+};
+
+/// The classes a sequence is evaluated on: the model's object classes that its sequence.yaml lists.
+std::vector<std::string> evaluatedClasses(const std::vector<std::string>& model_classes,
+                                          const SequenceFolder& sequence);
+
+/// Scores every stride-th frame of the sequence (frames without boxes count: their ground truth is
+/// missed).
+RecognitionResult scoreRecognition(const RecognitionRecording& run, const SequenceFolder& sequence,
+                                   const RecognitionEvalOptions& options);
+
+}  // namespace slamaware
