@@ -28,19 +28,6 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-// A camera at `eye` looking at `target` (x right, y down, z forward; world z up).
-SE3 lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  SE3 T = SE3::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = y;
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -66,14 +53,17 @@ int main(int argc, char** argv) {
     }
     std::normal_distribution<float> noise(0, 0.002f);
     for (auto& p : map) p.p += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
-    const Eigen::Vector3f eye(0, -0.6f, 0.6f);
 
     CandidateMap candidates(options);
     std::vector<double> cluster_ms;
     for (int r = 0; r < repeats; ++r) {
       candidates.update(1, true, 0, std::vector<int32_t>(map.size(), 0), map);
+      for (int v = 0; v < 36; ++v) {  // views circling the table
+        const double a = 2 * M_PI * v / 36;
+        candidates.addView(1, lookAt(Eigen::Vector3d(0.8 * std::cos(a), 0.8 * std::sin(a), 0.55), Eigen::Vector3d::Zero()));
+      }
       const auto t0 = std::chrono::steady_clock::now();
-      candidates.recluster(eye);
+      candidates.recluster();
       cluster_ms.push_back(msSince(t0));
     }
     const ClusterStats& st = candidates.stats();
@@ -91,14 +81,17 @@ int main(int argc, char** argv) {
     nlohmann::json j;
     j["proposals_cluster_ms_100k"] = median(cluster_ms);
     j["proposals_cluster_points"] = static_cast<int64_t>(map.size());
-    j["proposals_cluster_points_after_downsampling"] = st.clustered_points + st.plane_points + st.outliers;
+    j["proposals_cluster_points_after_downsampling"] = st.clustered_points + st.plane_points + st.seen_through;
     j["proposals_candidates"] = st.clusters;
+    j["proposals_cluster_parts_ms"] = {{"filter", st.filter_ms}, {"structure", st.structure_ms}, {"clustering", st.cluster_ms}};
     j["proposals_project_ms_per_frame"] = median(project_ms);
     j["proposals_boxes_per_frame_mean"] = static_cast<double>(boxes) / std::max(1, frames);
     std::ofstream(out) << j.dump(2) << "\n";
+    spdlog::info("last recluster: filter {:.0f} ms, structure {:.0f} ms, clustering {:.0f} ms", st.filter_ms,
+                 st.structure_ms, st.cluster_ms);
     spdlog::info("{} points ({} after downsampling): clustering at {} scales {:.1f} ms median -> {} candidates; "
                  "projection {:.3f} ms per frame median, {:.1f} boxes per frame",
-                 map.size(), st.clustered_points + st.plane_points + st.outliers, options.scales, median(cluster_ms),
+                 map.size(), st.clustered_points + st.plane_points + st.seen_through, options.scales, median(cluster_ms),
                  st.clusters, median(project_ms), static_cast<double>(boxes) / std::max(1, frames));
     return 0;
   } catch (const std::exception& e) {

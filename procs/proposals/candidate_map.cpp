@@ -1,56 +1,45 @@
 #include "procs/proposals/candidate_map.h"
 
-#include <pcl/filters/extract_indices.h>
-#include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/filters/voxel_grid.h>
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_types.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/segmentation/conditional_euclidean_clustering.h>
-#include <pcl/segmentation/sac_segmentation.h>
-
 #include <algorithm>
 #include <chrono>
+#include <unordered_map>
 #include <cmath>
-#include <unordered_set>
+
+#include "procs/proposals/density_clustering.h"
+#include "procs/proposals/free_space.h"
 
 namespace slamaware {
 
 namespace {
 
-using Cloud = pcl::PointCloud<pcl::PointXYZRGB>;
-
-Cloud::Ptr toCloud(const std::vector<MapPoint>& points) {
-  Cloud::Ptr c(new Cloud);
-  c->reserve(points.size());
-  for (const auto& m : points) {
-    if (!m.p.allFinite()) continue;
-    pcl::PointXYZRGB q;
-    q.x = m.p.x();
-    q.y = m.p.y();
-    q.z = m.p.z();
-    q.r = m.r;
-    q.g = m.g;
-    q.b = m.b;
-    c->push_back(q);
-  }
-  return c;
-}
-
-Cloud::Ptr downsample(const Cloud::Ptr& in, double leaf) {
-  if (leaf <= 0 || in->empty()) return in;
-  Cloud::Ptr out(new Cloud);
-  pcl::VoxelGrid<pcl::PointXYZRGB> grid;
-  grid.setInputCloud(in);
-  grid.setLeafSize(static_cast<float>(leaf), static_cast<float>(leaf), static_cast<float>(leaf));
-  grid.filter(*out);
-  return out;
-}
-
 int64_t voxelKey(const Eigen::Vector3f& p, double voxel) {
   const auto q = [&](float v) { return static_cast<int64_t>(std::floor(v / voxel)) & 0x1FFFFF; };
   return (q(p.x()) << 42) | (q(p.y()) << 21) | q(p.z());
+}
+
+// One point per occupied voxel: the centroid and mean colour of its points, in voxel-key order.
+std::vector<MapPoint> downsample(const std::vector<MapPoint>& in, double voxel) {
+  if (!(voxel > 0) || in.empty()) return in;
+  std::vector<std::pair<int64_t, uint32_t>> keyed(in.size());
+  for (size_t i = 0; i < in.size(); ++i) keyed[i] = {voxelKey(in[i].p, voxel), static_cast<uint32_t>(i)};
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<MapPoint> out;
+  for (size_t i = 0; i < keyed.size();) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    size_t j = i;
+    for (; j < keyed.size() && keyed[j].first == keyed[i].first; ++j) {
+      const MapPoint& m = in[keyed[j].second];
+      p += m.p.cast<double>();
+      c += Eigen::Vector3d(m.r, m.g, m.b);
+    }
+    const double k = static_cast<double>(j - i);
+    const Eigen::Vector3d mc = c / k;
+    out.push_back({(p / k).cast<float>(), static_cast<uint8_t>(std::lround(mc.x())),
+                   static_cast<uint8_t>(std::lround(mc.y())), static_cast<uint8_t>(std::lround(mc.z()))});
+    i = j;
+  }
+  return out;
 }
 
 std::vector<int64_t> voxelSet(const std::vector<Eigen::Vector3f>& points, double voxel) {
@@ -93,13 +82,12 @@ void setBounds(Candidate* c) {
 
 // Drops stray points: outside the per-axis [p, 100 - p] percentiles widened by margin x the
 // largest of the three ranges (a flat map, all table, must not lose what stands on it).
-Cloud::Ptr cropRobust(const Cloud::Ptr& in, double percentile, double margin) {
-  if (in->size() < 10 || percentile <= 0) return in;
+std::vector<MapPoint> cropRobust(const std::vector<MapPoint>& in, double percentile, double margin) {
+  if (in.size() < 10 || percentile <= 0) return in;
   Eigen::Vector3f lo, hi;
+  std::vector<float> v(in.size());
   for (int a = 0; a < 3; ++a) {
-    std::vector<float> v;
-    v.reserve(in->size());
-    for (const auto& q : *in) v.push_back(q.getVector3fMap()[a]);
+    for (size_t i = 0; i < in.size(); ++i) v[i] = in[i].p[a];
     const auto at = [&](double pct) {
       const size_t k = std::min(v.size() - 1, static_cast<size_t>(pct / 100.0 * static_cast<double>(v.size())));
       std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
@@ -111,132 +99,78 @@ Cloud::Ptr cropRobust(const Cloud::Ptr& in, double percentile, double margin) {
   const float widen = static_cast<float>(margin) * (hi - lo).maxCoeff();
   lo.array() -= widen;
   hi.array() += widen;
-  Cloud::Ptr out(new Cloud);
-  for (const auto& q : *in) {
-    const Eigen::Vector3f p = q.getVector3fMap();
-    if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) out->push_back(q);
-  }
-  return out;
-}
-
-// The largest plane of `in` by RANSAC: its inliers and coefficients (normal, offset).
-bool findPlane(const Cloud::Ptr& in, const ProposalOptions& o, pcl::PointIndices* inliers, Eigen::Vector4f* plane) {
-  if (in->size() < 3) return false;
-  pcl::SACSegmentation<pcl::PointXYZRGB> seg;
-  seg.setOptimizeCoefficients(true);
-  seg.setModelType(pcl::SACMODEL_PLANE);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setDistanceThreshold(o.plane_distance);
-  seg.setMaxIterations(o.plane_iterations);
-  seg.setInputCloud(in);
-  pcl::ModelCoefficients c;
-  seg.segment(*inliers, c);
-  if (inliers->indices.empty() || c.values.size() != 4) return false;
-  *plane = Eigen::Vector4f(c.values[0], c.values[1], c.values[2], c.values[3]);
-  return true;
-}
-
-Cloud::Ptr extract(const Cloud::Ptr& in, const pcl::PointIndices::Ptr& indices, bool negative) {
-  Cloud::Ptr out(new Cloud);
-  pcl::ExtractIndices<pcl::PointXYZRGB> ex;
-  ex.setInputCloud(in);
-  ex.setIndices(indices);
-  ex.setNegative(negative);
-  ex.filter(*out);
-  return out;
-}
-
-// The map without stray points, outliers and its planes; when a support plane is found, only
-// what stands on it: on the viewpoint's side, less than
-// max_extent above it, and over the plane's own points (within support_margin).
-std::vector<MapPoint> filterMap(const std::vector<MapPoint>& all, const ProposalOptions& o,
-                                const Eigen::Vector3f& viewpoint, ClusterStats* st, Eigen::Vector4f* support_out) {
-  Cloud::Ptr cloud = toCloud(all);
-  const size_t before = cloud->size();
-  cloud = cropRobust(cloud, o.crop_percentile, o.crop_margin);
-  st->cropped = static_cast<int64_t>(before - cloud->size());
-  // Bounded cost: downsample until the map fits max_points.
-  double voxel = o.voxel;
-  Cloud::Ptr small = downsample(cloud, voxel);
-  for (int i = 0; i < 20 && static_cast<int>(small->size()) > o.max_points; ++i) {
-    voxel *= 1.26;
-    small = downsample(cloud, voxel);
-  }
-  st->voxel = voxel;
-  Cloud::Ptr rest(new Cloud);
-  if (small->size() > static_cast<size_t>(o.outlier_neighbours)) {
-    pcl::StatisticalOutlierRemoval<pcl::PointXYZRGB> sor;
-    sor.setInputCloud(small);
-    sor.setMeanK(o.outlier_neighbours);
-    sor.setStddevMulThresh(o.outlier_std);
-    sor.filter(*rest);
-  } else {
-    *rest = *small;
-  }
-  st->outliers = static_cast<int64_t>(small->size() - rest->size());
-  const double total = static_cast<double>(rest->size());
-  // Planes, largest first; the largest is the support (the table fills most of a tabletop view).
-  Cloud::Ptr support;
-  Eigen::Vector4f support_plane = Eigen::Vector4f::Zero();
-  for (int k = 0; k < o.max_planes; ++k) {
-    pcl::PointIndices::Ptr in(new pcl::PointIndices);
-    Eigen::Vector4f plane;
-    if (!findPlane(rest, o, in.get(), &plane) ||
-        static_cast<double>(in->indices.size()) < o.plane_min_fraction * total)
-      break;
-    plane /= plane.head<3>().norm();
-    if (plane.head<3>().dot(viewpoint) + plane[3] < 0) plane = -plane;  // normal towards the camera
-    if (k == 0) {
-      support = extract(rest, in, false);
-      support_plane = plane;
-    }
-    st->plane_points += static_cast<int64_t>(in->indices.size());
-    ++st->planes;
-    rest = extract(rest, in, true);
-  }
   std::vector<MapPoint> out;
-  out.reserve(rest->size());
-  if (support && !support->empty()) {
-    st->support = true;
-    *support_out = support_plane;
-    pcl::KdTreeFLANN<pcl::PointXYZRGB> tree;
-    tree.setInputCloud(support);
-    std::vector<int> idx(1);
-    std::vector<float> d2(1);
-    const Eigen::Vector3f n = support_plane.head<3>().normalized();
-    const float r2 = static_cast<float>(o.support_margin * o.support_margin);
-    for (const auto& q : *rest) {
-      const Eigen::Vector3f p = q.getVector3fMap();
-      const float h = support_plane.head<3>().dot(p) + support_plane[3];
-      if (h <= 0 || h > o.max_extent) continue;
-      pcl::PointXYZRGB foot = q;
-      foot.getVector3fMap() = p - h * n;
-      if (tree.nearestKSearch(foot, 1, idx, d2) < 1 || d2[0] > r2) continue;
-      out.push_back({p, q.r, q.g, q.b});
-    }
-  } else {
-    for (const auto& q : *rest) out.push_back({q.getVector3fMap(), q.r, q.g, q.b});
-  }
+  out.reserve(in.size());
+  for (const auto& m : in)
+    if ((m.p.array() >= lo.array()).all() && (m.p.array() <= hi.array()).all()) out.push_back(m);
   return out;
 }
 
-// With a support plane (unit normal towards the camera): clusters lower than min_height are
-// texture of the plane itself; the others stand on it, so their footprint (their points dropped
-// onto the plane) belongs to them; it covers the bottom that plane removal took away.
-void standOnSupport(std::vector<Candidate>* candidates, const Eigen::Vector4f& plane, const ProposalOptions& o) {
+// Points that several keyframes agree on: a surface is seen, and seeded, from many keyframes,
+// while a wrong depth (a seed that converged on the wrong match, a smear at an occluding edge) is
+// one keyframe's mistake. Keeps the points whose voxel and its 26 neighbours hold points of at
+// least `min_keyframes` different keyframes (counted in a 128-bit mask of keyframe id hashes:
+// exact for the small counts the threshold looks at).
+std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint>>& by_keyframe, double voxel,
+                                    int min_keyframes) {
+  std::vector<MapPoint> out;
+  if (min_keyframes <= 1 || !(voxel > 0)) {
+    for (const auto& [kf, pts] : by_keyframe) out.insert(out.end(), pts.begin(), pts.end());
+    return out;
+  }
+  struct Mask {
+    uint64_t bits[2] = {0, 0};
+  };
+  std::unordered_map<int64_t, Mask> masks;
+  for (const auto& [kf, pts] : by_keyframe) {
+    const uint32_t h = static_cast<uint32_t>(kf) * 2654435761u >> 25;  // 0..127
+    for (const auto& m : pts) masks[voxelKey(m.p, voxel)].bits[h >> 6] |= uint64_t{1} << (h & 63);
+  }
+  std::unordered_map<int64_t, bool> keep;
+  keep.reserve(masks.size());
+  for (const auto& [kf, pts] : by_keyframe)
+    for (const auto& m : pts) {
+      const int64_t key = voxelKey(m.p, voxel);
+      auto it = keep.find(key);
+      if (it == keep.end()) {
+        const Eigen::Vector3i c = (m.p / static_cast<float>(voxel)).array().floor().cast<int>();
+        Mask all;
+        for (int dx = -1; dx <= 1; ++dx)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+              const auto n = masks.find(voxelKey((c + Eigen::Vector3i(dx, dy, dz)).cast<float>() * static_cast<float>(voxel) +
+                                                     Eigen::Vector3f::Constant(0.5f * static_cast<float>(voxel)),
+                                                 voxel));
+              if (n == masks.end()) continue;
+              all.bits[0] |= n->second.bits[0];
+              all.bits[1] |= n->second.bits[1];
+            }
+        it = keep.emplace(key, __builtin_popcountll(all.bits[0]) + __builtin_popcountll(all.bits[1]) >= min_keyframes)
+                 .first;
+      }
+      if (it->second) out.push_back(m);
+    }
+  return out;
+}
+
+// With a support: clusters lower than min_height over it are its texture; the others stand on
+// it, so their footprint (their points dropped onto the plane) belongs to them: it covers the
+// bottom that structure removal took away.
+void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, const ProposalOptions& o) {
   std::vector<Candidate> kept;
-  const Eigen::Vector3f n = plane.head<3>();
+  const Eigen::Vector3f n = plane.normal();
   for (auto& c : *candidates) {
     // Height of the cluster: its 80th percentile over the plane (noise does not make it tall).
     std::vector<float> h;
     h.reserve(c.points.size());
-    for (const auto& p : c.points) h.push_back(n.dot(p) + plane[3]);
+    for (const auto& p : c.points) h.push_back(plane.distance(p));
     const size_t k = h.size() * 4 / 5;
     std::nth_element(h.begin(), h.begin() + static_cast<long>(k), h.end());
     if (h.empty() || h[k] < o.min_height) continue;
+    c.height = h[k];
     if (o.add_footprint) {
       const size_t count = c.points.size();
-      for (size_t i = 0; i < count; ++i) c.points.push_back(c.points[i] - (n.dot(c.points[i]) + plane[3]) * n);
+      for (size_t i = 0; i < count; ++i) c.points.push_back(c.points[i] - plane.distance(c.points[i]) * n);
       setBounds(&c);
     }
     kept.push_back(std::move(c));
@@ -248,46 +182,53 @@ void standOnSupport(std::vector<Candidate>* candidates, const Eigen::Vector4f& p
 
 ProposalOptions scaledLengths(const ProposalOptions& options, double scale) {
   ProposalOptions o = options;
-  for (double* v : {&o.voxel, &o.max_depth_std, &o.plane_distance, &o.support_margin, &o.min_height, &o.radius,
-                    &o.max_extent, &o.min_extent})
+  for (double* v : {&o.voxel, &o.multiview_voxel, &o.max_depth_std, &o.plane_distance, &o.structure_cell, &o.structure_extent, &o.support_radius, &o.support_below, &o.support_distance, &o.support_margin,
+                    &o.min_height, &o.max_height, &o.radius, &o.max_extent, &o.min_extent})
     *v *= scale;
   return o;
 }
 
 std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const ProposalOptions& o) {
-  const Cloud::Ptr all = toCloud(points);
   std::vector<Candidate> out;
   std::vector<std::vector<int64_t>> keys;  // per kept cluster, at the finest clustering voxel
   const double key_voxel = 2 * o.radius;
-  const float colour2 = static_cast<float>(o.colour_distance * o.colour_distance);
   for (int s = 0; s < o.scales; ++s) {
     const double r = o.radius * std::pow(2.0, s);
-    // Each scale clusters a grid of half its radius: a bounded number of neighbours per point.
-    const Cloud::Ptr cloud = s == 0 ? all : downsample(all, r / 2);
-    if (cloud->empty()) break;
-    pcl::ConditionalEuclideanClustering<pcl::PointXYZRGB> cec;
-    cec.setInputCloud(cloud);
-    cec.setClusterTolerance(static_cast<float>(r));
-    const bool use_colour = o.colour_distance > 0;
-    cec.setConditionFunction([use_colour, colour2](const pcl::PointXYZRGB& a, const pcl::PointXYZRGB& b, float) {
-      if (!use_colour) return true;
-      const float dr = static_cast<float>(a.r) - b.r, dg = static_cast<float>(a.g) - b.g,
-                  db = static_cast<float>(a.b) - b.b;
-      return dr * dr + dg * dg + db * db < colour2;
-    });
-    const int min_points = std::max(5, static_cast<int>(o.min_points / std::pow(4.0, s)));
-    cec.setMinClusterSize(min_points);
-    cec.setMaxClusterSize(std::numeric_limits<int>::max());
-    pcl::IndicesClusters clusters;
-    cec.segment(clusters);
-    for (const auto& idx : clusters) {
-      Candidate c;
-      c.scale = s;
-      c.points.reserve(idx.indices.size());
-      for (int i : idx.indices) {
-        const auto& q = (*cloud)[static_cast<size_t>(i)];
-        c.points.emplace_back(q.x, q.y, q.z);
+    // Each coarser scale clusters a grid of half its radius (the map itself is on a grid of about
+    // half the finest radius): a bounded number of neighbours per point, and about the same
+    // density threshold (neighbours per radius) at every scale. Clusters are then made of the
+    // map's own points (each takes the cluster of its grid cell), so that sizes and overlaps
+    // compare across scales.
+    const std::vector<MapPoint> cloud = s == 0 ? points : downsample(points, r / 2);
+    if (cloud.empty()) break;
+    std::vector<Eigen::Vector3f> xyz(cloud.size()), rgb(cloud.size());
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      xyz[i] = cloud[i].p;
+      rgb[i] = Eigen::Vector3f(cloud[i].r, cloud[i].g, cloud[i].b);
+    }
+    DensityClusterOptions dc;
+    dc.radius = static_cast<float>(r);
+    dc.min_neighbours = o.min_neighbours;
+    dc.colour_distance = static_cast<float>(o.colour_distance);
+    int count = 0;
+    const std::vector<int> label = densityClusters(xyz, rgb, dc, &count);
+    std::vector<Candidate> found(static_cast<size_t>(count));
+    if (s == 0) {
+      for (size_t i = 0; i < xyz.size(); ++i)
+        if (label[i] >= 0) found[static_cast<size_t>(label[i])].points.push_back(xyz[i]);
+    } else {
+      std::unordered_map<int64_t, int> cell_label;  // downsample() keeps one point per cell, in key order
+      cell_label.reserve(cloud.size());
+      for (size_t i = 0; i < cloud.size(); ++i) cell_label.emplace(voxelKey(cloud[i].p, r / 2), label[i]);
+      for (const auto& m : points) {
+        const auto it = cell_label.find(voxelKey(m.p, r / 2));
+        if (it != cell_label.end() && it->second >= 0) found[static_cast<size_t>(it->second)].points.push_back(m.p);
       }
+    }
+    const int min_points = o.min_points;
+    for (auto& c : found) {
+      if (static_cast<int>(c.points.size()) < min_points) continue;
+      c.scale = s;
       setBounds(&c);
       const Eigen::Vector3f extent = c.max - c.min;
       if (extent.maxCoeff() > o.max_extent || extent.maxCoeff() < o.min_extent) continue;
@@ -315,13 +256,35 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
   return out;
 }
 
+CandidateMap::CandidateMap(CandidateMap&& other) noexcept
+    : options_(std::move(other.options_)),
+      map_id_(other.map_id_),
+      by_keyframe_(std::move(other.by_keyframe_)),
+      keyframe_centres_(std::move(other.keyframe_centres_)),
+      views_(std::move(other.views_)),
+      view_stride_(other.view_stride_),
+      views_seen_(other.views_seen_),
+      dirty_(other.dirty_),
+      candidates_(std::move(other.candidates_)),
+      support_(std::move(other.support_)),
+      own_ids_(other.own_ids_),
+      ids_(other.ids_ == &other.own_ids_ ? &own_ids_ : other.ids_),
+      stats_(other.stats_) {}
+
+void CandidateMap::resetMap(int32_t map_id) {
+  map_id_ = map_id;
+  by_keyframe_.clear();
+  keyframe_centres_.clear();
+  views_.clear();
+  view_stride_ = 1;
+  views_seen_ = 0;
+  candidates_.clear();
+  support_ = Support{};
+}
+
 void CandidateMap::update(int32_t map_id, bool full, int32_t keyframe_id, const std::vector<int32_t>& keyframe_ids,
                           const std::vector<MapPoint>& points) {
-  if (map_id != map_id_) {
-    map_id_ = map_id;
-    by_keyframe_.clear();
-    candidates_.clear();
-  }
+  if (map_id != map_id_) resetMap(map_id);
   if (full) {
     by_keyframe_.clear();
     for (size_t i = 0; i < points.size(); ++i)
@@ -335,13 +298,55 @@ void CandidateMap::update(int32_t map_id, bool full, int32_t keyframe_id, const 
   dirty_ = true;
 }
 
+void CandidateMap::setKeyframeCentre(int32_t map_id, int32_t keyframe_id, const Eigen::Vector3f& centre) {
+  if (map_id != map_id_ || !centre.allFinite()) return;
+  keyframe_centres_[keyframe_id] = centre;
+}
+
+void CandidateMap::addView(int32_t map_id, const SE3& T_world_camera) {
+  if (map_id != map_id_ || !T_world_camera.matrix().allFinite()) return;
+  // Bounded: past max_views, every other view is dropped and only every 2nd pose is kept after.
+  if (views_seen_++ % view_stride_ != 0) return;
+  const Eigen::Matrix3f R = T_world_camera.linear().cast<float>();
+  views_.push_back({T_world_camera.translation().cast<float>(), R.col(2), R.col(0), -R.col(1)});
+  if (static_cast<int>(views_.size()) > std::max(2, options_.max_views)) {
+    std::vector<View> kept;
+    for (size_t i = 0; i < views_.size(); i += 2) kept.push_back(views_[i]);
+    views_.swap(kept);
+    view_stride_ *= 2;
+  }
+}
+
 size_t CandidateMap::points() const {
   size_t n = 0;
   for (const auto& [kf, p] : by_keyframe_) n += p.size();
   return n;
 }
 
-bool CandidateMap::recluster(const Eigen::Vector3f& viewpoint) {
+// The median distance at which the map's points were seen: from their keyframe's centre when it
+// is known, else from the views' mean centre. Monocular maps have no metric scale; this is the
+// length every option is relative to.
+double CandidateMap::sceneScale(const std::vector<MapPoint>& all) const {
+  std::vector<float> range;
+  range.reserve(all.size() / 4 + 1);
+  for (const auto& [kf, pts] : by_keyframe_) {
+    const auto c = keyframe_centres_.find(kf);
+    if (c == keyframe_centres_.end()) continue;
+    for (size_t i = 0; i < pts.size(); i += 4) range.push_back((pts[i].p - c->second).norm());
+  }
+  if (range.empty() && !views_.empty()) {
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+    for (const auto& v : views_) centre += v.centre;
+    centre /= static_cast<float>(views_.size());
+    for (size_t i = 0; i < all.size(); i += 4) range.push_back((all[i].p - centre).norm());
+  }
+  if (range.empty()) return 1.0;
+  std::nth_element(range.begin(), range.begin() + static_cast<long>(range.size() / 2), range.end());
+  const double m = range[range.size() / 2];
+  return m > 0 ? m : 1.0;
+}
+
+bool CandidateMap::recluster() {
   if (!dirty_) return false;
   dirty_ = false;
   const auto t0 = std::chrono::steady_clock::now();
@@ -350,22 +355,60 @@ bool CandidateMap::recluster(const Eigen::Vector3f& viewpoint) {
   for (const auto& [kf, p] : by_keyframe_) all.insert(all.end(), p.begin(), p.end());
   stats_ = ClusterStats{};
   stats_.input_points = static_cast<int64_t>(all.size());
+  stats_.views = static_cast<int>(views_.size());
   std::vector<Candidate> found;
   ProposalOptions o = options_;
+  bool has_support = false;
   if (all.size() >= static_cast<size_t>(std::max(3, options_.min_points))) {
-    // Lengths are fractions of the viewing distance: monocular maps have no metric scale.
-    std::vector<float> range;
-    range.reserve(all.size());
-    for (const auto& m : all) range.push_back((m.p - viewpoint).norm());
-    std::nth_element(range.begin(), range.begin() + static_cast<long>(range.size() / 2), range.end());
-    stats_.scene_scale = options_.relative_lengths && range[range.size() / 2] > 0 ? range[range.size() / 2] : 1.0;
+    stats_.scene_scale = options_.relative_lengths ? sceneScale(all) : 1.0;
     o = scaledLengths(options_, stats_.scene_scale);
-    Eigen::Vector4f plane = Eigen::Vector4f::Zero();
-    const std::vector<MapPoint> objects = filterMap(all, o, viewpoint, &stats_, &plane);
-    stats_.clustered_points = static_cast<int64_t>(objects.size());
-    found = clusterPoints(objects, o);
-    if (stats_.support) standOnSupport(&found, plane, o);
+    const ViewPriors priors = viewPriors(views_);
+    stats_.look_at = priors.has_look_at;
+    const size_t before = all.size();
+    // A young map has few keyframes: ask for agreement of at most half of them.
+    const int keyframes = static_cast<int>(by_keyframe_.size());
+    const int min_keyframes = std::min(o.min_keyframes, std::max(1, keyframes / 2));
+    all = keepMultiView(by_keyframe_, o.multiview_voxel, min_keyframes);
+    stats_.single_view = static_cast<int64_t>(before - all.size());
+    all = cropRobust(all, o.crop_percentile, o.crop_margin);
+    stats_.cropped = static_cast<int64_t>(before) - stats_.single_view - static_cast<int64_t>(all.size());
+    // Bounded cost: downsample until the map fits max_points.
+    double voxel = o.voxel;
+    std::vector<MapPoint> small = downsample(all, voxel);
+    for (int i = 0; i < 20 && static_cast<int>(small.size()) > o.max_points; ++i) {
+      voxel *= 1.26;
+      small = downsample(all, voxel);
+    }
+    stats_.voxel = voxel;
+    std::vector<MapPoint> rest = std::move(small);
+    const auto t1 = std::chrono::steady_clock::now();
+    stats_.filter_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    StructureStats ss;
+    rest = removeStructure(rest, views_, priors, o, &support_, &has_support, &ss);
+    const auto t2 = std::chrono::steady_clock::now();
+    stats_.structure_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    stats_.planes = ss.planes;
+    stats_.plane_points = ss.structure_points;
+    stats_.support = has_support;
+    if (has_support) {
+      // What stands on the support: over its points' region and not higher than an object.
+      std::vector<MapPoint> on;
+      on.reserve(rest.size());
+      for (const auto& m : rest) {
+        const float h = support_.plane.distance(m.p);
+        if (h > 0 && h <= o.max_height && support_.over(m.p, static_cast<float>(o.support_margin))) on.push_back(m);
+      }
+      rest.swap(on);
+    }
+    int64_t seen_through = 0;
+    rest = removeSeenThrough(rest, by_keyframe_, keyframe_centres_, views_, o.free_space, &seen_through);
+    stats_.seen_through = seen_through;
+    stats_.clustered_points = static_cast<int64_t>(rest.size());
+    found = clusterPoints(rest, o);
+    if (has_support) standOnSupport(&found, support_.plane, o);
+    stats_.cluster_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
   }
+  if (!has_support) support_ = Support{};
   // Stable ids: each new cluster takes the id of the old candidate it shares most voxels with
   // (one to one, greedily by overlap), if they share at least id_overlap.
   const double key_voxel = 2 * o.radius;
@@ -393,7 +436,7 @@ bool CandidateMap::recluster(const Eigen::Vector3f& viewpoint) {
     found[p.n].id = candidates_[p.o].id;
   }
   for (auto& c : found)
-    if (c.id < 0) c.id = next_id_++;
+    if (c.id < 0) c.id = (*ids_)++;
   candidates_ = std::move(found);
   stats_.clusters = static_cast<int>(candidates_.size());
   stats_.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

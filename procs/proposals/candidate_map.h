@@ -1,23 +1,20 @@
 #pragma once
 // Object candidates from the semi-dense map (DESIGN.md §3): the map of one SLAM map id is kept
-// per keyframe (incremental updates replace a keyframe's points, a full cloud replaces all);
-// recluster() filters it (outliers, the dominant support plane) and over-segments it by
-// density-based clustering on position and colour at several radii, a factor 2 apart. A cluster
-// that survives a map update keeps its id (association by shared voxels). PCL stays inside the
-// .cpp file.
+// per keyframe (incremental updates replace a keyframe's points, a full cloud replaces all),
+// with the views (camera poses) of that map; recluster() removes the map's structure (large
+// planes, and everything not standing on the support the views look at) and over-segments the
+// rest by density-based clustering at several radii, a factor 2 apart. A cluster that survives a
+// map update keeps its id (association by shared voxels).
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <vector>
 
+#include "common/geometry.h"
 #include "procs/proposals/proposal_options.h"
+#include "procs/proposals/scene_structure.h"
 
 namespace slamaware {
-
-struct MapPoint {
-  Eigen::Vector3f p;
-  uint8_t r = 0, g = 0, b = 0;
-};
 
 struct Candidate {
   int32_t id = -1;
@@ -26,42 +23,68 @@ struct Candidate {
   std::vector<Eigen::Vector3f> points; ///< world frame, map units
   Eigen::Vector3f min, max;            ///< axis-aligned bounds
   Eigen::Vector3f centroid;
+  float height = 0;                    ///< map units, over the support (0 without one)
 };
 
 struct ClusterStats {
-  int64_t input_points = 0, clustered_points = 0, outliers = 0, plane_points = 0, cropped = 0;
+  int64_t input_points = 0, clustered_points = 0, plane_points = 0, cropped = 0;
+  int64_t single_view = 0;   ///< points dropped because too few keyframes agree on them
+  int64_t seen_through = 0;  ///< points dropped by free-space carving
   int planes = 0;
   bool support = false;  ///< a support plane was found and the map restricted to what stands on it
   int clusters = 0;
+  int views = 0;         ///< camera poses the priors came from
+  bool look_at = false;  ///< the views' optical axes meet
   double voxel = 0;   ///< voxel used for downsampling
   double scene_scale = 1;  ///< map units per length unit of the options (median viewing distance)
   double ms = 0;      ///< time of the last recluster()
+  double filter_ms = 0, structure_ms = 0, cluster_ms = 0;  ///< its parts: agreement + crop + grid, planes, clustering
 };
 
 class CandidateMap {
  public:
-  explicit CandidateMap(const ProposalOptions& options) : options_(options) {}
+  /// `ids`: where new candidate ids come from (shared by several maps so that ids are unique
+  /// across them); nullptr: a counter of this map's own.
+  explicit CandidateMap(const ProposalOptions& options, int32_t* ids = nullptr)
+      : options_(options), ids_(ids ? ids : &own_ids_) {}
+  CandidateMap(CandidateMap&& other) noexcept;
 
   /// Replaces the points of `keyframe_id` (incremental update) or, with full = true, the whole
-  /// map. A new map id drops the old map and its candidates. Non-finite points are ignored.
+  /// map. A new map id drops the old map, its views and its candidates. Non-finite points are
+  /// ignored.
   void update(int32_t map_id, bool full, int32_t keyframe_id, const std::vector<int32_t>& keyframe_ids,
               const std::vector<MapPoint>& points);
+  /// The camera centre of a keyframe (lengths are relative to the distance points were seen from).
+  void setKeyframeCentre(int32_t map_id, int32_t keyframe_id, const Eigen::Vector3f& centre);
+  /// A camera pose localised in map `map_id` (the up direction and what the camera looks at come
+  /// from these). Poses of another map than the current one are ignored.
+  void addView(int32_t map_id, const SE3& T_world_camera);
   /// Re-runs filtering and clustering when the map changed since the last call; true if it ran.
-  /// `viewpoint` (a camera centre) tells the side of the support plane that objects stand on.
-  bool recluster(const Eigen::Vector3f& viewpoint = Eigen::Vector3f::Zero());
+  bool recluster();
 
   int32_t mapId() const { return map_id_; }
   const std::vector<Candidate>& candidates() const { return candidates_; }
   const ClusterStats& stats() const { return stats_; }
+  /// The support of the last recluster (valid when stats().support).
+  const Support& support() const { return support_; }
   size_t points() const;
 
  private:
+  void resetMap(int32_t map_id);
+  double sceneScale(const std::vector<MapPoint>& all) const;
+
   ProposalOptions options_;
   int32_t map_id_ = -1;
   std::map<int32_t, std::vector<MapPoint>> by_keyframe_;
+  std::map<int32_t, Eigen::Vector3f> keyframe_centres_;
+  std::vector<View> views_;
+  int view_stride_ = 1;   ///< every view_stride_-th pose is kept (bounded memory)
+  int64_t views_seen_ = 0;
   bool dirty_ = false;
   std::vector<Candidate> candidates_;
-  int32_t next_id_ = 1;
+  Support support_;
+  int32_t own_ids_ = 1;
+  int32_t* ids_;  ///< the next new candidate id
   ClusterStats stats_;
 };
 

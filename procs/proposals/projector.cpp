@@ -91,13 +91,21 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
       ++st.occluded;
       continue;
     }
-    float x0 = std::numeric_limits<float>::max(), y0 = x0, x1 = -x0, y1 = -x0;
-    for (const auto& px : p.pixels) {
-      x0 = std::min(x0, px.x());
-      y0 = std::min(y0, px.y());
-      x1 = std::max(x1, px.x());
-      y1 = std::max(y1, px.y());
+    // The box of the projected points without the outer box_trim_pct % on each side: a few
+    // stray points around an object (depths smeared at its occluding edges) would otherwise
+    // widen the box far beyond it.
+    std::vector<float> us(p.pixels.size()), vs(p.pixels.size());
+    for (size_t i = 0; i < p.pixels.size(); ++i) {
+      us[i] = p.pixels[i].x();
+      vs[i] = p.pixels[i].y();
     }
+    const auto at = [&](std::vector<float>& v, double pct) {
+      const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::lround(pct / 100.0 * static_cast<double>(v.size() - 1))));
+      std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+      return v[k];
+    };
+    const double trim = std::clamp(o.box_trim_pct, 0.0, 49.0);
+    const float x0 = at(us, trim), x1 = at(us, 100 - trim), y0 = at(vs, trim), y1 = at(vs, 100 - trim);
     ProposalBox b;
     b.candidate_id = c.id;
     b.x = std::floor(x0);
@@ -116,8 +124,9 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     b.points = static_cast<int>(p.pixels.size());
     boxes.push_back(b);
   }
-  // Clusters found alike at several density scales first (isolated objects), then finer ones
-  // (they split what coarser ones merge), then by support.
+  // Ranking: clusters found alike at more density scales first (an isolated object), then finer
+  // ones (a coarser cluster that holds the same object also holds the smeared points around it
+  // and often a neighbour), then the ones with more points.
   std::stable_sort(boxes.begin(), boxes.end(), [](const ProposalBox& a, const ProposalBox& b) {
     if (a.stability != b.stability) return a.stability > b.stability;
     if (a.scale != b.scale) return a.scale < b.scale;

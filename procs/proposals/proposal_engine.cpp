@@ -1,8 +1,26 @@
 #include "procs/proposals/proposal_engine.h"
 
+#include <algorithm>
+
 #include "common/bus/image_msg.h"
 
 namespace slamaware {
+
+CandidateMap& ProposalEngine::mapOf(int32_t map_id) {
+  auto it = maps_.find(map_id);
+  if (it == maps_.end()) it = maps_.emplace(map_id, CandidateMap(options_, &next_candidate_id_)).first;
+  recent_.erase(std::remove(recent_.begin(), recent_.end(), map_id), recent_.end());
+  recent_.push_back(map_id);
+  while (static_cast<int>(recent_.size()) > std::max(1, options_.max_maps)) {
+    maps_.erase(recent_.front());
+    recent_.erase(recent_.begin());
+  }
+  return it->second;
+}
+
+const CandidateMap& ProposalEngine::map() const {
+  return recent_.empty() ? empty_ : maps_.at(recent_.back());
+}
 
 bool ProposalEngine::onCameraInfo(const camera_info_t& info, std::string* why) {
   CameraModel c;
@@ -29,7 +47,11 @@ bool ProposalEngine::onMap(const point_cloud_t& c, std::string* why) {
                       static_cast<uint8_t>(c.g[i]), static_cast<uint8_t>(c.b[i])});
     keyframes.push_back(c.keyframe_ids[i]);
   }
-  map_.update(c.map_id, c.full, c.keyframe_id, keyframes, points);
+  CandidateMap& map = mapOf(c.map_id);
+  map.update(c.map_id, c.full, c.keyframe_id, keyframes, points);
+  const size_t k = static_cast<size_t>(std::max(0, c.num_keyframes));
+  if (c.kf_ids.size() == k && c.kf_x.size() == k && c.kf_y.size() == k && c.kf_z.size() == k)
+    for (size_t i = 0; i < k; ++i) map.setKeyframeCentre(c.map_id, c.kf_ids[i], Eigen::Vector3f(c.kf_x[i], c.kf_y[i], c.kf_z[i]));
   return true;
 }
 
@@ -48,10 +70,12 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
     return m;
   }
   if (!located || !have_camera_) return m;
-  const bool ran = map_.recluster(T_wc.translation().cast<float>());
+  if (!maps_.count(pose.map_id)) return m;  // no point of that map yet
+  CandidateMap& map = mapOf(pose.map_id);
+  map.addView(pose.map_id, T_wc);
+  const bool ran = map.recluster();
   if (reclustered) *reclustered = ran;
-  if (pose.map_id != map_.mapId()) return m;
-  for (const auto& b : projectCandidates(map_.candidates(), camera_, T_wc, options_, &last_)) {
+  for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, &last_)) {
     box_t bx{};
     bx.x = b.x;
     bx.y = b.y;

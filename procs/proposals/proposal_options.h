@@ -8,30 +8,60 @@
 
 namespace slamaware {
 
+/// Free-space carving of the map (free_space.h): points that keyframes saw through are dropped.
+struct FreeSpaceOptions {
+  double bin_rad = 0.004;   ///< rad, angular bin of a keyframe's rays (about 2 px at f = 525)
+  double margin = 0.05;     ///< a point is seen through when nearer than (1 - margin) x the ray's end
+  int min_violations = 2;   ///< keyframes that must see through a point to drop it (0: off) ...
+  double min_share = 0.3;   ///< ... and this share of the keyframes that have a ray through it
+
+  template <class V>
+  void visit(V& v) {
+    v("bin_rad", bin_rad, "rad, angular bin of a keyframe's rays");
+    v("margin", margin, "a point is seen through when nearer than (1 - margin) x the ray's end");
+    v("min_violations", min_violations, "keyframes that must see through a point to drop it (0: off)");
+    v("min_share", min_share, "share of the keyframes with a ray through a point that must see through it");
+  }
+};
+
 struct ProposalOptions {
   bool relative_lengths = true;  ///< lengths in units of the median viewing distance (else map units)
   // Map filtering.
+  double multiview_voxel = 0.008; ///< map units, voxel of the multi-keyframe check
+  int min_keyframes = 5;         ///< a point is kept if its voxel and neighbours hold points of this many
+                                 ///< keyframes (at most half of the map's keyframes)
   double voxel = 0.004;          ///< map units, the map is downsampled to one point per voxel
   int max_points = 120000;       ///< points clustered at most (bounded cost); the voxel grows to fit
-  int outlier_neighbours = 12;   ///< statistical outlier removal: neighbours considered
-  double outlier_std = 2.0;      ///< ... points farther than mean + this many std are dropped
   double max_depth_std = 0.0;    ///< map units, points with a less certain depth are ignored (<= 0: all kept)
   double crop_percentile = 2.0;  ///< %, points outside the [p, 100-p] percentiles per axis ...
   double crop_margin = 0.5;      ///< ... widened by this share of the range are dropped (stray depths)
   double plane_distance = 0.02;  ///< map units, RANSAC inlier distance of a plane
   int plane_iterations = 200;    ///< RANSAC iterations
-  double plane_min_fraction = 0.1; ///< a plane is removed only if it holds this share of the points
-  int max_planes = 3;            ///< planes removed at most (support, floor, walls)
-  double support_margin = 0.03;  ///< map units: objects stand on the support plane (the largest,
-                                 ///< facing the camera), within this distance of its points
-  double min_height = 0.02;      ///< map units: clusters lower than this over the support plane are its texture
+  int ransac_points = 20000;     ///< RANSAC runs on an even subsample of this many points
+  double plane_min_fraction = 0.05; ///< planes are searched while they hold this share of the points
+  int max_planes = 5;            ///< planes searched at most (table, floor, walls)
+  double structure_cell = 0.03;  ///< map units, grid cell of a plane's connected patches
+  int structure_min_points = 3;  ///< points a cell of a plane must hold to be part of a patch
+  double structure_extent = 0.6; ///< map units, a plane patch larger than this is structure (removed)
+  double support_max_tilt_deg = 40; ///< deg, a support's normal is this close to the views' up
+  double support_radius = 0.8;   ///< map units, the support's region: its cells this close to where the views look
+  double support_below = 0.1;    ///< map units, the views' look-at point is at most this far under a support
+  double support_fill = 0.3;     ///< share of plane cells around where a view's axis meets a support that hold points
+  double support_distance = 0.012; ///< map units, points this close to the support are its own
+  double support_margin = 0.03;  ///< map units, objects stand over the support's region grown by this
+  double min_height = 0.015;     ///< map units: clusters lower than this over the support are its texture
+  double max_height = 0.5;       ///< map units: points higher than this over the support are not on it
   bool add_footprint = true;     ///< a candidate over the support plane includes its footprint on it
-  // Density-based clustering at `scales` radii, each twice the previous.
+  FreeSpaceOptions free_space;   ///< points seen through by other keyframes are not objects
+  int max_maps = 4;              ///< SLAM maps whose candidates are kept (SLAM may relocalise into an older one)
+  int max_views = 512;           ///< camera poses kept for the up / look-at priors (thinned beyond)
+  // Density-based clustering (DBSCAN) at `scales` radii, each twice the previous.
   double radius = 0.008;         ///< map units, neighbourhood radius of the finest scale
   int scales = 4;                ///< density thresholds, a factor 2 apart
-  double colour_distance = 0;    ///< RGB distance (0..441) under which neighbours join; <= 0: position only
-  int min_points = 60;           ///< smallest cluster
-  double max_extent = 0.7;       ///< map units, clusters larger than this along any axis are not objects
+  int min_neighbours = 4;        ///< points within the radius (on a grid of half of it) of a core point
+  double colour_distance = 0;    ///< RGB distance (0..441) under which core points join; <= 0: position only
+  int min_points = 60;           ///< smallest cluster, in map points (on the voxel grid) at every scale
+  double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
   double same_cluster_overlap = 0.9; ///< clusters of two scales sharing this share of points are one
   double id_overlap = 0.3;       ///< a new cluster keeps the id of an old one sharing this share of voxels
@@ -41,6 +71,7 @@ struct ProposalOptions {
   double occlusion_margin = 0.15; ///< relative depth: nearer than (1 - margin) x depth occludes
   double occluded_fraction = 0.6; ///< candidates with more of their points hidden are culled
   double min_visible_fraction = 0.5; ///< of a candidate's points in front of the camera and in the image
+  double box_trim_pct = 3;       ///< %, a box spans its projected points without this share on each side
   int min_box_px = 20;           ///< boxes smaller than this along either side are dropped
   double nms_iou = 0.5;          ///< boxes overlapping a kept box more than this are suppressed
   int max_boxes = 100;           ///< boxes per frame at most
@@ -48,23 +79,37 @@ struct ProposalOptions {
   template <class V>
   void visit(V& v) {
     v("relative_lengths", relative_lengths, "lengths in units of the median viewing distance (else map units)");
+    v("multiview_voxel", multiview_voxel, "map units, voxel of the multi-keyframe check");
+    v("min_keyframes", min_keyframes, "keyframes whose points must be near a point for it to be kept (<= 1: off)");
     v("voxel", voxel, "map units, downsampling voxel");
     v("max_points", max_points, "points clustered at most (the voxel grows to fit)");
-    v("outlier_neighbours", outlier_neighbours, "statistical outlier removal: neighbours");
-    v("outlier_std", outlier_std, "statistical outlier removal: std multiplier");
     v("max_depth_std", max_depth_std, "map units, points with a less certain depth are ignored (<= 0: all)");
     v("crop_percentile", crop_percentile, "%, per-axis percentile of the robust map bounds");
     v("crop_margin", crop_margin, "share of the robust range added to the bounds");
     v("plane_distance", plane_distance, "map units, RANSAC inlier distance of a plane");
     v("plane_iterations", plane_iterations, "RANSAC iterations");
-    v("plane_min_fraction", plane_min_fraction, "share of points a plane must hold to be removed");
-    v("max_planes", max_planes, "planes removed at most");
-    v("support_margin", support_margin, "map units, objects are over the support plane within this");
-    v("min_height", min_height, "map units, clusters lower than this over the support plane are dropped");
+    v("ransac_points", ransac_points, "RANSAC runs on an even subsample of this many points");
+    v("plane_min_fraction", plane_min_fraction, "share of points a plane must hold to be searched further");
+    v("max_planes", max_planes, "planes searched at most");
+    v("structure_cell", structure_cell, "map units, grid cell of a plane's connected patches");
+    v("structure_min_points", structure_min_points, "points a plane cell must hold to be part of a patch");
+    v("structure_extent", structure_extent, "map units, plane patches larger than this are structure");
+    v("support_max_tilt_deg", support_max_tilt_deg, "deg, largest angle of a support's normal to the views' up");
+    v("support_radius", support_radius, "map units, the support's region: its cells this close to where the views look");
+    v("support_below", support_below, "map units, the views' look-at point is at most this far under a support");
+    v("support_fill", support_fill, "share of plane cells around a view's aim point that hold points");
+    v("support_distance", support_distance, "map units, points this close to the support are its own");
+    v("support_margin", support_margin, "map units, objects stand over the support's region grown by this");
+    v("min_height", min_height, "map units, clusters lower than this over the support are dropped");
+    v("max_height", max_height, "map units, points higher than this over the support are dropped");
     v("add_footprint", add_footprint, "candidates over the support plane include their footprint on it");
+    v.section("free_space", free_space);
+    v("max_maps", max_maps, "SLAM maps whose candidates are kept (SLAM may return to an older one)");
+    v("max_views", max_views, "camera poses kept for the up and look-at priors");
     v("radius", radius, "map units, clustering radius of the finest scale (x2 per scale)");
     v("scales", scales, "density thresholds, a factor 2 apart");
-    v("colour_distance", colour_distance, "RGB distance for neighbours to join (<= 0: position only)");
+    v("min_neighbours", min_neighbours, "points within the radius that make a core point");
+    v("colour_distance", colour_distance, "RGB distance for core points to join (<= 0: position only)");
     v("min_points", min_points, "smallest cluster");
     v("max_extent", max_extent, "map units, largest object along any axis");
     v("min_extent", min_extent, "map units, smallest object along its largest axis");
@@ -75,6 +120,7 @@ struct ProposalOptions {
     v("occlusion_margin", occlusion_margin, "relative depth margin of occlusion");
     v("occluded_fraction", occluded_fraction, "share of hidden points that culls a candidate");
     v("min_visible_fraction", min_visible_fraction, "share of points that must be in the image");
+    v("box_trim_pct", box_trim_pct, "%, a box spans its projected points without this share on each side");
     v("min_box_px", min_box_px, "px, smallest box side");
     v("nms_iou", nms_iou, "IoU above which boxes are suppressed");
     v("max_boxes", max_boxes, "boxes per frame at most");

@@ -58,10 +58,11 @@ int main(int argc, char** argv) {
         const ClusterStats& s = engine.map().stats();
         status.setCounter("map_points", s.input_points);
         status.setCounter("candidates", s.clusters);
+        status.setCounter("support", s.support ? 1 : 0);
         status.setCounter("recluster_ms", static_cast<int64_t>(s.ms));
         status.count("reclusters");
-        spdlog::debug("map {}: {} points, {} outliers, plane {}, {} clustered -> {} candidates in {:.0f} ms",
-                      engine.map().mapId(), s.input_points, s.outliers, s.plane_points, s.clustered_points,
+        spdlog::debug("map {}: {} points, {} single-view, {} seen through, planes {}, {} clustered -> {} candidates in {:.0f} ms",
+                      engine.map().mapId(), s.input_points, s.single_view, s.seen_through, s.plane_points, s.clustered_points,
                       s.clusters, s.ms);
       }
       bus.publish(ch.proposals, out);

@@ -42,6 +42,18 @@ SE3 lookingDown(double height) {
   return T;
 }
 
+SE3 lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - eye).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  SE3 T = SE3::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = eye;
+  return T;
+}
+
 CameraModel vga() { return CameraModel(640, 480, 500, 500, 319.5, 239.5); }
 
 camera_info_t vgaInfo() {

@@ -20,6 +20,8 @@ std::vector<MapPoint> table(float size, float step);
 std::vector<MapPoint> join(std::vector<MapPoint> a, const std::vector<MapPoint>& b);
 /// A camera `height` above the table looking straight down (world z up).
 SE3 lookingDown(double height);
+/// A camera at `eye` looking at `target`, upright (x right, y down, z forward; world z up).
+SE3 lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target);
 /// 640x480, f = 500 px, no distortion; and its CAMERA_INFO.
 CameraModel vga();
 camera_info_t vgaInfo();

@@ -32,6 +32,12 @@ std::set<int> sidesOf(const Candidate& c, float split) {
   return sides;
 }
 
+// The map seen by a camera 1 m above the table looking down, then re-clustered.
+bool reclusterFromAbove(CandidateMap& map) {
+  map.addView(map.mapId(), lookingDown(1.0));
+  return map.recluster();
+}
+
 }  // namespace
 
 // At each density scale alone, two objects whose gap is larger than the scale's radius are two
@@ -83,7 +89,7 @@ TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
   const auto points =
       join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f)));
   map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
-  ASSERT_TRUE(map.recluster(Eigen::Vector3f(0, 0, 1)));
+  ASSERT_TRUE(reclusterFromAbove(map));
   EXPECT_TRUE(map.stats().support);
   EXPECT_EQ(map.stats().planes, 1);
   int tall = 0, short_ = 0;
@@ -154,9 +160,8 @@ TEST(ProposalIds, StableAcrossIncrementalUpdatesOfAGrowingMap) {
   // Keyframe 0: the table and the lower half of object a.
   std::vector<MapPoint> a_low, a_high;
   for (const auto& p : a) (p.p.z() < 0.05f ? a_low : a_high).push_back(p);
-  const Eigen::Vector3f eye(0, 0, 1);
   map.update(1, false, 0, {}, join(tab, a_low));
-  ASSERT_TRUE(map.recluster(eye));
+  ASSERT_TRUE(reclusterFromAbove(map));
   // The candidates that are a whole object (centred on it, as wide as it).
   auto idNear = [&](float x) {
     std::set<int32_t> ids;
@@ -171,26 +176,26 @@ TEST(ProposalIds, StableAcrossIncrementalUpdatesOfAGrowingMap) {
   };
   const auto a_ids = idNear(-0.15f);
   ASSERT_FALSE(a_ids.empty());
-  EXPECT_FALSE(map.recluster(eye)) << "re-clustered without a change";
+  EXPECT_FALSE(map.recluster()) << "re-clustered without a change";
   // Keyframe 1 adds the upper half of a; keyframe 2 adds object b.
   map.update(1, false, 1, {}, a_high);
-  ASSERT_TRUE(map.recluster(eye));
+  ASSERT_TRUE(reclusterFromAbove(map));
   const auto a_ids2 = idNear(-0.15f);
   ASSERT_FALSE(a_ids2.empty());
   EXPECT_TRUE(shared(a_ids, a_ids2)) << "object a lost its id when its top was added";
   map.update(1, false, 2, {}, b);
-  ASSERT_TRUE(map.recluster(eye));
+  ASSERT_TRUE(reclusterFromAbove(map));
   EXPECT_TRUE(shared(idNear(-0.15f), a_ids2)) << "object a lost its id when b appeared";
   const auto b_ids = idNear(0.15f);
   ASSERT_FALSE(b_ids.empty());
   for (int32_t id : b_ids) EXPECT_FALSE(a_ids2.count(id));
   // Keyframe 2 re-published (its depths refined): ids stay.
   map.update(1, false, 2, {}, b);
-  ASSERT_TRUE(map.recluster(eye));
+  ASSERT_TRUE(reclusterFromAbove(map));
   EXPECT_EQ(idNear(0.15f), b_ids);
   // A new map id starts over: nothing of the old map is proposed.
   map.update(2, false, 0, {}, tab);
-  ASSERT_TRUE(map.recluster(eye));
+  ASSERT_TRUE(reclusterFromAbove(map));
   EXPECT_TRUE(map.candidates().empty());
 }
 

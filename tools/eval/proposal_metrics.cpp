@@ -133,9 +133,9 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       addProposals(&run, engine.onPose(m, &why, &reclustered));
       if (reclustered) {
         const ClusterStats& s = engine.map().stats();
-        spdlog::debug("frame {}: map {} points ({} cropped, {} outliers, voxel {:.4f}), {} planes with {} points, "
+        spdlog::debug("frame {}: map {} points ({} cropped, {} single-view, voxel {:.4f}), {} planes with {} points, "
                       "support {}, scale {:.3f}, {} clustered -> {} candidates, {:.0f} ms",
-                      m.seq, s.input_points, s.cropped, s.outliers, s.voxel, s.planes, s.plane_points, s.support,
+                      m.seq, s.input_points, s.cropped, s.single_view, s.voxel, s.planes, s.plane_points, s.support,
                       s.scene_scale, s.clustered_points, s.clusters, s.ms);
       }
     }
