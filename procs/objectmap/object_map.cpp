@@ -289,6 +289,7 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
   last_utime_ = d.utime;
   last_seq_ = d.seq;
   if (nb == 0 || nc == 0) {
+    updateObjects();  // occupancy may have changed since the last frame
     if (report) *report = r;
     return true;
   }
@@ -372,6 +373,9 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
   }
   seg.dirty = true;
   ++changes_;
+  // Objects are regrouped here and only here (and after a restore): what the map shows then
+  // depends only on the messages fused so far, never on when it is read, saved or queried.
+  updateObjects();
   if (report) *report = r;
   return true;
 }
@@ -386,15 +390,13 @@ void ObjectMapEngine::updateObjects() {
   }
 }
 
-const Object* ObjectMapEngine::objectOfCandidate(int32_t slam_map_id, int32_t candidate) {
-  updateObjects();
+const Object* ObjectMapEngine::objectOfCandidate(int32_t slam_map_id, int32_t candidate) const {
   const auto it = session_maps_.find(slam_map_id);
   if (it == session_maps_.end()) return nullptr;
   return segments_.at(it->second)->table.objectOfCandidate(candidate);
 }
 
-size_t ObjectMapEngine::numObjects() {
-  updateObjects();
+size_t ObjectMapEngine::numObjects() const {
   size_t n = 0;
   for (const auto& [id, seg] : segments_) n += seg->table.objects().size();
   return n;
@@ -440,8 +442,7 @@ object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::
 
 }  // namespace
 
-object_map_t ObjectMapEngine::objectMap() {
-  updateObjects();
+object_map_t ObjectMapEngine::objectMap() const {
   object_map_t m;
   m.utime = last_utime_;
   m.seq = last_seq_;
@@ -459,8 +460,7 @@ object_map_t ObjectMapEngine::objectMap() {
   return m;
 }
 
-object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) {
-  updateObjects();
+object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) const {
   object_query_reply_t reply;
   reply.utime = 0;
   reply.request_id = q.request_id;
@@ -519,8 +519,7 @@ object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) {
   return reply;
 }
 
-MapSnapshot ObjectMapEngine::snapshot() {
-  updateObjects();
+MapSnapshot ObjectMapEngine::snapshot() const {
   MapSnapshot snap;
   json& c = snap.content;
   c["classes"] = classes_;

@@ -13,7 +13,9 @@
 // Per frame (the join on seq of SLAM_POSE, PROPOSALS and DETECTIONS): every box adds a view of
 // its candidate with the box's class log-probabilities; in a localised frame it also votes for the
 // occupied voxels it covers near the candidate's median depth (candidate_voxels.h). Objects are
-// regrouped lazily, when the map is read (objectMap(), answer(), snapshot()).
+// regrouped after each DETECTIONS (and after a restore): reading the map (objectMap(), answer(),
+// snapshot(): const) never changes it, so in lockstep the objects and their ids do not depend on
+// when the node saved or was queried; occupancy changes show at the next DETECTIONS.
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -97,12 +99,12 @@ class ObjectMapEngine {
                     FrameReport* report = nullptr);
 
   /// The OBJECT_MAP message (saved_map_path and saved_utime are the node's business).
-  object_map_t objectMap();
+  object_map_t objectMap() const;
   /// The reply to a query (error set for an unknown kind, label or map id, or a bad region).
-  object_query_reply_t answer(const object_query_t& query);
+  object_query_reply_t answer(const object_query_t& query) const;
 
   /// Everything needed to continue after a restart (regroups first; colours the trees by label).
-  MapSnapshot snapshot();
+  MapSnapshot snapshot() const;
   /// Replaces the state by a saved one. Throws std::runtime_error when the content is
   /// inconsistent; the state is then unchanged.
   void restore(const MapSnapshot& snapshot);
@@ -115,7 +117,7 @@ class ObjectMapEngine {
   /// The segment the last localised pose or detections were in, -1 before any.
   int32_t currentSegment() const { return current_segment_; }
   int64_t sessions() const { return sessions_; }
-  size_t numObjects();
+  size_t numObjects() const;
   size_t numCandidates() const;
   size_t numOccupiedVoxels() const;
   /// Regroups the segments whose voxels or evidence changed.
@@ -123,7 +125,7 @@ class ObjectMapEngine {
   /// The object that a candidate of a SLAM map (of the current session) belongs to now, after
   /// regrouping; nullptr when the map or the candidate is unknown. Read-only use (the evaluator's
   /// multi-view labels); the pointer is valid until the next input.
-  const Object* objectOfCandidate(int32_t slam_map_id, int32_t candidate);
+  const Object* objectOfCandidate(int32_t slam_map_id, int32_t candidate) const;
 
  private:
   Segment& segmentFor(int32_t slam_map_id);
