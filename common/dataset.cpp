@@ -321,4 +321,9 @@ std::map<std::string, std::vector<std::string>> ObjectSet::instances() const {
   return out;
 }
 
+bool isSyntheticSequence(const SequenceFolder& sequence) {
+  if (sequence.info().source.rfind("synth", 0) == 0) return true;
+  return sequence.size() > 0 && !sequence.depthPath(0).empty();
+}
+
 }  // namespace slamaware

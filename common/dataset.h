@@ -76,6 +76,9 @@ class SequenceFolder {
   std::vector<double> timestamps_;
 };
 
+/// True for sequences of the synthetic suite (the generator's source, or depth ground truth).
+bool isSyntheticSequence(const SequenceFolder& sequence);
+
 /// Reads sequence.yaml; throws DatasetError naming the file and the key at fault.
 SequenceInfo readSequenceInfo(const std::string& path);
 void writeSequenceInfo(const std::string& path, const SequenceInfo& info);

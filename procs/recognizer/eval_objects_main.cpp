@@ -5,7 +5,11 @@
 // Protocol: leave-one-instance-out (one fold per instance) for sets of up to --loio-max-instances
 // instances, else one fold holding out one instance of each category.
 // Without --objects it evaluates every object set in <shared>/objects and build/data/objects.
-// Positional arguments (the sequence folders scripts/eval passes to every eval tool) are ignored.
+// Positional arguments (the sequence folders scripts/eval passes to every eval tool): the
+// ground-truth boxes of their every 5th frame are classified with --model (the shipped model by
+// default), which measures the recognizer apart from the proposals:
+//   {"sequences": {"<name>": {"gt_boxes": {"accuracy": %, "jittered_accuracy": %, "confusion": ...}}},
+//    "overall": {"gt_boxes": {...}}}   (objects of other categories count as background)
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -17,6 +21,8 @@
 #include "common/config.h"
 #include "common/dataset.h"
 #include "common/progress.h"
+#include "common/image_codec.h"
+#include "procs/recognizer/recognizer.h"
 #include "procs/recognizer/trainer.h"
 
 using namespace slamaware;
@@ -37,6 +43,87 @@ std::vector<std::string> defaultObjectSets(const std::string& shared) {
   return sets;
 }
 
+// Accuracy of the model on ground-truth boxes of scene frames: the boxes themselves and one
+// jittered copy each (IoU >= 0.6, as a proposal would draw them).
+struct BoxTally {
+  std::vector<std::string> classes;
+  std::vector<std::vector<int64_t>> confusion;  // [truth][predicted], exact boxes
+  int64_t boxes = 0, correct = 0, jittered = 0, jittered_correct = 0;
+  std::vector<double> runner_up_log_prob;  // the second-best class of each exact box
+
+  void merge(const BoxTally& o) {
+    if (confusion.empty()) {
+      *this = o;
+      return;
+    }
+    for (size_t i = 0; i < confusion.size(); ++i)
+      for (size_t j = 0; j < confusion[i].size(); ++j) confusion[i][j] += o.confusion[i][j];
+    boxes += o.boxes;
+    correct += o.correct;
+    jittered += o.jittered;
+    jittered_correct += o.jittered_correct;
+    runner_up_log_prob.insert(runner_up_log_prob.end(), o.runner_up_log_prob.begin(), o.runner_up_log_prob.end());
+  }
+  nlohmann::json json() const {
+    nlohmann::json j;
+    j["boxes"] = boxes;
+    j["accuracy"] = boxes ? 100.0 * static_cast<double>(correct) / static_cast<double>(boxes) : 0.0;
+    j["jittered_accuracy"] =
+        jittered ? 100.0 * static_cast<double>(jittered_correct) / static_cast<double>(jittered) : 0.0;
+    j["classes"] = classes;
+    j["confusion"] = confusion;
+    std::vector<double> r = runner_up_log_prob;
+    std::sort(r.begin(), r.end());
+    j["runner_up_log_prob_median"] = r.empty() ? 0.0 : r[r.size() / 2];
+    return j;
+  }
+};
+
+BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, int stride) {
+  BoxTally t;
+  t.classes = recognizer.classes();
+  const int C = static_cast<int>(t.classes.size());
+  t.confusion.assign(static_cast<size_t>(C), std::vector<int64_t>(static_cast<size_t>(C), 0));
+  std::map<int, std::vector<GroundTruthBox>> by_frame;
+  for (const auto& b : seq.boxes()) by_frame[b.frame].push_back(b);
+  for (const auto& [frame, truth] : by_frame) {
+    if (frame % stride != 0 || frame >= static_cast<int>(seq.size())) continue;
+    const cv::Mat image = readImage(seq.framePath(static_cast<size_t>(frame)));
+    std::vector<BoxRequest> req;
+    std::vector<int> label;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      const auto& b = truth[i];
+      auto it = std::find(t.classes.begin(), t.classes.end(), b.cls);
+      const int l = it == t.classes.end() ? C - 1 : static_cast<int>(it - t.classes.begin());
+      req.push_back({b.x, b.y, b.w, b.h, 0});
+      label.push_back(l);
+      for (const auto& r : jitteredBoxes(cv::Rect2d(b.x, b.y, b.w, b.h), image.cols, image.rows, 1, 0.6,
+                                         static_cast<uint32_t>(frame * 131 + static_cast<int>(i)))) {
+        req.push_back({r.x, r.y, r.width, r.height, 1});
+        label.push_back(l);
+      }
+    }
+    const FrameDetections d = recognizer.recognize(image, req);
+    for (const auto& b : d.boxes) {
+      const auto best = std::max_element(b.log_prob.begin(), b.log_prob.end());
+      const int pred = static_cast<int>(best - b.log_prob.begin());
+      const int truth_label = label[static_cast<size_t>(b.input_index)];
+      if (req[static_cast<size_t>(b.input_index)].candidate_id == 1) {
+        ++t.jittered;
+        t.jittered_correct += pred == truth_label;
+        continue;
+      }
+      ++t.boxes;
+      t.correct += pred == truth_label;
+      ++t.confusion[static_cast<size_t>(truth_label)][static_cast<size_t>(pred)];
+      std::vector<float> lp = b.log_prob;
+      std::nth_element(lp.begin(), lp.begin() + 1, lp.end(), std::greater<float>());
+      t.runner_up_log_prob.push_back(lp.size() > 1 ? lp[1] : 0.0);
+    }
+  }
+  return t;
+}
+
 std::string setName(const std::string& dir) {
   fs::path p = fs::path(dir).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
@@ -47,7 +134,8 @@ std::string setName(const std::string& dir) {
 
 int main(int argc, char** argv) {
   CLI::App app{"slamaware-eval-objects: recognizer accuracy on held-out object instances"};
-  std::vector<std::string> objects, ignored;
+  std::vector<std::string> objects, sequences;
+  std::string model_path = "models/recognizer.model";
   std::string out, config, shared = "../shared/data", protocol = "auto", log_level = "info";
   int max_views = -1, loio_max = 16;
   app.add_option("--objects", objects, "object set folders (default: every set in <shared>/objects and build/data/objects)");
@@ -60,14 +148,19 @@ int main(int argc, char** argv) {
   app.add_option("--loio-max-instances", loio_max, "auto: leave-one-instance-out up to this many instances");
   app.add_option("--max-views", max_views, "views per instance (overrides train.max_views_per_instance)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
-  app.add_option("sequences", ignored, "ignored (scripts/eval passes its sequence folders to every eval tool)");
+  app.add_option("sequences", sequences,
+                 "sequence folders: their ground-truth boxes are classified with --model (objects of other "
+                 "categories count as background)");
+  app.add_option("--model", model_path, "model for the ground-truth boxes of the sequences");
+  bool skip_sets = false;
+  app.add_flag("--no-object-sets", skip_sets, "only the ground-truth boxes of the sequences");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   try {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
     if (max_views >= 0) options.max_views_per_instance = max_views;
-    if (objects.empty()) objects = defaultObjectSets(shared);
-    if (objects.empty()) throw std::runtime_error("no object sets found (give --objects DIR)");
+    if (objects.empty() && !skip_sets) objects = defaultObjectSets(shared);
+    if (objects.empty() && !skip_sets) throw std::runtime_error("no object sets found (give --objects DIR)");
     nlohmann::json j = nlohmann::json::object();
     j["objects"] = nlohmann::json::object();
     for (const auto& dir : objects) {
@@ -108,6 +201,32 @@ int main(int argc, char** argv) {
         std::cout << "\n";
       }
       for (const auto& [inst, acc] : r.instance_accuracy) std::cout << "  " << inst << ": " << acc << "%\n";
+    }
+    if (!sequences.empty()) {
+      auto model = std::make_shared<const RecognizerModel>(loadModel(model_path));
+      Recognizer recognizer(model, RecognizerOptions{});
+      BoxTally suite;
+      for (const auto& dir : sequences) {
+        const SequenceFolder seq = SequenceFolder::open(dir);
+        if (!seq.hasBoxes()) continue;
+        const BoxTally t = classifySceneBoxes(recognizer, seq, 5);
+        const std::string name = setName(dir);
+        j["sequences"][name]["gt_boxes"] = t.json();
+        std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
+                  << " ground-truth boxes right (jittered: " << t.json()["jittered_accuracy"].get<double>()
+                  << "%)\n";
+        if (isSyntheticSequence(seq)) suite.merge(t);
+      }
+      if (suite.boxes > 0) {
+        j["overall"]["gt_boxes"] = suite.json();
+        std::cout << "suite: " << suite.json()["accuracy"].get<double>() << "% of " << suite.boxes
+                  << " ground-truth boxes right; confusion (rows: true, columns: predicted):\n";
+        for (size_t i = 0; i < suite.classes.size(); ++i) {
+          std::cout << "  " << suite.classes[i];
+          for (int64_t n : suite.confusion[i]) std::cout << " " << n;
+          std::cout << "\n";
+        }
+      }
     }
     fs::path p(out);
     if (p.has_parent_path()) fs::create_directories(p.parent_path());

@@ -1,6 +1,6 @@
 // slamaware-train: trains the recognizer's model (PCA, vocabulary, classifiers) from object sets
-// and, for the background class, scene sequences with ground-truth boxes; prints a validation
-// summary on held-out instances and writes one model file.
+// and scene sequences with ground-truth boxes (their objects as positives or background, the rest
+// as background); prints a validation summary on held-out data and writes one model file.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -15,15 +15,16 @@ using namespace slamaware;
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "slamaware-train: trains the recognizer model from object sets (--objects) and background "
-      "boxes of "
-      "scene sequences with boxes.csv (--negatives)"};
-  std::vector<std::string> objects, negatives;
+      "slamaware-train: trains the recognizer model from object sets (--objects) and scene "
+      "sequences with boxes.csv (--scenes: their objects of the model's categories, the rest as "
+      "background)"};
+  std::vector<std::string> objects, scenes;
   std::string out, config, report_path, log_level = "info";
   int64_t seed = -1;
   app.add_option("--objects", objects, "object set folders (category/category_N/..._crop.png)")
       ->required();
-  app.add_option("--negatives", negatives, "sequence folders with boxes.csv: background examples");
+  app.add_option("--scenes,--negatives", scenes,
+                 "sequence folders with boxes.csv: their objects (jittered boxes) and background boxes");
   app.add_option("--out", out, "model file to write")->required();
   app.add_option("--config", config, "YAML file with a 'train' section (default: built-in options)")
       ->check(CLI::ExistingFile);
@@ -36,7 +37,7 @@ int main(int argc, char** argv) {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
     if (seed >= 0) options.seed = static_cast<int>(seed);
     TrainReport report;
-    const RecognizerModel model = trainModel(objects, negatives, options, &report);
+    const RecognizerModel model = trainModel(objects, scenes, options, &report);
     saveModel(model, out);
     std::cout << report.toText();
     std::cout << "model written to " << out << "\n";

@@ -62,6 +62,7 @@ double backgroundProbability(const float* s, int C) {
 struct Split {
   std::vector<bool> crop_val, frame_val;
   std::vector<std::string> held_out_instances;
+  std::string held_out_sequence;  ///< "" when frames are held out one in n
 };
 
 Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFrame>& frames,
@@ -91,10 +92,17 @@ Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFr
           (view_counter[c.instance]++ % 5) == 4;  // single instance: hold out every 5th view
     }
   }
-  const int every = std::max(2, options.holdout_frame_every);
-  if (frames.size() >= 2)
-    for (size_t f = 0; f < frames.size(); ++f)
-      s.frame_val[f] = static_cast<int>(f) % every == every / 2;
+  std::vector<std::string> sequences;
+  for (const auto& f : frames)
+    if (std::find(sequences.begin(), sequences.end(), f.sequence) == sequences.end()) sequences.push_back(f.sequence);
+  if (sequences.size() >= 2) {
+    const std::string& held_scene = sequences[rng() % sequences.size()];
+    for (size_t f = 0; f < frames.size(); ++f) s.frame_val[f] = frames[f].sequence == held_scene;
+    s.held_out_sequence = held_scene;
+  } else if (frames.size() >= 2) {
+    const int every = std::max(2, options.holdout_frame_every);
+    for (size_t f = 0; f < frames.size(); ++f) s.frame_val[f] = static_cast<int>(f) % every == every / 2;
+  }
   return s;
 }
 
@@ -181,18 +189,38 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
     if (!seq.hasBoxes())
       throw DatasetError(dir +
                          ": no boxes.csv; background boxes need to know where the objects are");
-    std::map<int, std::vector<cv::Rect2d>> objects;
-    for (const auto& b : seq.boxes()) objects[b.frame].push_back(cv::Rect2d(b.x, b.y, b.w, b.h));
+    std::map<int, SceneFrame> by_frame;
+    for (const auto& b : seq.boxes()) {
+      by_frame[b.frame].objects.push_back(cv::Rect2d(b.x, b.y, b.w, b.h));
+      by_frame[b.frame].object_classes.push_back(b.cls);
+    }
     for (size_t i = 0; i < seq.size(); ++i) {
-      SceneFrame f;
+      SceneFrame f = std::move(by_frame[static_cast<int>(i)]);
       f.path = seq.framePath(i);
       f.sequence = seq.info().name.empty() ? dir : seq.info().name;
       f.index = static_cast<int>(i);
-      f.objects = objects[static_cast<int>(i)];
       frames.push_back(std::move(f));
     }
   }
   return frames;
+}
+
+std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count, double min_iou,
+                                      uint32_t seed) {
+  std::vector<cv::Rect2d> boxes;
+  std::mt19937 rng(seed);
+  const cv::Rect2d image(0, 0, width, height);
+  for (int attempt = 0; attempt < count * 50 && static_cast<int>(boxes.size()) < count; ++attempt) {
+    // Sides scaled by 0.75-1.33, centre moved by up to a quarter of the side.
+    const double sw = std::exp((uniform01(rng) * 2 - 1) * std::log(4.0 / 3.0));
+    const double sh = std::exp((uniform01(rng) * 2 - 1) * std::log(4.0 / 3.0));
+    const double w = object.width * sw, h = object.height * sh;
+    const double cx = object.x + object.width / 2 + (uniform01(rng) - 0.5) * 0.5 * object.width;
+    const double cy = object.y + object.height / 2 + (uniform01(rng) - 0.5) * 0.5 * object.height;
+    const cv::Rect2d r = cv::Rect2d(cx - w / 2, cy - h / 2, w, h) & image;
+    if (r.width >= 8 && r.height >= 8 && iou(r, object) >= min_iou) boxes.push_back(r);
+  }
+  return boxes;
 }
 
 std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
@@ -371,11 +399,11 @@ std::string TrainReport::toText() const {
 }
 
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
-                           const std::vector<std::string>& sequence_dirs,
+                           const std::vector<std::string>& scene_dirs,
                            const TrainOptions& options, TrainReport* report) {
   options.encoding.validate();
   const std::vector<LabeledCrop> crops = collectCrops(object_dirs, options.max_views_per_instance);
-  const std::vector<SceneFrame> frames = collectSceneFrames(sequence_dirs);
+  const std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs);
   if (crops.empty()) throw DatasetError("no training crops");
   std::set<std::string> category_set, instance_set;
   for (const auto& c : crops) {
@@ -392,10 +420,11 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   const Split split = makeSplit(crops, frames, options);
   spdlog::info(
       "{} crops of {} instances in {} categories, {} scene frames; held out: {} instances, {} "
-      "frames",
+      "frames{}",
       crops.size(), instances.size(), category_set.size(), frames.size(),
       split.held_out_instances.size(),
-      std::count(split.frame_val.begin(), split.frame_val.end(), true));
+      std::count(split.frame_val.begin(), split.frame_val.end(), true),
+      split.held_out_sequence.empty() ? "" : " (scene " + split.held_out_sequence + ")");
 
   RecognizerModel model;
   model.params = options.encoding;
@@ -487,6 +516,46 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       bar.update(static_cast<int64_t>(f + 1));
     }
     bar.finish();
+  }
+  if (has_background && options.scene_positive_every > 0) {
+    // The scenes' objects, boxed as a proposal would box them: a category of the model is a
+    // positive, any other object is background (a calculator is not a cap).
+    const int every = options.scene_positive_every;
+    ProgressBar bar("encode scene objects", static_cast<int64_t>(frames.size()));
+    int64_t positives = 0, others = 0;
+    for (size_t f = 0; f < frames.size(); ++f) {
+      bar.update(static_cast<int64_t>(f + 1));
+      if (frames[f].index % every != 0 || frames[f].objects.empty()) continue;
+      const cv::Mat image = readImage(frames[f].path);
+      std::vector<PyramidBox> snapped;
+      std::vector<int> labels;
+      for (size_t o = 0; o < frames[f].objects.size(); ++o) {
+        const int c = indexOf(classes, frames[f].object_classes[o]);
+        const int label = c >= 0 ? c : bg;
+        std::vector<cv::Rect2d> boxes{frames[f].objects[o]};
+        const auto jittered = jitteredBoxes(frames[f].objects[o], image.cols, image.rows, options.positive_jitter,
+                                            options.positive_min_iou,
+                                            subSeed(static_cast<uint32_t>(options.seed), 8,
+                                                    static_cast<uint32_t>(f * 64 + o)));
+        boxes.insert(boxes.end(), jittered.begin(), jittered.end());
+        for (const auto& r : boxes) {
+          PyramidBox b;
+          if (!encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) continue;
+          snapped.push_back(b);
+          labels.push_back(label);
+        }
+      }
+      if (snapped.empty()) continue;
+      encoder.encode(image, snapped, EncoderKind::kAuto, &buffer);
+      for (int64_t i = 0; i < buffer.rows(); ++i) {
+        all.add(buffer.row(i), labels[static_cast<size_t>(i)], -1 - static_cast<int>(f));
+        (labels[static_cast<size_t>(i)] == bg ? others : positives) += 1;
+      }
+      is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
+    }
+    bar.finish();
+    spdlog::info("scene objects: {} boxes of the model's categories, {} of other objects (background)", positives,
+                 others);
   }
   // Training and held-out parts.
   ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });
@@ -611,7 +680,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   r.validation = summary;
   nlohmann::json prov;
   prov["objects"] = object_dirs;
-  prov["negatives"] = sequence_dirs;
+  prov["scenes"] = scene_dirs;
   prov["report"] = nlohmann::json::parse(r.toJson());
   model.provenance = prov.dump();
   model.check("trained model");

@@ -1,15 +1,21 @@
 #pragma once
-// Training the recognizer's model from object sets (labelled crops) and, for the background
-// class, scene sequences with ground-truth boxes (boxes.csv).
+// Training the recognizer's model from object sets (labelled crops) and scene sequences with
+// ground-truth boxes (boxes.csv): their objects of the model's categories are positives (boxes as
+// the proposals stage draws them: jittered), everything else in them (other objects included) is
+// background.
 //
 //  1. Split: one instance of each category with >= 2 instances is held out (categories with a
-//     single instance hold out every 5th view), and every `holdout_frame_every`-th scene frame.
+//     single instance hold out every 5th view); of the scenes, one whole sequence when there are
+//     several (its neighbouring frames would otherwise be near copies of training frames and the
+//     calibration over-confident), else every `holdout_frame_every`-th frame.
 //  2. Vocabulary: raw features of the training crops and scene frames, a shuffled subset of
 //     `vocabulary_descriptors` of them -> PCA (D dims) -> VLFeat k-means (K codewords).
 //  3. Examples: every crop encoded as one box covering it, and `context_copies` times more pasted
 //     at a random place of a random scene frame (a box in a frame sees its surroundings, a crop
 //     alone only its mirrored border); per scene frame `negatives_per_frame` random boxes that
-//     overlap no ground-truth box (IoU < 0.1).
+//     overlap no ground-truth box (IoU < 0.1); per `scene_positive_every`-th scene frame, each
+//     ground-truth box and `positive_jitter` boxes around it (IoU >= `positive_min_iou`): labelled
+//     with the object's category, or background for a category the model does not have.
 //  4. One-vs-all logistic regression (SGD, L2) over the categories + "background", then
 //     `mining_rounds` rounds of hard-negative mining: `mining_candidates_per_frame` new random
 //     background boxes per training frame are scored and those the current model takes for an
@@ -47,7 +53,10 @@ struct TrainOptions {
   int negative_min_size_px = 24;
   double negative_max_size = 0.6;  ///< of the image width / height
   bool validation = true;          ///< hold out data for calibration and the summary
-  int holdout_frame_every = 5;
+  int holdout_frame_every = 5;      ///< (one scene only) every n-th frame is held out
+  int scene_positive_every = 2;     ///< every n-th scene frame gives its objects' boxes (0: none)
+  int positive_jitter = 2;          ///< jittered boxes per ground-truth box
+  double positive_min_iou = 0.6;    ///< a jittered box overlaps its object at least this much
 
   template <class V>
   void visit(V& v) {
@@ -70,7 +79,10 @@ struct TrainOptions {
     v("negative_max_size", negative_max_size, "largest background box side, fraction of the image");
     v("validation", validation,
       "hold out instances and frames for calibration and the validation summary");
-    v("holdout_frame_every", holdout_frame_every, "every n-th scene frame is held out");
+    v("holdout_frame_every", holdout_frame_every, "with one scene sequence, every n-th frame is held out");
+    v("scene_positive_every", scene_positive_every, "every n-th scene frame gives its objects' boxes (0: none)");
+    v("positive_jitter", positive_jitter, "jittered boxes per ground-truth box of a scene");
+    v("positive_min_iou", positive_min_iou, "a jittered box overlaps its object at least this much");
   }
 };
 
@@ -87,6 +99,7 @@ struct SceneFrame {
   std::string sequence;
   int index = 0;
   std::vector<cv::Rect2d> objects;
+  std::vector<std::string> object_classes;  ///< category of each of `objects`
 };
 
 /// The crops of the object sets (categories merged by name across sets), at most
@@ -97,6 +110,10 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
 /// boxes.csv: its background is unknown).
 std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs);
 
+/// `count` boxes around `object` (scaled and shifted at random) that overlap it by IoU >= min_iou
+/// and lie in the image.
+std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count, double min_iou,
+                                      uint32_t seed);
 /// `count` random boxes of an image that overlap each of `objects` by IoU < max_iou.
 std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
                                               const std::vector<cv::Rect2d>& objects, int count,
@@ -157,7 +174,7 @@ HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const Tra
 
 /// Trains a model (see the top of this file). Progress bars go to stderr.
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
-                           const std::vector<std::string>& sequence_dirs,
+                           const std::vector<std::string>& scene_dirs,
                            const TrainOptions& options, TrainReport* report);
 
 }  // namespace slamaware

@@ -78,12 +78,36 @@ TEST(Training, SeparatesTwoSyntheticCategoriesOnHeldOutInstances) {
   const ValidationSummary& v = t.report.validation;
   ASSERT_TRUE(v.available);
   EXPECT_EQ(v.held_out_instances.size(), 2u);  // one instance of each category
-  EXPECT_EQ(v.crops, 2 * 28);  // 28 held-out crops, each also pasted into a scene frame
+  // 28 held-out crops, each also pasted into a scene frame, and the object of the held-out scene
+  // frame 0 boxed as it is plus 2 jittered boxes.
+  EXPECT_EQ(v.crops, 2 * 28 + 3);
   EXPECT_GE(v.object_accuracy, 90.0) << t.report.toText();
   EXPECT_GE(v.background_accuracy, 90.0) << t.report.toText();
   EXPECT_GT(t.model.classifier.temperature, 0.f);
   EXPECT_EQ(t.report.mined.size() <= 2u, true);
   EXPECT_GT(t.report.train_negatives, 0);
+}
+
+TEST(Training, JitteredPositivesOverlapTheirObjectAndStayInTheImage) {
+  auto overlap = [](const cv::Rect2d& a, const cv::Rect2d& b) {
+    const double inter = (a & b).area();
+    return inter / (a.area() + b.area() - inter);
+  };
+  const cv::Rect2d image(0, 0, 640, 480);
+  // One object in the middle, one cut by the image corner.
+  for (const cv::Rect2d object : {cv::Rect2d(200, 150, 120, 90), cv::Rect2d(-20, -10, 80, 60)}) {
+    const cv::Rect2d visible = object & image;
+    const auto boxes = jitteredBoxes(visible, 640, 480, 20, 0.6, 42);
+    ASSERT_EQ(boxes.size(), 20u);
+    int moved = 0;
+    for (const auto& b : boxes) {
+      EXPECT_GE(overlap(b, visible), 0.6);
+      EXPECT_EQ((b & image).area(), b.area()) << "box leaves the image";
+      moved += overlap(b, visible) < 0.95;
+    }
+    EXPECT_GE(moved, 10) << "the boxes are not jittered";
+    EXPECT_EQ(boxes, jitteredBoxes(visible, 640, 480, 20, 0.6, 42)) << "not deterministic";
+  }
 }
 
 TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {

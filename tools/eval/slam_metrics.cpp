@@ -101,11 +101,6 @@ void SlamRecording::addCloud(int map_id, bool full, int64_t keyframe_id,
   pts.insert(pts.end(), cloud_points.begin(), cloud_points.end());
 }
 
-bool isSyntheticSequence(const SequenceFolder& sequence) {
-  if (sequence.info().source.rfind("synth", 0) == 0) return true;
-  return sequence.size() > 0 && !sequence.depthPath(0).empty();
-}
-
 nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequence,
                             const SlamEvalOptions& options) {
   nlohmann::json s;

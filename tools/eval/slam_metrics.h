@@ -55,7 +55,4 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
 /// The overall slam section over several sequences' sections (frames-weighted where it matters).
 nlohmann::json summarizeSlam(const std::vector<nlohmann::json>& sections);
 
-/// True for sequences of the synthetic suite (the generator's source, or depth ground truth).
-bool isSyntheticSequence(const SequenceFolder& sequence);
-
 }  // namespace slamaware
