@@ -11,8 +11,13 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
+#include <algorithm>
+#include <filesystem>
+#include <map>
 #include <optional>
 
+#include "common/atomic_file.h"
 #include "common/bus/bus.h"
 #include "common/bus/node.h"
 #include "common/bus/shutdown.h"
@@ -258,6 +263,60 @@ class ObjectMapNode {
   Clock::time_point last_publish_{}, last_save_ = Clock::now(), last_counters_{};
 };
 
+/// --export: the newest good generation of `dir` as `out`/map.ot (the segment with the most
+/// labelled objects; octovis opens it) and `out`/objects.json (the object table as OBJECT_MAP
+/// gives it). No bus.
+int exportMap(const ObjectMapOptions& options, const std::string& dir, const std::string& out) {
+  MapStore store(dir);
+  std::optional<MapSnapshot> snapshot;
+  std::optional<ObjectMapEngine> engine;
+  const LoadReport report = store.load([&](const MapSnapshot& s) {
+    ObjectMapEngine e(options);
+    e.restore(s);  // throws on inconsistent content: the generation is refused
+    snapshot = s;
+    engine = std::move(e);
+  });
+  for (const auto& f : report.failures) spdlog::error("refused {}", f);
+  if (!snapshot) {
+    spdlog::error("{}: no usable map to export", dir);
+    return 1;
+  }
+  const object_map_t map = engine->objectMap();
+  std::map<int32_t, int> labelled;
+  for (const auto& [sid, bytes] : snapshot->segment_files) labelled[sid] = 0;
+  nlohmann::json objects = nlohmann::json::array();
+  for (const auto& o : map.objects) {
+    if (o.label != "background") ++labelled[o.map_id];
+    nlohmann::json posterior;
+    for (size_t c = 0; c < map.class_names.size(); ++c) posterior[map.class_names[c]] = o.posterior[c];
+    nlohmann::json jo = {{"id", o.id},          {"segment", o.map_id},       {"label", o.label},
+                         {"posterior", posterior}, {"num_views", o.num_views}, {"num_voxels", o.num_voxels}};
+    if (std::isfinite(o.centroid[0])) {
+      jo["centroid"] = {o.centroid[0], o.centroid[1], o.centroid[2]};
+      jo["extent"] = {o.extent[0], o.extent[1], o.extent[2]};
+    }
+    objects.push_back(jo);
+  }
+  if (labelled.empty()) {
+    spdlog::error("{}: the map has no segment to export", report.json_path);
+    return 1;
+  }
+  const auto best = std::max_element(labelled.begin(), labelled.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  const std::string& ot = snapshot->segment_files.at(best->first);
+  std::filesystem::create_directories(out);
+  writeFileAtomic(out + "/map.ot", ot.data(), ot.size());
+  const nlohmann::json table = {{"source", report.json_path},
+                                {"segment_in_map_ot", best->first},
+                                {"classes", map.class_names},
+                                {"objects", objects}};
+  const std::string text = table.dump(2) + "\n";
+  writeFileAtomic(out + "/objects.json", text.data(), text.size());
+  spdlog::info("exported {}: {}/map.ot (segment {}, {} labelled objects), {}/objects.json ({} objects)",
+               report.json_path, out, best->first, best->second, out, objects.size());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -268,14 +327,27 @@ int main(int argc, char** argv) {
   NodeArgs node;
   addNodeOptions(app, node);
   std::string map_dir;
+  std::string export_dir;
   bool fresh = false;
   app.add_option("--map-dir", map_dir,
                  "folder of the map files (overrides objectmap.persistence.dir)");
   app.add_flag(
       "--fresh", fresh,
       "start from an empty map, whatever the folder holds (its map is replaced at the first save)");
+  app.add_option("--export", export_dir,
+                 "write the newest good saved map as DIR/map.ot and DIR/objects.json, then exit (no bus)");
   CLI11_PARSE(app, argc, argv);
 
+  if (!export_dir.empty()) {
+    spdlog::set_level(spdlog::level::from_str(node.log_level));
+    try {
+      ObjectMapOptions options = loadConfig<ObjectMapOptions>(node.config, "objectmap");
+      return exportMap(options, map_dir.empty() ? options.persistence.dir : map_dir, export_dir);
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 1;
+    }
+  }
   return runNode("objectmap", node, [&]() -> int {
     const SystemConfig sys = loadSystem(node);
     ObjectMapOptions options = loadConfig<ObjectMapOptions>(node.config, "objectmap");

@@ -378,3 +378,48 @@ TEST(MapFiles, SaveAndLoadTimesOfLargeMaps) {
     EXPECT_LT(load_ms, 3000);
   }
 }
+
+TEST(MapFiles, ExportWritesTheNewestGoodMapAsMapOtAndAnObjectTable) {
+  const std::string dir = test::tempDir("objectmap_export");
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  ObjectMapEngine e{ObjectMapOptions{}};
+  feed(e, w, 0, 30);
+  MapStore store(dir + "/map");
+  const SaveReport good = store.save(e.snapshot());
+  // A newer generation that is damaged: the export takes the good one.
+  feed(e, w, 30, 40);
+  const SaveReport damaged = store.save(e.snapshot());
+  std::string text = readBytes(damaged.json_path);
+  text.resize(text.size() / 2);
+  writeBytes(damaged.json_path, text);
+
+  test::ChildProcess exporter(
+      {test::binPath("slamaware-objectmap"), "--map-dir", dir + "/map", "--export", dir + "/out"},
+      dir + "/export.log");
+  ASSERT_EQ(exporter.wait(60s), 0) << exporter.log();
+  EXPECT_NE(exporter.log().find(damaged.json_path), std::string::npos) << "the refused file is named";
+  const std::string ot = readBytes(good.segment_paths.at(1));
+  EXPECT_EQ(readBytes(dir + "/out/map.ot"), ot);
+  const auto table = nlohmann::json::parse(readBytes(dir + "/out/objects.json"));
+  EXPECT_EQ(table.at("source").get<std::string>(), good.json_path);
+  EXPECT_EQ(table.at("classes").get<std::vector<std::string>>(), test::SyntheticWorld::classNames());
+  const Loaded loaded = loadFolder(dir + "/map");
+  ASSERT_TRUE(loaded.engine);
+  const object_map_t want = loaded.engine->objectMap();
+  ASSERT_EQ(table.at("objects").size(), want.objects.size());
+  ASSERT_GT(want.objects.size(), 0u);
+  for (size_t i = 0; i < want.objects.size(); ++i) {
+    const auto& o = table.at("objects")[i];
+    EXPECT_EQ(o.at("id").get<int>(), want.objects[i].id);
+    EXPECT_EQ(o.at("label").get<std::string>(), want.objects[i].label);
+    EXPECT_EQ(o.at("num_views").get<int>(), want.objects[i].num_views);
+  }
+
+  // Nothing to export: a clear error, not an empty file.
+  test::ChildProcess empty({test::binPath("slamaware-objectmap"), "--map-dir", dir + "/none", "--export",
+                            dir + "/out2"},
+                           dir + "/export2.log");
+  EXPECT_EQ(empty.wait(60s), 1);
+  EXPECT_NE(empty.log().find("no usable map to export"), std::string::npos) << empty.log();
+  EXPECT_FALSE(fs::exists(dir + "/out2/map.ot"));
+}

@@ -16,6 +16,8 @@ struct CtlContext {
 
 /// `bus`: a live table of what is on the bus (channel, type, rate, bandwidth, last message).
 void addBusCommand(CLI::App& app, CtlContext& ctx);
+/// `watch`: one live status line of the pipeline (fps, SLAM state, drops, objects).
+void addWatchCommand(CLI::App& app, CtlContext& ctx);
 /// `status`, `start`, `stop`, `restart`, `logs`: the supervisors' table and commands.
 void addProcCommands(CLI::App& app, CtlContext& ctx);
 /// `query`: asks the object map (by label, by region) and prints the answer as a table.

@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   slamaware::addNodeOptions(app, ctx.node, false);
   app.require_subcommand(1);
   slamaware::addBusCommand(app, ctx);
+  slamaware::addWatchCommand(app, ctx);
   slamaware::addProcCommands(app, ctx);
   slamaware::addQueryCommand(app, ctx);
   CLI11_PARSE(app, argc, argv);

@@ -28,16 +28,20 @@ struct QueryArgs {
   std::vector<double> region;
   int map_id = -1;
   double timeout_s = 3.0;
+  bool hide_background = false;
 };
 
-void printReply(const object_query_reply_t& r) {
-  if (r.objects.empty()) {
-    std::printf("no objects\n");
+void printReply(const object_query_reply_t& r, bool hide_background) {
+  size_t hidden = 0;
+  for (const auto& o : r.objects) hidden += hide_background && o.label == "background";
+  if (r.objects.size() == hidden) {
+    std::printf("no objects%s\n", hidden ? (" (" + std::to_string(hidden) + " background candidates)").c_str() : "");
     return;
   }
   std::printf("%6s  %-16s %6s %6s  %-26s %-20s %7s %4s\n", "ID", "LABEL", "P", "VIEWS",
               "CENTROID (x y z)", "EXTENT (x y z)", "VOXELS", "MAP");
   for (const auto& o : r.objects) {
+    if (hide_background && o.label == "background") continue;
     float p = 0;
     for (size_t c = 0; c < r.class_names.size() && c < o.posterior.size(); ++c)
       if (r.class_names[c] == o.label) p = o.posterior[c];
@@ -54,6 +58,7 @@ void printReply(const object_query_reply_t& r) {
     std::printf("%6d  %-16s %6.3f %6d  %-26s %-20s %7d %4d\n", o.id, o.label.c_str(), p,
                 o.num_views, centroid, extent, o.num_voxels, o.map_id);
   }
+  if (hidden) std::printf("(and %zu background candidates)\n", hidden);
 }
 
 int runQuery(const NodeArgs& node, const QueryArgs& args) {
@@ -102,7 +107,7 @@ int runQuery(const NodeArgs& node, const QueryArgs& args) {
     std::fprintf(stderr, "query refused: %s\n", reply->error.c_str());
     return 1;
   }
-  printReply(*reply);
+  printReply(*reply, args.hide_background);
   return 0;
 }
 
@@ -120,6 +125,8 @@ void addQueryCommand(CLI::App& app, CtlContext& ctx) {
       ->excludes(label);
   sub->add_option("--map-id", args->map_id, "only this map segment (-1: all)");
   sub->add_option("--timeout", args->timeout_s, "s to wait for the answer");
+  sub->add_flag("--hide-background", args->hide_background,
+                "leave out the candidates whose fused label is background (counted at the end)");
   sub->callback([&ctx, args] {
     ctx.exit_code = runNode("ctl", ctx.node, [&] { return runQuery(ctx.node, *args); });
   });

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -51,7 +52,11 @@ class Child {
 
   bool running() {
     if (pid_ <= 0 || exited_) return false;
-    if (waitpid(pid_, &status_, WNOHANG) == pid_) exited_ = true;
+    struct rusage usage {};
+    if (wait4(pid_, &status_, WNOHANG, &usage) == pid_) {
+      exited_ = true;
+      max_rss_kb_ = usage.ru_maxrss;
+    }
     return !exited_;
   }
   /// Exit code, or -1 if it did not exit within the timeout.
@@ -75,11 +80,14 @@ class Child {
     }
     return rc;
   }
+  /// Peak resident memory in kB, once the process has exited.
+  long maxRssKb() const { return max_rss_kb_; }
 
  private:
   pid_t pid_ = -1;
   int status_ = 0;
   bool exited_ = false;
+  long max_rss_kb_ = 0;
 };
 
 SE3 poseOf(const double position[3], const double orientation[4]) {
@@ -98,7 +106,14 @@ std::vector<PipelineStage> pipelineStages(const Channels& ch) {
 PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
                         const SystemConfig& system, const PipelineRunOptions& options) {
   PipelineRun result;
-  const SequenceFolder sequence = SequenceFolder::open(sequence_dir);
+  // The source: a sequence folder, or a recording (.lcm) whose CAMERA messages are played.
+  size_t frames = 0;
+  if (fs::path(sequence_dir).extension() == ".lcm") {
+    LogReader reader(sequence_dir);
+    while (auto r = reader.next()) frames += r->channel == system.channels.camera;
+  } else {
+    frames = SequenceFolder::open(sequence_dir).size();
+  }
   std::vector<PipelineStage> stages;
   for (const auto& s : pipelineStages(system.channels)) {
     if (!options.only.empty() &&
@@ -125,11 +140,8 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   std::vector<std::unique_ptr<Child>> procs;
   for (const auto& s : stages) {
     std::vector<std::string> argv = {(fs::path(options.bin_dir) / ("slamaware-" + s.name)).string(),
-                                     "--lockstep",
-                                     "--lcm-url",
-                                     options.lcm_url,
-                                     "--log-level",
-                                     "warn"};
+                                     "--lcm-url", options.lcm_url, "--log-level", "warn"};
+    if (!options.realtime) argv.push_back("--lockstep");
     const fs::path config = fs::path(options.config_dir) / (s.name + ".yaml");
     if (fs::exists(config)) {
       argv.push_back("--config");
@@ -143,15 +155,20 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     }
     procs.push_back(std::make_unique<Child>(argv, log_path + "." + s.name + ".txt"));
   }
-  Child camera({(fs::path(options.bin_dir) / "slamaware-camera").string(), "--source", sequence_dir,
-                "--lockstep", result.lockstep_channel, "--wait-for", wait_for, "--lcm-url",
-                options.lcm_url, "--log-level", "warn"},
-               log_path + ".camera.txt");
+  std::vector<std::string> camera_argv = {(fs::path(options.bin_dir) / "slamaware-camera").string(),
+                                          "--source", sequence_dir, "--wait-for", wait_for,
+                                          "--lcm-url", options.lcm_url, "--log-level", "warn"};
+  if (options.realtime) {
+    camera_argv.insert(camera_argv.end(), {"--speed", "1"});
+  } else {
+    camera_argv.insert(camera_argv.end(), {"--lockstep", result.lockstep_channel});
+  }
+  Child camera(camera_argv, log_path + ".camera.txt");
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(
-      1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, sequence.size()))));
+      1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, frames))));
   const int camera_rc = camera.wait(timeout);
-  std::this_thread::sleep_for(
-      std::chrono::milliseconds(300));  // the last messages reach the logger
+  // The last messages reach the logger (in real time, the stages also finish their last frames).
+  std::this_thread::sleep_for(std::chrono::milliseconds(options.realtime ? 2000 : 300));
   bool crashed = false;
   for (size_t i = 0; i < procs.size(); ++i) {
     const bool alive = procs[i]->running();
@@ -163,6 +180,8 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     }
   }
   logger.stop(std::chrono::milliseconds(3000));
+  result.rss_mb_total = static_cast<double>(camera.maxRssKb()) / 1024.0;
+  for (const auto& p : procs) result.rss_mb_total += static_cast<double>(p->maxRssKb()) / 1024.0;
   if (camera_rc != 0) result.error += "camera exited with " + std::to_string(camera_rc) + "; ";
   result.ok = camera_rc == 0 && !crashed;
   return result;

@@ -1,5 +1,5 @@
 #pragma once
-// Runs the multi-process pipeline on one sequence folder, lockstep, and records the bus:
+// Runs the multi-process pipeline on one sequence folder, lockstep (or real time), and records the bus:
 // lcm-logger, then every stage of the pipeline whose binary is built, then the camera, which
 // publishes frame n+1 only after the last stage answered frame n. The stages are a table (the
 // order of DESIGN.md §1) so that later stages join by being built.
@@ -26,6 +26,9 @@ struct PipelineRunOptions {
   std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
   std::string objectmap_dir;      ///< --map-dir of the objectmap stage: a fresh folder per sequence
   double timeout_per_frame_s = 20.0;
+  /// false: lockstep (every stage handles every frame, deterministic); true: the camera plays the
+  /// source in real time and the stages keep up as they can (bounded queues, drops counted).
+  bool realtime = false;
 };
 
 struct PipelineRun {
@@ -33,9 +36,10 @@ struct PipelineRun {
   std::string error;
   std::vector<std::string> stages;  ///< the stages that ran
   std::string lockstep_channel;
+  double rss_mb_total = 0;  ///< sum of the peak resident memory of the camera and every stage
 };
 
-/// Runs the pipeline on `sequence_dir`, recording the bus into `log_path` (process outputs go to
+/// Runs the pipeline on `sequence_dir` (a sequence folder or an LCM log with CAMERA), recording the bus into `log_path` (process outputs go to
 /// <log_path>.<name>.txt).
 PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
                         const SystemConfig& system, const PipelineRunOptions& options);

@@ -1,0 +1,138 @@
+// slamaware-bench-system: the whole pipeline as separate processes (camera, slam, proposals,
+// recognizer, objectmap) on a recording (default: the bundled logs/sample.lcm), run inside
+// scripts/netns-run:
+//   lockstep:  every stage on every frame -> pipeline_lockstep_fps (CAMERA of the first frame to
+//              OBJECT_MAP of the last, on the logger's clock; it bounds how fast `make eval` runs);
+//   real time: the camera plays the recording at its own rate (30 Hz) and every stage keeps up as
+//              it can -> realtime_slam_fps (frames SLAM answered per second of camera stream),
+//              realtime_recognizer_hz (frames classified per second; the recognizer takes the
+//              newest frame and drops the rest), latency_ms_p95 (CAMERA to the frame's DETECTIONS),
+//              rss_mb_total (sum of the processes' peak resident memory).
+// Times are the logger's receive times of the messages, so process start-up is not counted.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "common/bus/log_reader.h"
+#include "common/bus/system_config.h"
+#include "slamaware/detections_t.hpp"
+#include "slamaware/image_t.hpp"
+#include "slamaware/pose_t.hpp"
+#include "tools/eval/pipeline_run.h"
+
+using namespace slamaware;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// What the recording of one run says, on the logger's clock (µs).
+struct RunTimes {
+  std::map<int32_t, int64_t> camera, pose, detections;  ///< seq -> first receive time
+  int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
+  int64_t recognizer_dropped = 0;
+};
+
+RunTimes readRun(const std::string& log_path, const Channels& ch) {
+  RunTimes t;
+  LogReader reader(log_path);
+  while (auto r = reader.next()) {
+    if (r->channel == ch.camera) {
+      image_t m;
+      if (!decodeRecord(*r, &m)) continue;
+      t.camera.emplace(m.seq, r->timestamp);
+      if (t.first_camera < 0) t.first_camera = r->timestamp;
+      t.last_camera = r->timestamp;
+    } else if (r->channel == ch.slam_pose) {
+      pose_t m;
+      if (decodeRecord(*r, &m)) t.pose.emplace(m.seq, r->timestamp);
+    } else if (r->channel == ch.detections) {
+      detections_t m;
+      if (decodeRecord(*r, &m)) t.detections.emplace(m.seq, r->timestamp);
+    } else if (r->channel == ch.object_map) {
+      t.last_object_map = r->timestamp;
+    }
+  }
+  return t;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"slamaware-bench-system: the whole pipeline, lockstep and in real time"};
+  std::string out, source = "logs/sample.lcm", work;
+  std::string bin_dir = fs::path(argv[0]).parent_path().string();
+  std::string config_dir = "config";
+  app.add_option("--out", out, "JSON file to write")->required();
+  app.add_option("--source", source, "recording (.lcm with CAMERA) or sequence folder");
+  app.add_option("--bin-dir", bin_dir, "where the slamaware-* binaries are");
+  app.add_option("--config-dir", config_dir, "the processes' <name>.yaml");
+  app.add_option("--work-dir", work, "recordings of the runs (default: beside --out)");
+  CLI11_PARSE(app, argc, argv);
+  if (work.empty()) work = (fs::path(out).parent_path() / "system").string();
+  fs::create_directories(work);
+
+  SystemConfig sys;  // the default bus (ttl=0), inside the bench's network namespace
+  PipelineRunOptions options;
+  options.bin_dir = bin_dir;
+  options.config_dir = config_dir;
+  options.lcm_url = sys.bus.url;
+  nlohmann::json j;
+  j["system_source"] = source;
+
+  // Lockstep.
+  options.objectmap_dir = work + "/map-lockstep";
+  fs::remove_all(options.objectmap_dir);
+  const std::string lockstep_log = work + "/lockstep.lcm";
+  PipelineRun run = runPipeline(source, lockstep_log, sys, options);
+  if (!run.ok) {
+    std::fprintf(stderr, "lockstep run failed: %s (outputs: %s.<stage>.txt)\n", run.error.c_str(),
+                 lockstep_log.c_str());
+    return 1;
+  }
+  const RunTimes lock = readRun(lockstep_log, sys.channels);
+  const double lock_s = 1e-6 * static_cast<double>(lock.last_object_map - lock.first_camera);
+  j["system_frames"] = lock.camera.size();
+  j["pipeline_lockstep_fps"] = lock_s > 0 ? static_cast<double>(lock.camera.size()) / lock_s : 0;
+
+  // Real time.
+  options.realtime = true;
+  options.objectmap_dir = work + "/map-realtime";
+  fs::remove_all(options.objectmap_dir);
+  const std::string realtime_log = work + "/realtime.lcm";
+  run = runPipeline(source, realtime_log, sys, options);
+  if (!run.ok) {
+    std::fprintf(stderr, "real-time run failed: %s (outputs: %s.<stage>.txt)\n", run.error.c_str(),
+                 realtime_log.c_str());
+    return 1;
+  }
+  const RunTimes rt = readRun(realtime_log, sys.channels);
+  // The stream lasts from the first to the last frame, plus one frame period.
+  const double n = static_cast<double>(rt.camera.size());
+  const double stream_s =
+      n > 1 ? 1e-6 * static_cast<double>(rt.last_camera - rt.first_camera) * n / (n - 1) : 0;
+  std::vector<double> latency;
+  for (const auto& [seq, t] : rt.detections) {
+    auto c = rt.camera.find(seq);
+    if (c != rt.camera.end()) latency.push_back(1e-3 * static_cast<double>(t - c->second));
+  }
+  j["realtime_camera_fps"] = stream_s > 0 ? n / stream_s : 0;
+  j["realtime_slam_fps"] = stream_s > 0 ? static_cast<double>(rt.pose.size()) / stream_s : 0;
+  j["realtime_slam_frames_missed"] = static_cast<int64_t>(rt.camera.size()) - static_cast<int64_t>(rt.pose.size());
+  j["realtime_recognizer_hz"] = stream_s > 0 ? static_cast<double>(rt.detections.size()) / stream_s : 0;
+  j["latency_ms_p95"] = percentile(latency, 0.95);
+  j["latency_ms_median"] = percentile(latency, 0.5);
+  j["rss_mb_total"] = run.rss_mb_total;
+  std::ofstream f(out);
+  f << j.dump(2) << "\n";
+  std::printf("%s\n", j.dump(2).c_str());
+  return f ? 0 : 1;
+}
