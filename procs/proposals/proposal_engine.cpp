@@ -13,6 +13,7 @@ CandidateMap& ProposalEngine::mapOf(int32_t map_id) {
   recent_.push_back(map_id);
   while (static_cast<int>(recent_.size()) > std::max(1, options_.max_maps)) {
     maps_.erase(recent_.front());
+    reclustered_utime_.erase(recent_.front());
     recent_.erase(recent_.begin());
   }
   return it->second;
@@ -73,8 +74,17 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
   if (!maps_.count(pose.map_id)) return m;  // no point of that map yet
   CandidateMap& map = mapOf(pose.map_id);
   map.addView(pose.map_id, T_wc);
-  const bool ran = map.recluster();
-  if (reclustered) *reclustered = ran;
+  // A growing map is clustered again at most every recluster_interval_s of frame time (the
+  // message clock: lockstep replays stay deterministic); in between, the last candidates are
+  // projected. A map's first points are clustered at once, and a clock that goes back (a replay
+  // started again) is due at once.
+  auto last = reclustered_utime_.find(pose.map_id);
+  const bool due = last == reclustered_utime_.end() || pose.utime < last->second ||
+                   static_cast<double>(pose.utime - last->second) >= 1e6 * options_.recluster_interval_s;
+  if (due && map.recluster()) {
+    reclustered_utime_[pose.map_id] = pose.utime;
+    if (reclustered) *reclustered = true;
+  }
   for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, &last_)) {
     box_t bx{};
     bx.x = b.x;

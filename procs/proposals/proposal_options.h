@@ -55,6 +55,7 @@ struct ProposalOptions {
   FreeSpaceOptions free_space;   ///< points seen through by other keyframes are not objects
   int max_maps = 4;              ///< SLAM maps whose candidates are kept (SLAM may relocalise into an older one)
   int max_views = 512;           ///< camera poses kept for the up / look-at priors (thinned beyond)
+  double recluster_interval_s = 0.25; ///< s of frame time between re-clusterings of a growing map
   // Density-based clustering (DBSCAN) at `scales` radii, each twice the previous.
   double radius = 0.008;         ///< map units, neighbourhood radius of the finest scale
   int scales = 4;                ///< density thresholds, a factor 2 apart
@@ -106,6 +107,7 @@ struct ProposalOptions {
     v.section("free_space", free_space);
     v("max_maps", max_maps, "SLAM maps whose candidates are kept (SLAM may return to an older one)");
     v("max_views", max_views, "camera poses kept for the up and look-at priors");
+    v("recluster_interval_s", recluster_interval_s, "s of frame time between re-clusterings of a growing map (0: every change)");
     v("radius", radius, "map units, clustering radius of the finest scale (x2 per scale)");
     v("scales", scales, "density thresholds, a factor 2 apart");
     v("min_neighbours", min_neighbours, "points within the radius that make a core point");

@@ -21,6 +21,7 @@ namespace {
 ProposalOptions metricOptions() {
   ProposalOptions o;
   o.relative_lengths = false;  // the tests place things in map units
+  o.recluster_interval_s = 0;  // every map change clustered at the next pose
   return o;
 }
 
@@ -248,6 +249,39 @@ TEST(ProposalEngineInput, DegenerateInputGivesNoBoxes) {
   camera_info_t zero = vgaInfo();
   zero.fx = 0;
   EXPECT_FALSE(blind.onCameraInfo(zero, &why));
+}
+
+// A growing map is clustered again at most every recluster_interval_s of frame time (poses are
+// 1 ms apart here); the first points of a map at once.
+TEST(ProposalEngineInput, AGrowingMapIsReclusteredAtMostOncePerInterval) {
+  ProposalOptions o = metricOptions();
+  o.recluster_interval_s = 0.01;
+  ProposalEngine engine(o);
+  std::string why;
+  ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
+  const SE3 T = lookingDown(1.0);
+  const auto one = join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f));
+  const auto two = join(one, cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f));
+  auto step = [&](int seq) {
+    bool reclustered = false;
+    const proposals_t m = engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
+    return std::make_pair(reclustered, m.num_boxes);
+  };
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, one), &why));
+  auto [ran, boxes] = step(0);
+  EXPECT_TRUE(ran) << "the first points are clustered at once";
+  EXPECT_EQ(boxes, 1);
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, two), &why));
+  for (int seq = 1; seq < 10; ++seq) {
+    std::tie(ran, boxes) = step(seq);
+    EXPECT_FALSE(ran) << "seq " << seq << ": within 10 ms of the last clustering";
+    EXPECT_EQ(boxes, 1) << "seq " << seq << ": the last candidates are projected meanwhile";
+  }
+  std::tie(ran, boxes) = step(10);
+  EXPECT_TRUE(ran);
+  EXPECT_EQ(boxes, 2) << "the second object appears once the interval has passed";
+  std::tie(ran, boxes) = step(30);
+  EXPECT_FALSE(ran) << "no change, no clustering";
 }
 
 TEST(ShippedConfig, ProposalsYamlEqualsDefaults) {

@@ -21,6 +21,7 @@
 #include "slamaware/detections_t.hpp"
 #include "slamaware/image_t.hpp"
 #include "slamaware/pose_t.hpp"
+#include "slamaware/proposals_t.hpp"
 #include "tools/eval/pipeline_run.h"
 
 using namespace slamaware;
@@ -30,7 +31,7 @@ namespace {
 
 /// What the recording of one run says, on the logger's clock (µs).
 struct RunTimes {
-  std::map<int32_t, int64_t> camera, pose, detections;  ///< seq -> first receive time
+  std::map<int32_t, int64_t> camera, pose, proposals, detections;  ///< seq -> first receive time
   int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
   int64_t recognizer_dropped = 0;
 };
@@ -48,6 +49,9 @@ RunTimes readRun(const std::string& log_path, const Channels& ch) {
     } else if (r->channel == ch.slam_pose) {
       pose_t m;
       if (decodeRecord(*r, &m)) t.pose.emplace(m.seq, r->timestamp);
+    } else if (r->channel == ch.proposals) {
+      proposals_t m;
+      if (decodeRecord(*r, &m)) t.proposals.emplace(m.seq, r->timestamp);
     } else if (r->channel == ch.detections) {
       detections_t m;
       if (decodeRecord(*r, &m)) t.detections.emplace(m.seq, r->timestamp);
@@ -56,6 +60,16 @@ RunTimes readRun(const std::string& log_path, const Channels& ch) {
     }
   }
   return t;
+}
+
+/// Per frame answered by both stages: ms from `from`'s message to `to`'s.
+std::vector<double> delays(const std::map<int32_t, int64_t>& from, const std::map<int32_t, int64_t>& to) {
+  std::vector<double> ms;
+  for (const auto& [seq, t] : to) {
+    auto f = from.find(seq);
+    if (f != from.end()) ms.push_back(1e-3 * static_cast<double>(t - f->second));
+  }
+  return ms;
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -119,17 +133,21 @@ int main(int argc, char** argv) {
   const double n = static_cast<double>(rt.camera.size());
   const double stream_s =
       n > 1 ? 1e-6 * static_cast<double>(rt.last_camera - rt.first_camera) * n / (n - 1) : 0;
-  std::vector<double> latency;
-  for (const auto& [seq, t] : rt.detections) {
-    auto c = rt.camera.find(seq);
-    if (c != rt.camera.end()) latency.push_back(1e-3 * static_cast<double>(t - c->second));
-  }
+  const std::vector<double> latency = delays(rt.camera, rt.detections);
   j["realtime_camera_fps"] = stream_s > 0 ? n / stream_s : 0;
   j["realtime_slam_fps"] = stream_s > 0 ? static_cast<double>(rt.pose.size()) / stream_s : 0;
   j["realtime_slam_frames_missed"] = static_cast<int64_t>(rt.camera.size()) - static_cast<int64_t>(rt.pose.size());
   j["realtime_recognizer_hz"] = stream_s > 0 ? static_cast<double>(rt.detections.size()) / stream_s : 0;
   j["latency_ms_p95"] = percentile(latency, 0.95);
   j["latency_ms_median"] = percentile(latency, 0.5);
+  // Where the latency goes (median and p95 of each hop).
+  const std::vector<std::pair<std::string, std::vector<double>>> hops = {
+      {"camera_to_slam_pose", delays(rt.camera, rt.pose)},
+      {"slam_pose_to_proposals", delays(rt.pose, rt.proposals)},
+      {"proposals_to_detections", delays(rt.proposals, rt.detections)}};
+  for (const auto& [name, ms] : hops) {
+    j["latency_breakdown_ms"][name] = {{"median", percentile(ms, 0.5)}, {"p95", percentile(ms, 0.95)}};
+  }
   j["rss_mb_total"] = run.rss_mb_total;
   std::ofstream f(out);
   f << j.dump(2) << "\n";
