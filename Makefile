@@ -27,9 +27,10 @@ NETNS ?= 1
 demo: deps build
 	scripts/demo "$(SOURCE)" $(NETNS)
 
-# Evaluation on the default suite or SEQUENCES="dir ...": build/eval/report.{json,md} + plots.
+# Evaluation on the default suite or SEQUENCES="dir ..." (MODEL=file: another recognizer model):
+# build/eval/report.{json,md} + plots.
 eval: deps build
-	scripts/eval $(SEQUENCES)
+	MODEL="$(MODEL)" scripts/eval $(SEQUENCES)
 
 # Benchmarks: build/bench/report.json.
 bench: deps build

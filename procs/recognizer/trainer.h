@@ -41,20 +41,20 @@ struct TrainOptions {
   int seed = 7;                         ///< every random choice of the trainer
   int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
   int kmeans_iterations = 100;
-  int max_views_per_instance = 0;  ///< 0 = every view
+  int max_views_per_instance = 72;  ///< 0 = every view (72: every 3rd of a 216-view turntable)
   int context_copies = 1;          ///< crops also encoded pasted into scene frames
   bool mirror_crops = true;        ///< crops also encoded mirrored left-right
   SgdOptions sgd;
-  int negatives_per_frame = 10;
+  int negatives_per_frame = 4;
   int mining_rounds = 2;
-  int mining_candidates_per_frame = 100;
+  int mining_candidates_per_frame = 40;
   int mining_max_per_round = 1000;
   double negative_max_iou = 0.1;  ///< background boxes overlap every object less than this
   int negative_min_size_px = 24;
   double negative_max_size = 0.6;  ///< of the image width / height
   bool validation = true;          ///< hold out data for calibration and the summary
   int holdout_frame_every = 5;      ///< (one scene only) every n-th frame is held out
-  int scene_positive_every = 2;     ///< every n-th scene frame gives its objects' boxes (0: none)
+  int scene_positive_every = 4;     ///< every n-th scene frame gives its objects' boxes (0: none)
   int positive_jitter = 2;          ///< jittered boxes per ground-truth box
   double positive_min_iou = 0.6;    ///< a jittered box overlaps its object at least this much
 

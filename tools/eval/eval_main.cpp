@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
   app.add_option("--system", system_path, "system.yaml (bus URL, channels)");
   app.add_option("--lcm-url", pipeline.lcm_url, "bus URL (default: the system's)");
   app.add_option("--config-dir", pipeline.config_dir, "folder of the processes' <name>.yaml");
+  app.add_option("--model", pipeline.recognizer_model, "recognizer model (default: config/recognizer.yaml's)");
   app.add_option("--stages", stages, "comma-separated stages to run (default: every built stage)");
   app.add_flag("--offline", offline, "run the SLAM library in-process instead of the processes");
   app.add_option("--slam-config", slam_config,

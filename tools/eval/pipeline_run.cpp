@@ -147,6 +147,10 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
       argv.push_back("--config");
       argv.push_back(config.string());
     }
+    if (s.name == "recognizer" && !options.recognizer_model.empty()) {
+      argv.push_back("--model");
+      argv.push_back(options.recognizer_model);
+    }
     if (s.name == "objectmap" && !options.objectmap_dir.empty()) {
       // Each sequence its own map folder (lockstep starts empty anyway; the saves stay apart).
       fs::create_directories(options.objectmap_dir);

@@ -25,6 +25,7 @@ struct PipelineRunOptions {
   std::string lcm_url;
   std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
   std::string objectmap_dir;      ///< --map-dir of the objectmap stage: a fresh folder per sequence
+  std::string recognizer_model;   ///< --model of the recognizer stage ("" = its config's)
   double timeout_per_frame_s = 20.0;
   /// false: lockstep (every stage handles every frame, deterministic); true: the camera plays the
   /// source in real time and the stages keep up as they can (bounded queues, drops counted).
