@@ -51,8 +51,8 @@ synth: deps build
 sample: deps build
 	scripts/make-sample
 
-# Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set,
-# full training options; about 25 minutes on 2 cores).
+# Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set and
+# the training scenes of config/training, full training options; about 35 minutes here, 12 GB).
 model: deps build
 	FORCE=1 TRAIN_CONFIG= scripts/demo-model
 
