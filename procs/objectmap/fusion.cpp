@@ -6,11 +6,15 @@
 namespace slamaware {
 
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
-                                        size_t num_classes) {
+                                        size_t num_classes, bool objectness_weights) {
   std::vector<double> sum(num_classes, 0.0);
-  for (const auto* v : views)
+  for (const auto* v : views) {
+    double w = 1.0;
+    if (objectness_weights && num_classes > 0 && v->size() >= num_classes)
+      w = 1.0 - std::exp(std::min(0.0, static_cast<double>((*v)[num_classes - 1])));
     for (size_t c = 0; c < num_classes && c < v->size(); ++c)
-      sum[c] += static_cast<double>((*v)[c]);
+      sum[c] += w * static_cast<double>((*v)[c]);
+  }
   return sum;
 }
 

@@ -11,8 +11,13 @@ namespace slamaware {
 
 /// sum_i log p(c | x_i) per class over the views (each a vector of natural-log probabilities, one
 /// per class, num_classes long). Summed in double, in the order given.
+///
+/// objectness_weights: sum_i w_i log p(c | x_i) with w_i = 1 - p(background | x_i), the last class
+/// being background: the product of the views' p(c | x_i)^w_i. A view whose box the recognizer
+/// takes for background (the object cut by the image border, hidden, or the box off the object)
+/// says little about which object it is and counts little; views of the whole object count fully.
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
-                                        size_t num_classes);
+                                        size_t num_classes, bool objectness_weights = false);
 
 /// p(c | all views) = softmax of the summed log evidence (shifted by its maximum, so that sums of
 /// hundreds of views do not underflow). Empty in, empty out.

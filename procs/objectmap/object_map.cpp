@@ -385,7 +385,8 @@ void ObjectMapEngine::updateObjects() {
     if (!seg->dirty) continue;
     Segment& s = *seg;
     s.table.update([&s](VoxelKey k) { return s.occupancy.isOccupied(k); }, options_.voting,
-                   options_.grouping, classes_.size(), [this] { return next_object_id_++; });
+                   options_.grouping, classes_.size(), [this] { return next_object_id_++; },
+                   options_.objectness_weights);
     s.dirty = false;
   }
 }

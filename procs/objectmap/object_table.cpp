@@ -89,7 +89,8 @@ void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_si
 
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
-                         size_t num_classes, const std::function<int32_t()>& new_id) {
+                         size_t num_classes, const std::function<int32_t()>& new_id,
+                         bool objectness_weights) {
   // 1. Each candidate's voxels: voted often enough, and occupied now.
   std::vector<Candidate*> cands;
   for (auto& [id, c] : candidates_) {
@@ -200,7 +201,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     }
     std::vector<const std::vector<float>*> evidence;
     for (const auto& [key, v] : views) evidence.push_back(&v->log_prob);
-    o.log_evidence = sumLogProbabilities(evidence, num_classes);
+    o.log_evidence = sumLogProbabilities(evidence, num_classes, objectness_weights);
     o.posterior = posteriorFromLogEvidence(o.log_evidence);
     o.label = argmaxClass(o.log_evidence);
     o.num_views = static_cast<int32_t>(views.size());

@@ -84,7 +84,7 @@ class ObjectTable {
   /// geometry.
   void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
               const GroupingOptions& grouping, size_t num_classes,
-              const std::function<int32_t()>& new_id);
+              const std::function<int32_t()>& new_id, bool objectness_weights = false);
 
   const std::map<int32_t, Candidate>& candidates() const { return candidates_; }
   Candidate* findCandidate(int32_t id);

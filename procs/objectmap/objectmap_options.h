@@ -104,6 +104,8 @@ struct ObjectMapOptions {
   VotingOptions voting;
   GroupingOptions grouping;
   double publish_period_s = 1.0;  ///< s, OBJECT_MAP also goes out this often (real time)
+  /// Each view's log p weighted by 1 - p(background | view) in the sum (procs/objectmap/fusion.h).
+  bool objectness_weights = true;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
   int seq_buffer = 64;
   PersistenceOptions persistence;
@@ -114,6 +116,8 @@ struct ObjectMapOptions {
     v.section("voting", voting);
     v.section("grouping", grouping);
     v("publish_period_s", publish_period_s, "s between periodic OBJECT_MAP messages (real time)");
+    v("objectness_weights", objectness_weights,
+      "each view's log p weighted by 1 - p(background | view) in the fused sum (false: the paper's plain sum)");
     v("seq_buffer", seq_buffer,
       "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
     v.section("persistence", persistence);

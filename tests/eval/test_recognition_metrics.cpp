@@ -18,6 +18,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The paper's plain sum of log p (the labels below are computed by hand with it).
+ObjectMapOptions plainSum() {
+  ObjectMapOptions o;
+  o.objectness_weights = false;
+  return o;
+}
+
 const std::vector<std::string> kModel = {"cap", "coffee_mug", "background"};
 
 LabelledBox box(double x, double y, double w, double h, std::vector<double> p) {
@@ -285,7 +292,7 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
       detections(0, 1, kModel, {{5, weak_cap}, {6, logs({0.1, 0.1, 0.8})}}),
       detections(5, 1, kModel, {{5, weak_cap}}), detections(10, 1, kModel, {{5, strong_mug}})};
   // The node's OBJECT_MAP after each DETECTIONS, as the lockstep node publishes it.
-  ObjectMapEngine node(ObjectMapOptions{});
+  ObjectMapEngine node(plainSum());
   auto record = [&](const std::string& path, bool tamper) {
     lcm::LogFile log(path, "w");
     int64_t n = 0;
@@ -299,12 +306,12 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
     }
   };
   record(log_path, false);
-  const RecognitionRecording run = readRecognitionRecording(log_path, ch, ObjectMapOptions{});
+  const RecognitionRecording run = readRecognitionRecording(log_path, ch, plainSum());
   EXPECT_EQ(run.matches_node, 1) << "the replay gives the node's objects";
   EXPECT_EQ(run.objects, 2);
-  node = ObjectMapEngine(ObjectMapOptions{});
+  node = ObjectMapEngine(plainSum());
   record(dir + "/tampered.lcm", true);
-  EXPECT_EQ(readRecognitionRecording(dir + "/tampered.lcm", ch, ObjectMapOptions{}).matches_node, 0);
+  EXPECT_EQ(readRecognitionRecording(dir + "/tampered.lcm", ch, plainSum()).matches_node, 0);
   ASSERT_EQ(run.classes, kModel);
   ASSERT_EQ(run.frames.size(), 3u);
   const double cap = std::log(0.5) * 2 + std::log(0.05), mug = std::log(0.4) * 2 + std::log(0.9),
@@ -350,7 +357,7 @@ TEST(MultiViewLabels, CandidatesOfOneObjectShareItsPosterior) {
   twin.candidate = 21;
   objects.push_back(twin);
   const test::SyntheticWorld w(wo, objects);
-  MultiViewLabeller labeller{ObjectMapOptions{}};
+  MultiViewLabeller labeller{plainSum()};
   labeller.onCameraInfo(w.cameraInfo());
   const auto clouds = w.keyframeClouds(1);
   for (int f = 0; f < wo.frames; ++f) {
@@ -383,7 +390,7 @@ TEST(MultiViewLabels, CandidatesOfOneObjectShareItsPosterior) {
 // is labelled by its own evidence (log-probabilities clamped to [-100, 0]); one never seen gets a
 // uniform distribution.
 TEST(MultiViewLabels, ACandidateTheMapDoesNotHoldFallsBackToItsOwnEvidence) {
-  MultiViewLabeller labeller{ObjectMapOptions{}};
+  MultiViewLabeller labeller{plainSum()};
   std::vector<float> bad = logs({0.2, 0.7, 0.1});
   bad[2] = 0.01f;  // not a log-probability: the object map refuses the box
   labeller.onDetections(detections(0, 1, kModel, {{7, bad}, {8, logs({0.6, 0.3, 0.1})}}));

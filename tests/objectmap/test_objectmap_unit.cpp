@@ -104,6 +104,24 @@ TEST(Fusion, AConfidentlyWrongViewIsOutvoted) {
   EXPECT_EQ(argmaxClass(sumLogProbabilities({ptrs.back()}, 3)), 1);
 }
 
+// Objectness weights (classes: mug, cap, background): three views of the whole object say mug
+// (p(background) small); six views in which the object is cut by the border say, weakly, cap and
+// mostly background. The plain sum follows the many poor views; the weighted sum the good ones, and
+// each view's weight is 1 - p(background).
+TEST(Fusion, ObjectnessWeightsLetViewsOfTheWholeObjectDecide) {
+  std::vector<std::vector<float>> views(3, logs({0.8, 0.1, 0.1}));
+  for (int i = 0; i < 6; ++i) views.push_back(logs({0.02, 0.18, 0.8}));
+  std::vector<const std::vector<float>*> ptrs;
+  for (const auto& v : views) ptrs.push_back(&v);
+  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3)), 2) << "plain: the poor views win (background)";
+  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3, true)), 0) << "weighted: the whole-object views win";
+  const auto one = sumLogProbabilities({ptrs.back()}, 3, true);
+  EXPECT_NEAR(one[1], 0.2 * std::log(0.18), 1e-6);
+  // Views that all say background keep background.
+  std::vector<float> bg = logs({0.01, 0.01, 0.98});
+  EXPECT_EQ(argmaxClass(sumLogProbabilities({&bg, &bg, &bg}, 3, true)), 2);
+}
+
 TEST(Fusion, ThousandsOfViewsDoNotUnderflowAndTiesGoToTheLowerClass) {
   std::vector<std::vector<float>> views(5000, logs({0.3, 0.3, 0.4}));
   std::vector<const std::vector<float>*> ptrs;

@@ -11,6 +11,7 @@
 
 #include "common/bus/log_reader.h"
 #include "common/image_codec.h"
+#include "procs/objectmap/fusion.h"
 #include "tools/eval/plot.h"
 
 namespace slamaware {
@@ -276,7 +277,8 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& mult
 
 // ---- Multi-view labels ------------------------------------------------------------------------
 
-MultiViewLabeller::MultiViewLabeller(const ObjectMapOptions& options) : engine_(options) {}
+MultiViewLabeller::MultiViewLabeller(const ObjectMapOptions& options)
+    : engine_(options), objectness_weights_(options.objectness_weights) {}
 
 void MultiViewLabeller::onCameraInfo(const camera_info_t& m) {
   std::string why;
@@ -298,9 +300,6 @@ void MultiViewLabeller::onProposals(const proposals_t& m) {
 void MultiViewLabeller::onDetections(const detections_t& d) {
   std::string why;
   if (!engine_.onDetections(d, &why)) ++refused_, spdlog::debug("objectmap refused DETECTIONS: {}", why);
-  // The lockstep node publishes OBJECT_MAP after every DETECTIONS, which regroups: object ids
-  // depend on that history (the grouping itself does not), so the replay regroups there too.
-  engine_.updateObjects();
   // The candidate's own evidence, for the fallback: one box per frame (the larger), as the map.
   if (own_classes_.empty()) own_classes_ = d.class_names;
   std::vector<int> index(own_classes_.size(), -1);
@@ -332,10 +331,15 @@ std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t cand
     evidence = o->log_evidence;
     names = engine_.classes();
   } else if (auto it = own_.find({map_id, candidate}); it != own_.end()) {
-    evidence.assign(own_classes_.size(), 0.0);
-    for (const auto& [seq, v] : it->second)
-      for (size_t k = 0; k < v.log_p.size(); ++k)
-        evidence[k] += std::clamp(static_cast<double>(v.log_p[k]), kMinLogProb, 0.0);
+    // As the map fuses (procs/objectmap/fusion.h), each view clamped as the map clamps.
+    std::vector<std::vector<float>> clamped;
+    for (const auto& [seq, v] : it->second) {
+      clamped.push_back(v.log_p);
+      for (float& x : clamped.back()) x = std::clamp(x, static_cast<float>(kMinLogProb), 0.f);
+    }
+    std::vector<const std::vector<float>*> views;
+    for (const auto& v : clamped) views.push_back(&v);
+    evidence = sumLogProbabilities(views, own_classes_.size(), objectness_weights_);
     names = own_classes_;
   }
   if (from_object) *from_object = o && !o->log_evidence.empty();
@@ -423,9 +427,8 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
   run.objects = static_cast<int>(labeller.engine().numObjects());
   run.candidates = static_cast<int>(labeller.engine().numCandidates());
   if (have_node_map) {
-    // The node fused the same messages in lockstep: the replay must give its objects. (Not their
-    // ids: the node also regroups when it saves, every save_period_s of wall time, and a transient
-    // group between two messages takes an id.)
+    // The node fused the same messages in lockstep: the replay must give its objects (labels,
+    // views and voxels).
     auto summary = [](const object_map_t& m) {
       std::vector<std::tuple<std::string, int32_t, int32_t>> s;
       for (const auto& o : m.objects) s.emplace_back(o.label, o.num_views, o.num_voxels);
