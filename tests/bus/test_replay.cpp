@@ -21,7 +21,9 @@ std::vector<std::vector<uint8_t>> payloads(const std::string& log, const std::st
 }
 
 std::string recordSession(const std::string& dir, int frames) {
-  const std::string seq_dir = test::makeTestSequence("replay_seq", frames, 30.0);
+  // A sequence of its own per test: the tests of this file run in parallel.
+  const std::string seq_dir =
+      test::makeTestSequence(std::filesystem::path(dir).filename().string() + "_seq", frames, 30.0);
   const std::string log = dir + "/session.lcm";
   test::BusRecorder recorder(log);
   test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", seq_dir, "--lcm-url", test::testUrl(),

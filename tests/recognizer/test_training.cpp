@@ -27,6 +27,7 @@ TrainOptions testOptions() {
   o.negatives_per_frame = 8;
   o.mining_candidates_per_frame = 30;
   o.mining_max_per_round = 60;
+  o.scene_positive_every = 2;  // frame 0 (held out) gives its object's boxes
   return o;
 }
 
@@ -40,7 +41,9 @@ struct Trained {
 const Trained& synthetic() {
   static Trained t = [] {
     Trained t;
-    const std::string dir = test::tempDir("recognizer_training");
+    // A folder per test: each test of this file runs in a process of its own, in parallel.
+    const std::string dir = test::tempDir(std::string("recognizer_training_") +
+                                          ::testing::UnitTest::GetInstance()->current_test_info()->name());
     t.objects = test::makeSyntheticObjectSet(dir + "/objects", 3, 14);
     t.scenes = test::makeSyntheticScenes(dir + "/scenes", 6);
     t.model = trainModel({t.objects}, {t.scenes}, testOptions(), &t.report);
