@@ -71,8 +71,8 @@ struct VotingOptions {
 /// candidates merge when their voxels overlap by merge_overlap of the smaller group AND the smaller
 /// is at least merge_size_ratio of the larger (a part is not merged into a whole it lies in).
 struct GroupingOptions {
-  double merge_overlap = 0.5;     ///< share of the smaller group's voxels the two share
-  double merge_size_ratio = 0.5;  ///< smaller group / larger group, in voxels
+  double merge_overlap = 0.8;     ///< share of the smaller group's voxels the two share
+  double merge_size_ratio = 0.8;  ///< smaller group / larger group, in voxels
 
   template <class V>
   void visit(V& v) {

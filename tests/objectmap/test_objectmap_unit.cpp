@@ -270,6 +270,9 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   VotingOptions vo;
   vo.min_votes = 2;
   vo.min_vote_share = 0.5;
+  GroupingOptions half;  // candidates that share half their voxels merge
+  half.merge_overlap = 0.5;
+  half.merge_size_ratio = 0.5;
   ObjectTable t(0.01);
   auto keys = [](int from, int to) {
     std::vector<VoxelKey> k;
@@ -290,7 +293,7 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   std::set<VoxelKey> free;
   auto occupied = [&](VoxelKey k) { return !free.count(k); };
 
-  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  t.update(occupied, vo, half, 3, new_id);
   ASSERT_EQ(t.objects().size(), 1u);
   const Object merged = t.objects().begin()->second;
   EXPECT_EQ(merged.id, 7);
@@ -308,7 +311,7 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   // The shared voxels turn free (a full SLAM map moved them): the candidates split. The part with
   // the lower candidate keeps the id, the other gets a new one, each with its own views only.
   for (VoxelKey k : keys(10, 20)) free.insert(k);
-  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  t.update(occupied, vo, half, 3, new_id);
   ASSERT_EQ(t.objects().size(), 2u);
   const Object& a = t.objects().at(7);
   EXPECT_EQ(a.candidates, (std::vector<int32_t>{1}));
@@ -321,13 +324,13 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   EXPECT_NEAR(b.log_evidence[1], std::log(0.8) + std::log(0.7), 1e-5);
 
   // Nothing changes: nothing is renumbered.
-  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  t.update(occupied, vo, half, 3, new_id);
   EXPECT_TRUE(t.objects().count(7) && t.objects().count(8));
   EXPECT_EQ(next, 9);
 
   // They merge again: the lower previous id survives with the union of the evidence.
   free.clear();
-  t.update(occupied, vo, GroupingOptions{}, 3, new_id);
+  t.update(occupied, vo, half, 3, new_id);
   ASSERT_EQ(t.objects().size(), 1u);
   EXPECT_EQ(t.objects().begin()->first, 7);
   EXPECT_EQ(t.objects().begin()->second.num_views, 4);
