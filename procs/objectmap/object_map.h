@@ -120,14 +120,14 @@ class ObjectMapEngine {
   size_t numObjects() const;
   size_t numCandidates() const;
   size_t numOccupiedVoxels() const;
-  /// Regroups the segments whose voxels or evidence changed.
-  void updateObjects();
   /// The object that a candidate of a SLAM map (of the current session) belongs to now, after
   /// regrouping; nullptr when the map or the candidate is unknown. Read-only use (the evaluator's
   /// multi-view labels); the pointer is valid until the next input.
   const Object* objectOfCandidate(int32_t slam_map_id, int32_t candidate) const;
 
  private:
+  /// Regroups the segments whose voxels or evidence changed (after each input and a restore).
+  void updateObjects();
   Segment& segmentFor(int32_t slam_map_id);
   std::vector<int> mapClasses(const std::vector<std::string>& names);
 
