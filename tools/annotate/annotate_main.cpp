@@ -2,7 +2,7 @@
 //   annotated.mp4  every CAMERA frame with its proposal boxes, their labels and confidences
 //                  (DETECTIONS), the candidate ids and the SLAM state of the frame;
 //   topdown.png    the semi-dense map seen from above its dominant plane, the camera path and
-//                  the objects of the last OBJECT_MAP with their labels.
+//                  the labelled objects of the last OBJECT_MAP (not background).
 // It reads only the log (no bus), so it works on any recording, live or replayed.
 #include <spdlog/spdlog.h>
 
@@ -236,7 +236,8 @@ bool drawTopDown(const Session& s, const std::string& path) {
              {200, 90, 0}, 2, cv::LINE_AA);
   if (s.last_objects) {
     for (const auto& o : s.last_objects->objects) {
-      if (o.map_id != s.map_id) continue;
+      // The labelled objects only: background candidates (most of them) would hide the map.
+      if (o.map_id != s.map_id || o.label == "background" || o.label.empty()) continue;
       const Eigen::Vector3d c(o.centroid[0], o.centroid[1], o.centroid[2]);
       const Eigen::Vector3d half(o.extent[0] / 2, o.extent[1] / 2, o.extent[2] / 2);
       cv::Point lo(size, size), hi(0, 0);
