@@ -36,6 +36,25 @@ double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+/// The newest generation of `store` that passes the file checks and restores into an engine
+/// (refused generations are logged and listed in the report); nullopt when none does.
+struct LoadedMap {
+  LoadReport report;
+  std::optional<ObjectMapEngine> engine;
+  MapSnapshot snapshot;
+};
+LoadedMap loadNewestMap(MapStore& store, const ObjectMapOptions& options) {
+  LoadedMap l;
+  l.report = store.load([&](const MapSnapshot& s) {
+    ObjectMapEngine e(options);
+    e.restore(s);  // throws on inconsistent content: the generation is refused
+    l.engine = std::move(e);
+    l.snapshot = s;
+  });
+  for (const auto& f : l.report.failures) spdlog::error("refused {}", f);
+  return l;
+}
+
 class ObjectMapNode {
  public:
   ObjectMapNode(Bus& bus, StatusReporter& status, const SystemConfig& sys,
@@ -95,13 +114,8 @@ class ObjectMapNode {
       return;
     }
     const auto t0 = Clock::now();
-    std::optional<ObjectMapEngine> loaded;
-    const LoadReport report = store_.load([&](const MapSnapshot& snapshot) {
-      ObjectMapEngine e(options_);
-      e.restore(snapshot);
-      loaded = std::move(e);
-    });
-    for (const auto& f : report.failures) spdlog::error("refused {}", f);
+    LoadedMap loaded = loadNewestMap(store_, options_);
+    const LoadReport& report = loaded.report;
     if (!report.failures.empty()) {
       status_.count("load_failures", static_cast<int64_t>(report.failures.size()));
       status_.setMessage("refused " + report.failures.front());
@@ -110,7 +124,7 @@ class ObjectMapNode {
       spdlog::info("no usable map in {}: starting from an empty map", store_.dir());
       return;
     }
-    engine_ = std::move(*loaded);
+    engine_ = std::move(*loaded.engine);
     saved_changes_ = engine_.changes();
     status_.setCounter("loaded_generation", report.generation);
     status_.setCounter("load_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
@@ -268,22 +282,17 @@ class ObjectMapNode {
 /// gives it). No bus.
 int exportMap(const ObjectMapOptions& options, const std::string& dir, const std::string& out) {
   MapStore store(dir);
-  std::optional<MapSnapshot> snapshot;
-  std::optional<ObjectMapEngine> engine;
-  const LoadReport report = store.load([&](const MapSnapshot& s) {
-    ObjectMapEngine e(options);
-    e.restore(s);  // throws on inconsistent content: the generation is refused
-    snapshot = s;
-    engine = std::move(e);
-  });
-  for (const auto& f : report.failures) spdlog::error("refused {}", f);
-  if (!snapshot) {
+  LoadedMap loaded = loadNewestMap(store, options);
+  const LoadReport& report = loaded.report;
+  const std::optional<ObjectMapEngine>& engine = loaded.engine;
+  const std::map<int32_t, std::string>& segment_files = loaded.snapshot.segment_files;
+  if (!engine) {
     spdlog::error("{}: no usable map to export", dir);
     return 1;
   }
   const object_map_t map = engine->objectMap();
   std::map<int32_t, int> labelled;
-  for (const auto& [sid, bytes] : snapshot->segment_files) labelled[sid] = 0;
+  for (const auto& [sid, bytes] : segment_files) labelled[sid] = 0;
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& o : map.objects) {
     if (o.label != "background") ++labelled[o.map_id];
@@ -303,7 +312,7 @@ int exportMap(const ObjectMapOptions& options, const std::string& dir, const std
   }
   const auto best = std::max_element(labelled.begin(), labelled.end(),
                                      [](const auto& a, const auto& b) { return a.second < b.second; });
-  const std::string& ot = snapshot->segment_files.at(best->first);
+  const std::string& ot = segment_files.at(best->first);
   std::filesystem::create_directories(out);
   writeFileAtomic(out + "/map.ot", ot.data(), ot.size());
   const nlohmann::json table = {{"source", report.json_path},

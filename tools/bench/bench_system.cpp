@@ -33,7 +33,6 @@ namespace {
 struct RunTimes {
   std::map<int32_t, int64_t> camera, pose, proposals, detections;  ///< seq -> first receive time
   int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
-  int64_t recognizer_dropped = 0;
 };
 
 RunTimes readRun(const std::string& log_path, const Channels& ch) {

@@ -5,7 +5,6 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <deque>
 #include <map>
 #include <regex>
 
@@ -13,6 +12,7 @@
 #include "common/bus/shutdown.h"
 #include "common/bus/type_registry.h"
 #include "tools/ctl/ctl_commands.h"
+#include "tools/ctl/rate_meter.h"
 
 namespace slamaware {
 
@@ -21,8 +21,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct ChannelStats {
-  int64_t count = 0, bytes = 0;
-  std::deque<std::pair<Clock::time_point, size_t>> recent;  // the last 2 s
+  RateMeter rate;
   std::string type, last;
 };
 
@@ -30,18 +29,10 @@ void printTable(const std::map<std::string, ChannelStats>& stats, double elapsed
   if (clear) std::printf("\033[H\033[2J");
   std::printf("%-22s %-30s %8s %7s %9s  %s\n", "CHANNEL", "TYPE", "MSGS", "HZ", "KB/S", "LAST");
   for (const auto& [name, s] : stats) {
-    double hz = 0, kbs = 0;
-    if (s.recent.size() >= 2) {
-      const double span = std::chrono::duration<double>(s.recent.back().first - s.recent.front().first).count();
-      size_t b = 0;
-      for (const auto& r : s.recent) b += r.second;
-      if (span > 0) {
-        hz = (s.recent.size() - 1) / span;
-        kbs = b / 1024.0 / std::max(span, 1e-3);
-      }
-    }
+    // The rate of a channel's last 2 s of messages, however long ago its last one came.
+    const auto at = s.rate.lastTick();
     std::printf("%-22s %-30s %8lld %7.1f %9.1f  %s\n", name.c_str(), s.type.empty() ? "?" : s.type.c_str(),
-                (long long)s.count, hz, kbs, s.last.c_str());
+                (long long)s.rate.count(), s.rate.hz(at), s.rate.kbPerSecond(at), s.last.c_str());
   }
   std::printf("(%.0f s)\n", elapsed_s);
   std::fflush(stdout);
@@ -56,11 +47,7 @@ int runBusMonitor(const NodeArgs& node, double duration_s, bool once, const std:
       [&](const Bus::RawMessage& m) {
         if (m.channel == "LCM_SELF_TEST") return;  // LCM's own start-up probe
         ChannelStats& s = stats[m.channel];
-        const auto now = Clock::now();
-        ++s.count;
-        s.bytes += static_cast<int64_t>(m.size);
-        s.recent.emplace_back(now, m.size);
-        while (!s.recent.empty() && now - s.recent.front().first > std::chrono::seconds(2)) s.recent.pop_front();
+        s.rate.tick(Clock::now(), m.size);
         if (s.type.empty()) s.type = typeNameOfMessage(m.data, m.size);
         s.last = summarizeMessage(m.data, m.size);
       },

@@ -6,7 +6,6 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <deque>
 #include <map>
 #include <memory>
 #include <string>
@@ -19,32 +18,13 @@
 #include "slamaware/proposals_t.hpp"
 #include "slamaware/status_t.hpp"
 #include "tools/ctl/ctl_commands.h"
+#include "tools/ctl/rate_meter.h"
 
 namespace slamaware {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-/// Message rate over the last 2 s.
-class Rate {
- public:
-  void tick(Clock::time_point now) {
-    ++count_;
-    times_.push_back(now);
-    while (now - times_.front() > std::chrono::seconds(2)) times_.pop_front();
-  }
-  double hz(Clock::time_point now) const {
-    if (times_.size() < 2 || now - times_.back() > std::chrono::seconds(2)) return 0;
-    const double span = std::chrono::duration<double>(times_.back() - times_.front()).count();
-    return span > 0 ? static_cast<double>(times_.size() - 1) / span : 0;
-  }
-  int64_t count() const { return count_; }
-
- private:
-  std::deque<Clock::time_point> times_;
-  int64_t count_ = 0;
-};
 
 const char* slamStateName(int state) {
   switch (state) {
@@ -57,7 +37,7 @@ const char* slamStateName(int state) {
 }
 
 struct WatchState {
-  Rate camera, poses, detections;
+  RateMeter camera, poses, detections;
   int slam_state = -1, map_id = -1, last_seq = -1;
   int64_t tracked = 0, boxes = 0, proposal_msgs = 0, dropped = 0;
   std::map<std::string, int> labels;  // objects per label (background left out)

@@ -280,26 +280,31 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& mult
 MultiViewLabeller::MultiViewLabeller(const ObjectMapOptions& options)
     : engine_(options), objectness_weights_(options.objectness_weights) {}
 
+void MultiViewLabeller::countRefusal(bool accepted, const char* channel, const std::string& why) {
+  if (accepted) return;
+  ++refused_;
+  spdlog::debug("objectmap refused {}: {}", channel, why);
+}
 void MultiViewLabeller::onCameraInfo(const camera_info_t& m) {
   std::string why;
-  if (!engine_.onCameraInfo(m, &why)) ++refused_, spdlog::debug("objectmap refused CAMERA_INFO: {}", why);
+  countRefusal(engine_.onCameraInfo(m, &why), "CAMERA_INFO", why);
 }
 void MultiViewLabeller::onMap(const point_cloud_t& m) {
   std::string why;
-  if (!engine_.onMap(m, &why)) ++refused_, spdlog::debug("objectmap refused SLAM_MAP: {}", why);
+  countRefusal(engine_.onMap(m, &why), "SLAM_MAP", why);
 }
 void MultiViewLabeller::onPose(const pose_t& m) {
   std::string why;
-  if (!engine_.onPose(m, &why)) ++refused_, spdlog::debug("objectmap refused SLAM_POSE: {}", why);
+  countRefusal(engine_.onPose(m, &why), "SLAM_POSE", why);
 }
 void MultiViewLabeller::onProposals(const proposals_t& m) {
   std::string why;
-  if (!engine_.onProposals(m, &why)) ++refused_, spdlog::debug("objectmap refused PROPOSALS: {}", why);
+  countRefusal(engine_.onProposals(m, &why), "PROPOSALS", why);
 }
 
 void MultiViewLabeller::onDetections(const detections_t& d) {
   std::string why;
-  if (!engine_.onDetections(d, &why)) ++refused_, spdlog::debug("objectmap refused DETECTIONS: {}", why);
+  countRefusal(engine_.onDetections(d, &why), "DETECTIONS", why);
   // The candidate's own evidence, for the fallback: one box per frame (the larger), as the map.
   if (own_classes_.empty()) own_classes_ = d.class_names;
   std::vector<int> index(own_classes_.size(), -1);

@@ -122,6 +122,8 @@ class MultiViewLabeller {
   int refused() const { return refused_; }
 
  private:
+  /// Counts (and logs at debug level) a message the object map refused.
+  void countRefusal(bool accepted, const char* channel, const std::string& why);
   struct OwnView {
     float area = 0;
     std::vector<float> log_p;  ///< in own_classes_ order
