@@ -93,12 +93,7 @@ pose_t poseMessage(int seq, int8_t state, const SE3& T_wc, int map_id) {
   p.utime = 1000 * seq;
   p.state = state;
   p.map_id = map_id;
-  const Eigen::Quaterniond q(T_wc.linear());
-  for (int i = 0; i < 3; ++i) p.position[i] = T_wc.translation()[i];
-  p.orientation[0] = q.w();
-  p.orientation[1] = q.x();
-  p.orientation[2] = q.y();
-  p.orientation[3] = q.z();
+  se3ToArrays(T_wc, p.position, p.orientation);
   return p;
 }
 
