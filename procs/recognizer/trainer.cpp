@@ -223,6 +223,34 @@ std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int h
   return boxes;
 }
 
+std::vector<cv::Rect2d> partialBoxes(const std::vector<cv::Rect2d>& objects, size_t index, int width, int height,
+                                     int count, double min_iou, double max_iou, uint32_t seed) {
+  std::vector<cv::Rect2d> boxes;
+  if (index >= objects.size()) return boxes;
+  std::mt19937 rng(seed);
+  const cv::Rect2d& object = objects[index];
+  const cv::Rect2d image(0, 0, width, height);
+  for (int attempt = 0; attempt < count * 100 && static_cast<int>(boxes.size()) < count; ++attempt) {
+    // Every other attempt a part (sides 0.3-0.8 of the object's, inside it), else the object's box
+    // scaled by 0.35-2.5 and moved by up to 0.6 of its side (overhangs, neighbourhoods).
+    const bool part = attempt % 2 == 0;
+    auto scale = [&](double lo, double hi) { return std::exp(std::log(lo) + uniform01(rng) * (std::log(hi) - std::log(lo))); };
+    const double w = object.width * (part ? scale(0.3, 0.8) : scale(0.35, 2.5));
+    const double h = object.height * (part ? scale(0.3, 0.8) : scale(0.35, 2.5));
+    const double cx = part ? object.x + w / 2 + uniform01(rng) * (object.width - w)
+                           : object.x + object.width / 2 + (uniform01(rng) - 0.5) * 1.2 * object.width;
+    const double cy = part ? object.y + h / 2 + uniform01(rng) * (object.height - h)
+                           : object.y + object.height / 2 + (uniform01(rng) - 0.5) * 1.2 * object.height;
+    const cv::Rect2d r = cv::Rect2d(cx - w / 2, cy - h / 2, w, h) & image;
+    if (r.width < 16 || r.height < 16) continue;
+    const double own = iou(r, object);
+    bool ok = own >= min_iou && own < max_iou;
+    for (size_t o = 0; ok && o < objects.size(); ++o) ok = iou(r, objects[o]) < max_iou;
+    if (ok) boxes.push_back(r);
+  }
+  return boxes;
+}
+
 std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
                                               const std::vector<cv::Rect2d>& objects, int count,
                                               const TrainOptions& options, uint32_t seed) {
@@ -522,7 +550,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     // positive, any other object is background (a calculator is not a cap).
     const int every = options.scene_positive_every;
     ProgressBar bar("encode scene objects", static_cast<int64_t>(frames.size()));
-    int64_t positives = 0, others = 0;
+    int64_t positives = 0, others = 0, partials = 0;
     for (size_t f = 0; f < frames.size(); ++f) {
       bar.update(static_cast<int64_t>(f + 1));
       if (frames[f].index % every != 0 || frames[f].objects.empty()) continue;
@@ -538,11 +566,19 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                                             subSeed(static_cast<uint32_t>(options.seed), 8,
                                                     static_cast<uint32_t>(f * 64 + o)));
         boxes.insert(boxes.end(), jittered.begin(), jittered.end());
-        for (const auto& r : boxes) {
+        const size_t whole = boxes.size();
+        const auto partial = partialBoxes(frames[f].objects, o, image.cols, image.rows, options.partial_negatives,
+                                          options.partial_min_iou, options.partial_max_iou,
+                                          subSeed(static_cast<uint32_t>(options.seed), 9,
+                                                  static_cast<uint32_t>(f * 64 + o)));
+        boxes.insert(boxes.end(), partial.begin(), partial.end());
+        for (size_t n = 0; n < boxes.size(); ++n) {
+          const auto& r = boxes[n];
           PyramidBox b;
           if (!encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) continue;
           snapped.push_back(b);
-          labels.push_back(label);
+          labels.push_back(n < whole ? label : bg);
+          partials += n >= whole;
         }
       }
       if (snapped.empty()) continue;
@@ -554,8 +590,9 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
     }
     bar.finish();
-    spdlog::info("scene objects: {} boxes of the model's categories, {} of other objects (background)", positives,
-                 others);
+    spdlog::info("scene objects: {} boxes of the model's categories, {} of other objects or parts (background: {} "
+                 "parts)",
+                 positives, others, partials);
   }
   // Training and held-out parts.
   ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });
@@ -583,10 +620,18 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
         bar.update(static_cast<int64_t>(f + 1));
         if (split.frame_val[f]) continue;
         const cv::Mat image = readImage(frames[f].path);
-        const auto boxes = randomBackgroundBoxes(
+        auto boxes = randomBackgroundBoxes(
             image.cols, image.rows, frames[f].objects, options.mining_candidates_per_frame, options,
             subSeed(static_cast<uint32_t>(options.seed), 10 + static_cast<uint32_t>(round),
                     static_cast<uint32_t>(f)));
+        // Parts and overhangs of the objects are candidates too.
+        for (size_t o = 0; o < frames[f].objects.size(); ++o) {
+          const auto partial = partialBoxes(frames[f].objects, o, image.cols, image.rows, options.partial_negatives,
+                                            options.partial_min_iou, options.partial_max_iou,
+                                            subSeed(static_cast<uint32_t>(options.seed), 20 + static_cast<uint32_t>(round),
+                                                    static_cast<uint32_t>(f * 64 + o)));
+          boxes.insert(boxes.end(), partial.begin(), partial.end());
+        }
         std::vector<PyramidBox> snapped;
         for (const auto& r : boxes) {
           PyramidBox b;

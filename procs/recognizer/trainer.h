@@ -15,7 +15,11 @@
 //     alone only its mirrored border); per scene frame `negatives_per_frame` random boxes that
 //     overlap no ground-truth box (IoU < 0.1); per `scene_positive_every`-th scene frame, each
 //     ground-truth box and `positive_jitter` boxes around it (IoU >= `positive_min_iou`): labelled
-//     with the object's category, or background for a category the model does not have.
+//     with the object's category, or background for a category the model does not have; and
+//     `partial_negatives` boxes that cut or overhang it (IoU in [`partial_min_iou`,
+//     `partial_max_iou`) with it and below `partial_max_iou` with every object): background. A box
+//     on a part of a mug, or on a mug and half the table, is not a mug detection (it scores as a
+//     false positive), and without these the classifier never saw one labelled so.
 //  4. One-vs-all logistic regression (SGD, L2) over the categories + "background", then
 //     `mining_rounds` rounds of hard-negative mining: `mining_candidates_per_frame` new random
 //     background boxes per training frame are scored and those the current model takes for an
@@ -57,6 +61,9 @@ struct TrainOptions {
   int scene_positive_every = 4;     ///< every n-th scene frame gives its objects' boxes (0: none)
   int positive_jitter = 2;          ///< jittered boxes per ground-truth box
   double positive_min_iou = 0.6;    ///< a jittered box overlaps its object at least this much
+  int partial_negatives = 2;        ///< background boxes cutting or overhanging each scene object
+  double partial_min_iou = 0.1;     ///< ... that overlap it at least this much
+  double partial_max_iou = 0.4;     ///< ... and it (and every other object) less than this
 
   template <class V>
   void visit(V& v) {
@@ -83,6 +90,10 @@ struct TrainOptions {
     v("scene_positive_every", scene_positive_every, "every n-th scene frame gives its objects' boxes (0: none)");
     v("positive_jitter", positive_jitter, "jittered boxes per ground-truth box of a scene");
     v("positive_min_iou", positive_min_iou, "a jittered box overlaps its object at least this much");
+    v("partial_negatives", partial_negatives,
+      "background boxes cutting or overhanging each object of a scene frame that gives positives");
+    v("partial_min_iou", partial_min_iou, "a partial box overlaps its object at least this much");
+    v("partial_max_iou", partial_max_iou, "a partial box overlaps every object less than this");
   }
 };
 
@@ -114,6 +125,10 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
 /// and lie in the image.
 std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count, double min_iou,
                                       uint32_t seed);
+/// `count` boxes on a part of `objects[index]` or overhanging it (scaled and shifted at random,
+/// in the image) with IoU in [min_iou, max_iou) with it and < max_iou with each of `objects`.
+std::vector<cv::Rect2d> partialBoxes(const std::vector<cv::Rect2d>& objects, size_t index, int width, int height,
+                                     int count, double min_iou, double max_iou, uint32_t seed);
 /// `count` random boxes of an image that overlap each of `objects` by IoU < max_iou.
 std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
                                               const std::vector<cv::Rect2d>& objects, int count,

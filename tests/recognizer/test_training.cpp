@@ -113,6 +113,31 @@ TEST(Training, JitteredPositivesOverlapTheirObjectAndStayInTheImage) {
   }
 }
 
+TEST(Training, PartialBoxesCutOrOverhangTheirObjectAndNoOtherObject) {
+  auto overlap = [](const cv::Rect2d& a, const cv::Rect2d& b) {
+    const double inter = (a & b).area();
+    return inter / (a.area() + b.area() - inter);
+  };
+  const cv::Rect2d image(0, 0, 640, 480);
+  // Two neighbours: a part of one must not be a whole of the other.
+  const std::vector<cv::Rect2d> objects{cv::Rect2d(200, 150, 120, 90), cv::Rect2d(330, 160, 60, 80)};
+  const auto boxes = partialBoxes(objects, 0, 640, 480, 30, 0.1, 0.4, 42);
+  ASSERT_EQ(boxes.size(), 30u);
+  int inside = 0, overhanging = 0;
+  for (const auto& b : boxes) {
+    EXPECT_GE(overlap(b, objects[0]), 0.1);
+    EXPECT_LT(overlap(b, objects[0]), 0.4);
+    EXPECT_LT(overlap(b, objects[1]), 0.4);
+    EXPECT_EQ((b & image).area(), b.area()) << "box leaves the image";
+    inside += (b & objects[0]).area() > 0.95 * b.area();
+    overhanging += b.area() > objects[0].area();
+  }
+  EXPECT_GT(inside, 0) << "no box on a part of the object";
+  EXPECT_GT(overhanging, 0) << "no box overhanging the object";
+  EXPECT_EQ(boxes, partialBoxes(objects, 0, 640, 480, 30, 0.1, 0.4, 42)) << "not deterministic";
+  EXPECT_TRUE(partialBoxes(objects, 2, 640, 480, 5, 0.1, 0.4, 42).empty()) << "an object index out of range";
+}
+
 TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
   const Trained& t = synthetic();
   auto model = std::make_shared<const RecognizerModel>(t.model);
