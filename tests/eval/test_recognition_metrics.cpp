@@ -321,14 +321,18 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
     const auto& b = run.frames.at(f)[0];
     EXPECT_EQ(b.candidate, 5);
     EXPECT_TRUE(b.multi_from_object);
+    ASSERT_EQ(b.fused.log_p.size(), 3u);
+    EXPECT_NEAR(b.fused.log_p[0], cap - norm, 1e-5);
+    EXPECT_NEAR(b.fused.log_p[1], mug - norm, 1e-5);
+    EXPECT_NEAR(b.fused.log_p[2], bg - norm, 1e-5);
+    // Labelled by the fused evidence, scored with the box's own objectness.
+    EXPECT_EQ(b.multi.label, 1);
     ASSERT_EQ(b.multi.log_p.size(), 3u);
-    EXPECT_NEAR(b.multi.log_p[0], cap - norm, 1e-5);
-    EXPECT_NEAR(b.multi.log_p[1], mug - norm, 1e-5);
-    EXPECT_NEAR(b.multi.log_p[2], bg - norm, 1e-5);
+    EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(1 - (f == 10 ? 0.05 : 0.1)), 1e-5);
     EXPECT_NEAR(b.single.log_p[1], std::log(f == 10 ? 0.9 : 0.4), 1e-6);
   }
   // The other candidate keeps its own (background) evidence.
-  EXPECT_NEAR(std::exp(run.frames.at(0)[1].multi.log_p[2]), 0.8, 1e-6);
+  EXPECT_NEAR(std::exp(run.frames.at(0)[1].fused.log_p[2]), 0.8, 1e-6);
 
   const std::string seq = makeSequence("eval_multiview_seq", 11, {"cap", "coffee_mug"},
                                        {truth(0, 100, 100, 50, 50, "coffee_mug"),
@@ -344,6 +348,39 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
   EXPECT_EQ(r.multi.fallback_boxes, 0);
   EXPECT_NEAR(recognitionSection(r.multi)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0, 1e-9);
   EXPECT_NEAR(recognitionSection(r.single)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0 / 3, 1e-9);
+}
+
+// Multi-view scores: p(c | object) x (1 - p(background | box)) for the object classes, the rest to
+// background; a confident object seen through a box that its own view calls background ranks below
+// the same object through a box that frames it, but keeps its label.
+TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
+  auto lg = [](std::vector<double> p) {
+    for (double& v : p) v = std::log(v);
+    return p;
+  };
+  const std::vector<double> fused = lg({0.02, 0.97, 0.01});  // the object is a mug
+  const std::vector<double> framed = multiViewScores(fused, lg({0.1, 0.8, 0.1}));
+  const std::vector<double> part = multiViewScores(fused, lg({0.05, 0.05, 0.9}));
+  ASSERT_EQ(framed.size(), 3u);
+  EXPECT_NEAR(std::exp(framed[1]), 0.97 * 0.9, 1e-9);
+  EXPECT_NEAR(std::exp(framed[0]), 0.02 * 0.9, 1e-9);
+  EXPECT_NEAR(std::exp(framed[0]) + std::exp(framed[1]) + std::exp(framed[2]), 1.0, 1e-9);
+  EXPECT_NEAR(std::exp(part[1]), 0.97 * 0.1, 1e-9);
+  // A box whose view is sure it frames an object (log p(background) = -800) scores as the object.
+  EXPECT_NEAR(multiViewScores(fused, {-1, -0.5, -800})[1], std::log(0.97), 1e-9);
+  EXPECT_EQ(multiViewScores({}, {}), std::vector<double>{});
+
+  // Both boxes over a mug in one frame: the framing one is ranked first and matched; the part
+  // (IoU < 0.5) is a false positive ranked below it, and both are still labelled mug.
+  RecognitionScores s = emptyScores({"cap", "coffee_mug"});
+  LabelledBox a{{100, 100, 50, 50}, framed, 1}, b{{100, 100, 20, 20}, part, 1};
+  scoreFrame(kModel, {b, a}, {truth(0, 100, 100, 50, 50, "coffee_mug")}, 0.5, &s);
+  const ClassTally& mug = s.classes.at("coffee_mug");
+  ASSERT_EQ(mug.ranked.size(), 2u);
+  EXPECT_TRUE(mug.ranked[0].true_positive);
+  EXPECT_FALSE(mug.ranked[1].true_positive);
+  EXPECT_EQ(mug.labelled, 2) << "the label is the fused one, not the argmax of the scores";
+  EXPECT_DOUBLE_EQ(averagePrecision(mug.ranked, mug.truth), 1.0);
 }
 
 // Two candidates of one object (the proposals stage over-segments; here two clusters of the same

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <nlohmann/json.hpp>
 
 #include "common/bus/log_reader.h"
@@ -38,16 +39,46 @@ std::string selfDir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
+// Multi-view ranked by the fused posterior alone (a diagnostic beside the multi_view section).
+nlohmann::json fusedOnlySummary(const RecognitionScores& fused) {
+  const nlohmann::json s = recognitionSection(fused);
+  return {{"mAP", s["mAP"]}, {"recall", s["recall"]}};
+}
+
+// Every box of a recording with its single-view and multi-view log-probabilities, one CSV row per
+// box (frame, candidate, object, box, then log p single, fused, multi per class).
+void writeBoxesCsv(const RecognitionRecording& rr, const std::string& path) {
+  std::ofstream f(path);
+  f << "frame,map_id,candidate,object,x,y,w,h";
+  for (const char* kind : {"single", "fused", "multi"})
+    for (const auto& c : rr.classes) f << "," << kind << ":" << c;
+  f << "\n";
+  for (const auto& [frame, boxes] : rr.frames)
+    for (const auto& b : boxes) {
+      f << frame << "," << b.map_id << "," << b.candidate << "," << b.object << "," << b.single.box.x << ","
+        << b.single.box.y << "," << b.single.box.w << "," << b.single.box.h;
+      for (const auto* lp : {&b.single.log_p, &b.fused.log_p, &b.multi.log_p})
+        for (double v : *lp) f << "," << v;
+      f << "\n";
+    }
+  if (!f) throw std::runtime_error("cannot write " + path);
+}
+
 // The single_view and multi_view sections of a sequence (into `out`) and its precision-recall
 // plot, from the DETECTIONS of its recording and the object map replayed; no classes in the
 // result when the sequence has none to evaluate.
 RecognitionResult recognitionSections(const std::string& name, const SequenceFolder& seq, const std::string& log,
                                       const Channels& channels, const ObjectMapOptions& objectmap_options,
-                                      const std::string& out_dir, nlohmann::json& out) {
+                                      const std::string& out_dir, bool dump_boxes, nlohmann::json& out) {
   const RecognitionRecording rr = readRecognitionRecording(log, channels, objectmap_options);
   if (rr.empty()) {
     spdlog::info("{}: no DETECTIONS in the recording: no single_view / multi_view", name);
     return {};
+  }
+  if (dump_boxes) {
+    const fs::path d = fs::path(out_dir) / "boxes";
+    fs::create_directories(d);
+    writeBoxesCsv(rr, (d / (name + ".csv")).string());
   }
   RecognitionResult res = scoreRecognition(rr, seq, RecognitionEvalOptions{});
   if (res.classes.empty()) {
@@ -56,6 +87,7 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
   }
   out["single_view"] = recognitionSection(res.single);
   out["multi_view"] = recognitionSection(res.multi);
+  out["multi_view"]["fused_posterior_only"] = fusedOnlySummary(res.fused);
   out["multi_view"]["objects"] = rr.objects;
   out["multi_view"]["candidates"] = rr.candidates;
   out["multi_view"]["replay_matches_node"] =
@@ -79,6 +111,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sequences;
   std::string proposals_config, objectmap_config;
   int draw_frames = 0;
+  bool dump_boxes = false;
   bool offline = false, verbose = false, from_logs = false;
   ProposalEvalOptions peo;
   PipelineRunOptions pipeline;
@@ -104,6 +137,8 @@ int main(int argc, char** argv) {
                  "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
   app.add_option("--baseline-frames", peo.baseline_frames,
                  "frames per sequence for the selective-search baseline (0: none)");
+  app.add_flag("--dump-boxes", dump_boxes,
+               "write every labelled box with its single-view and multi-view scores to <out-dir>/boxes/<seq>.csv");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
@@ -127,7 +162,7 @@ int main(int argc, char** argv) {
     if (objectmap_config.empty() && fs::exists(fs::path(pipeline.config_dir) / "objectmap.yaml"))
       objectmap_config = (fs::path(pipeline.config_dir) / "objectmap.yaml").string();
     const ObjectMapOptions objectmap_options = loadConfig<ObjectMapOptions>(objectmap_config, "objectmap", false);
-    RecognitionScores suite_single, suite_multi;
+    RecognitionScores suite_single, suite_multi, suite_fused;
     bool any_recognition = false;
 
     nlohmann::json report = nlohmann::json::object();
@@ -195,10 +230,12 @@ int main(int argc, char** argv) {
         }
         if (!offline && seq.hasBoxes()) {
           const RecognitionResult res =
-              recognitionSections(name, seq, log, system.channels, objectmap_options, out_dir, report["sequences"][name]);
+              recognitionSections(name, seq, log, system.channels, objectmap_options, out_dir, dump_boxes,
+                                  report["sequences"][name]);
           if (!res.classes.empty() && isSyntheticSequence(seq)) {
             mergeRecognition(&suite_single, res.single);
             mergeRecognition(&suite_multi, res.multi);
+            mergeRecognition(&suite_fused, res.fused);
             any_recognition = true;
           }
         }
@@ -216,6 +253,7 @@ int main(int argc, char** argv) {
     if (any_recognition) {
       report["overall"]["single_view"] = recognitionSection(suite_single);
       report["overall"]["multi_view"] = recognitionSection(suite_multi);
+      report["overall"]["multi_view"]["fused_posterior_only"] = fusedOnlySummary(suite_fused);
       const std::string plot = (fs::path(out_dir) / "plots" / "suite_pr.png").string();
       drawPrCurves(suite_single, suite_multi, "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
       report["overall"]["single_view"]["plot"] = report["overall"]["multi_view"]["plot"] = plot;

@@ -110,7 +110,7 @@ void scoreFrame(const std::vector<std::string>& model_classes, const std::vector
   const auto background = std::find(model_classes.begin(), model_classes.end(), std::string(kBackgroundClass));
   const int bg = background == model_classes.end() ? -1 : static_cast<int>(background - model_classes.begin());
   std::vector<int> label(boxes.size());
-  for (size_t i = 0; i < boxes.size(); ++i) label[i] = argmaxOf(boxes[i].log_p);
+  for (size_t i = 0; i < boxes.size(); ++i) label[i] = boxes[i].label >= 0 ? boxes[i].label : argmaxOf(boxes[i].log_p);
   std::vector<Box2> truth_boxes;
   for (const auto& t : truth) truth_boxes.push_back({t.x, t.y, t.w, t.h});
 
@@ -357,6 +357,22 @@ std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t cand
   return out;
 }
 
+std::vector<double> multiViewScores(const std::vector<double>& fused, const std::vector<double>& single) {
+  if (fused.empty() || single.size() != fused.size()) return fused;
+  const size_t bg = fused.size() - 1;
+  // log(1 - p(background | box)), exact also for p(background) near 0 or 1.
+  const double lb = std::min(0.0, single[bg]);
+  const double log_objectness = lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
+  std::vector<double> out(fused.size());
+  double object_sum = 0;
+  for (size_t c = 0; c < bg; ++c) {
+    out[c] = fused[c] + log_objectness;
+    object_sum += std::exp(out[c]);
+  }
+  out[bg] = std::log(std::max(1e-300, 1.0 - std::min(1.0, object_sum)));
+  return out;
+}
+
 // ---- A sequence ------------------------------------------------------------------------------
 
 RecognitionRecording readRecognitionRecording(const std::string& log_path, const Channels& ch,
@@ -426,8 +442,13 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
         std::vector<double> lp = labeller.logPosterior(b.map_id, b.candidate, run.classes, &from_object);
         it = cache.emplace(std::make_pair(b.map_id, b.candidate), std::make_pair(std::move(lp), from_object)).first;
       }
-      b.multi.log_p = it->second.first;
+      b.fused.box = b.single.box;
+      b.fused.log_p = it->second.first;
+      b.multi.log_p = multiViewScores(b.fused.log_p, b.single.log_p);
+      b.multi.label = argmaxOf(b.fused.log_p);
       b.multi_from_object = it->second.second;
+      const Object* o = labeller.engine().objectOfCandidate(b.map_id, b.candidate);
+      b.object = o && b.multi_from_object ? o->id : -1;
     }
   run.objects = static_cast<int>(labeller.engine().numObjects());
   run.candidates = static_cast<int>(labeller.engine().numCandidates());
@@ -466,6 +487,7 @@ RecognitionResult scoreRecognition(const RecognitionRecording& run, const Sequen
   r.classes = evaluatedClasses(run.classes, seq);
   r.single = emptyScores(r.classes);
   r.multi = emptyScores(r.classes);
+  r.fused = emptyScores(r.classes);
   if (r.classes.empty()) return r;
   std::map<int, std::vector<GroundTruthBox>> truth;
   if (seq.hasBoxes())
@@ -473,17 +495,19 @@ RecognitionResult scoreRecognition(const RecognitionRecording& run, const Sequen
   static const std::vector<GroundTruthBox> no_truth;
   const int stride = std::max(1, o.stride);
   for (int f = 0; f < static_cast<int>(seq.size()); f += stride) {
-    std::vector<LabelledBox> single, multi;
+    std::vector<LabelledBox> single, multi, fused;
     if (auto it = run.frames.find(f); it != run.frames.end())
       for (const auto& b : it->second) {
         single.push_back(b.single);
         multi.push_back(b.multi);
+        fused.push_back(b.fused);
         r.multi.fallback_boxes += !b.multi_from_object;
       }
     const auto t = truth.find(f);
     const std::vector<GroundTruthBox>& gt = t == truth.end() ? no_truth : t->second;
     scoreFrame(run.classes, single, gt, o.iou, &r.single);
     scoreFrame(run.classes, multi, gt, o.iou, &r.multi);
+    scoreFrame(run.classes, fused, gt, o.iou, &r.fused);
   }
   return r;
 }

@@ -42,7 +42,8 @@ double averagePrecision(std::vector<ScoredDetection> detections, int num_truth, 
 /// classes (background last).
 struct LabelledBox {
   Box2 box;
-  std::vector<double> log_p;
+  std::vector<double> log_p;  ///< ranks the box as a detection of each class
+  int label = -1;             ///< the class the system reports; -1: the argmax of log_p
 };
 
 /// Tallies of one evaluated class.
@@ -70,6 +71,7 @@ struct RecognitionScores {
 RecognitionScores emptyScores(const std::vector<std::string>& evaluated_classes);
 
 /// Adds one frame: `model_classes` names the entries of every box's log_p (background last);
+/// a box is labelled with its `label`, or the argmax of its log_p;
 /// `truth` is every ground-truth box of the frame (boxes of classes that are not evaluated are
 /// distractors: not ground truth, and a box on one is not a true positive of any class). Matching
 /// per class: boxes in descending score, each to the unmatched ground-truth box of the class with
@@ -140,8 +142,11 @@ class MultiViewLabeller {
 /// The boxes of DETECTIONS by frame seq, with single-view and multi-view scores.
 struct RecognitionRecording {
   struct Box {
-    LabelledBox single, multi;
+    LabelledBox single;  ///< the box's own p(class | box)
+    LabelledBox fused;   ///< p(class | every view of its object): label and score
+    LabelledBox multi;   ///< label of `fused`, scored by multiViewScores()
     int32_t map_id = -1, candidate = -1;
+    int32_t object = -1;  ///< id of its object in the replayed map (-1: fallback)
     bool multi_from_object = true;
   };
   std::vector<std::string> classes;  ///< the model's, background last
@@ -156,6 +161,14 @@ struct RecognitionRecording {
   bool empty() const { return classes.empty(); }
 };
 
+/// The multi-view detection scores of a box (log, in the model's class order, background last)
+/// from its object's fused posterior and its own view: p(c) = p(c | object's views) x (1 -
+/// p(background | box)) for each object class, p(background) the rest. The object's views say
+/// which object it is; only the box's own view can say whether this box frames the whole object
+/// (a box on a part of a mug, or on the mug and half the table, is a view of the mug's object but
+/// not a mug detection). The reported label stays the fused posterior's argmax.
+std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, const std::vector<double>& single_log_p);
+
 /// Reads DETECTIONS of a recorded log and replays it through MultiViewLabeller (`options`: the
 /// objectmap stage's). Throws LogError for a damaged log. Empty when the log has no DETECTIONS.
 RecognitionRecording readRecognitionRecording(const std::string& log_path, const Channels& channels,
@@ -168,6 +181,7 @@ struct RecognitionEvalOptions {
 
 struct RecognitionResult {
   RecognitionScores single, multi;
+  RecognitionScores fused;  ///< multi-view ranked by the fused posterior alone (a diagnostic)
   std::vector<std::string> classes;  ///< evaluated: the model's (background excluded) that the sequence lists
 };
 
