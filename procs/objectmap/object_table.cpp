@@ -87,6 +87,90 @@ void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_si
     }
 }
 
+std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
+    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
+    const std::function<int(const std::vector<int32_t>&)>& label_of, int background) const {
+  std::vector<int> label(groups.size());
+  std::vector<std::vector<VoxelKey>> voxels(groups.size());
+  std::unordered_map<VoxelKey, std::vector<size_t>> owners;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    label[g] = label_of(groups[g]);
+    if (label[g] < 0 || label[g] == background) continue;
+    std::set<VoxelKey> u;
+    for (int32_t cid : groups[g]) u.insert(candidates_.at(cid).voxels.begin(), candidates_.at(cid).voxels.end());
+    voxels[g].assign(u.begin(), u.end());
+    for (VoxelKey k : voxels[g]) owners[k].push_back(g);
+  }
+  std::map<std::pair<size_t, size_t>, size_t> shared;
+  for (const auto& [key, list] : owners)
+    for (size_t a = 0; a < list.size(); ++a)
+      for (size_t b = a + 1; b < list.size(); ++b)
+        if (label[list[a]] == label[list[b]]) ++shared[{list[a], list[b]}];
+  // Most overlapping first; merged groups keep their label (a sum of evidence that two groups
+  // both call c is called c), and are tested again by their voxel unions.
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  for (const auto& [pair, n] : shared)
+    pairs.emplace_back(-static_cast<double>(n) /
+                           static_cast<double>(std::min(voxels[pair.first].size(), voxels[pair.second].size())),
+                       pair.first, pair.second);
+  std::sort(pairs.begin(), pairs.end());
+  UnionFind uf(groups.size());
+  for (const auto& [neg, i, j] : pairs) {
+    const size_t ri = uf.find(i), rj = uf.find(j);
+    if (ri == rj) continue;
+    std::vector<VoxelKey>& a = voxels[ri];
+    std::vector<VoxelKey>& b = voxels[rj];
+    std::vector<VoxelKey> both;
+    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
+    if (static_cast<double>(both.size()) < grouping.same_label_overlap * static_cast<double>(std::min(a.size(), b.size())))
+      continue;
+    std::vector<VoxelKey> merged;
+    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
+    uf.unite(ri, rj);
+    voxels[uf.find(ri)] = std::move(merged);
+  }
+  // A group without voxels yet (seen, but not from enough localised views) whose boxes put it
+  // inside the bounds of a group of its class joins that group (the first, in order).
+  for (size_t g = 0; g < groups.size(); ++g) {
+    if (!voxels[g].empty() || label[g] < 0 || label[g] == background) continue;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int32_t n = 0;
+    for (int32_t cid : groups[g]) {
+      sum += candidates_.at(cid).box_position_sum;
+      n += candidates_.at(cid).box_positions;
+    }
+    if (n == 0) continue;
+    const Eigen::Vector3d p = sum / n;
+    for (size_t h = 0; h < groups.size(); ++h) {
+      const std::vector<VoxelKey>& v = voxels[uf.find(h)];
+      if (h == g || label[h] != label[g] || v.empty() || uf.find(h) == uf.find(g)) continue;
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+      for (VoxelKey k : v) {
+        lo = lo.cwiseMin(voxelCentre(k, resolution_));
+        hi = hi.cwiseMax(voxelCentre(k, resolution_));
+      }
+      const Eigen::Vector3d half = Eigen::Vector3d::Constant(resolution_ / 2);
+      if (((p - (lo - half)).array() >= 0).all() && (((hi + half) - p).array() >= 0).all()) {
+        const size_t rh = uf.find(h);
+        uf.unite(g, h);
+        if (uf.find(h) != rh) voxels[uf.find(h)] = std::move(voxels[rh]);  // the union's voxels at its root
+        break;
+      }
+    }
+  }
+  std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index: groups stay in order
+  for (size_t g = 0; g < groups.size(); ++g) {
+    auto& m = by_root[uf.find(g)];
+    m.insert(m.end(), groups[g].begin(), groups[g].end());
+  }
+  std::vector<std::vector<int32_t>> out;
+  for (auto& [root, members] : by_root) {
+    std::sort(members.begin(), members.end());
+    out.push_back(std::move(members));
+  }
+  return out;
+}
+
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
@@ -153,6 +237,25 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   std::vector<std::vector<int32_t>> groups;
   for (auto& [root, members] : by_root) groups.push_back(std::move(members));
 
+  // The views of a group: one per frame (the larger box).
+  auto viewsOf = [&](const std::vector<int32_t>& members) {
+    std::map<ViewKey, const View*> views;
+    for (int32_t cid : members)
+      for (const auto& [key, v] : candidates_.at(cid).views) {
+        auto [it, inserted] = views.emplace(key, &v);
+        if (!inserted && v.area > it->second->area) it->second = &v;
+      }
+    return views;
+  };
+  auto evidenceOf = [&](const std::map<ViewKey, const View*>& views) {
+    std::vector<const std::vector<float>*> evidence;
+    for (const auto& [key, v] : views) evidence.push_back(&v->log_prob);
+    return sumLogProbabilities(evidence, num_classes, objectness_weights);
+  };
+  if (grouping.same_label_overlap > 0 && num_classes > 1) groups = mergeSameLabel(groups, grouping, [&](const auto& m) {
+    return argmaxClass(evidenceOf(viewsOf(m)));
+  }, static_cast<int>(num_classes) - 1);
+
   // 3. Stable ids: greedily give each previous object's id to the group sharing most of its
   // candidates (ties: lower previous id, then earlier group); the other groups get new ids.
   std::unordered_map<int32_t, int32_t> previous_of;  // candidate -> previous object id
@@ -183,25 +286,19 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     Object o;
     o.id = group_id[g];
     o.candidates = groups[g];
-    std::map<ViewKey, const View*> views;  // one per frame: the larger box
+    const std::map<ViewKey, const View*> views = viewsOf(o.candidates);
     std::set<VoxelKey> voxels;
     Eigen::Vector3d box_sum = Eigen::Vector3d::Zero();
     int32_t box_n = 0;
     double box_size = 0;
     for (int32_t cid : o.candidates) {
       const Candidate& c = candidates_.at(cid);
-      for (const auto& [key, v] : c.views) {
-        auto [it, inserted] = views.emplace(key, &v);
-        if (!inserted && v.area > it->second->area) it->second = &v;
-      }
       voxels.insert(c.voxels.begin(), c.voxels.end());
       box_sum += c.box_position_sum;
       box_n += c.box_positions;
       box_size = std::max(box_size, c.box_size);
     }
-    std::vector<const std::vector<float>*> evidence;
-    for (const auto& [key, v] : views) evidence.push_back(&v->log_prob);
-    o.log_evidence = sumLogProbabilities(evidence, num_classes, objectness_weights);
+    o.log_evidence = evidenceOf(views);
     o.posterior = posteriorFromLogEvidence(o.log_evidence);
     o.label = argmaxClass(o.log_evidence);
     o.num_views = static_cast<int32_t>(views.size());

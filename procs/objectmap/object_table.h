@@ -2,7 +2,8 @@
 // The objects of one map segment. A candidate is a 3D cluster of the proposals stage (its id is
 // stable across frames); it collects, view after view, the class evidence of its boxes and votes
 // for the occupied voxels its boxes cover (candidate_voxels.h). An object is a group of
-// candidates whose voxels overlap strongly and are of similar size (GroupingOptions): the
+// candidates whose voxels overlap strongly and are of similar size (GroupingOptions), and then
+// groups that overlap and are called the same object class (a part and its whole): the
 // proposals stage over-segments at several scales and its clusters split, merge and change ids as
 // the map grows, so candidates are grouped again whenever their voxels change, and object ids are
 // kept stable across regroupings (an object keeps the id of the previous object it shares most
@@ -103,6 +104,13 @@ class ObjectTable {
   void restoreObject(int32_t id, std::vector<int32_t> candidates);
 
  private:
+  /// Merges groups that `label_of` gives the same object class (not `background`) and that share
+  /// same_label_overlap of the smaller's voxels (parts and wholes of one object); order kept.
+  std::vector<std::vector<int32_t>> mergeSameLabel(std::vector<std::vector<int32_t>> groups,
+                                                   const GroupingOptions& grouping,
+                                                   const std::function<int(const std::vector<int32_t>&)>& label_of,
+                                                   int background) const;
+
   double resolution_;
   std::map<int32_t, Candidate> candidates_;
   std::map<int32_t, Object> objects_;

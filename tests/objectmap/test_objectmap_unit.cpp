@@ -354,13 +354,68 @@ TEST(ObjectTable, APartIsNotMergedIntoTheWholeItLiesIn) {
     t.addVotes(3, keys(100, 130), vo);  // a bowl on it
     t.addVotes(4, keys(12, 42), vo);    // the mug again, under a new id (re-clustered)
   }
-  for (int32_t c = 1; c <= 4; ++c) t.addView(c, View{100, 1, 10, logs({0.5, 0.5})});
+  // Classes: mug, bowl, background. The whole is called background.
+  t.addView(1, View{100, 1, 10, logs({0.1, 0.1, 0.8})});
+  for (int32_t c : {2, 4}) t.addView(c, View{100, 1, 10, logs({0.7, 0.2, 0.1})});
+  t.addView(3, View{100, 1, 10, logs({0.2, 0.7, 0.1})});
   int32_t next = 1;
-  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 2, [&] { return next++; });
+  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
   ASSERT_EQ(t.objects().size(), 3u);
   std::set<std::vector<int32_t>> groups;
   for (const auto& [id, o] : t.objects()) groups.insert(o.candidates);
   EXPECT_EQ(groups, (std::set<std::vector<int32_t>>{{1}, {2, 4}, {3}}));
+}
+
+// With the label it is: a mug's handle called mug lies in the mug called mug (one object, the
+// union of their evidence); a bowl-called part of the same mug, and the same geometry called
+// background, stay apart. A candidate called mug without voxels yet joins the mug when its boxes
+// put it inside the mug, not when they put it elsewhere. same_label_overlap 0 turns this off.
+TEST(ObjectTable, APartCalledLikeTheWholeItLiesInIsMergedIntoIt) {
+  VotingOptions vo;
+  auto keys = [](int from, int to) {
+    std::vector<VoxelKey> k;
+    for (int i = from; i < to; ++i) k.push_back(packVoxelKey(40000 + i, 40000, 40000));
+    return k;
+  };
+  auto build = [&](ObjectTable& t) {
+    for (int v = 0; v < 3; ++v) {
+      t.addVotes(1, keys(0, 100), vo);   // the mug
+      t.addVotes(2, keys(80, 100), vo);  // its handle, called mug
+      t.addVotes(3, keys(0, 20), vo);    // its bottom, called bowl
+      t.addVotes(4, keys(40, 60), vo);   // a part called background
+    }
+    t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});
+    t.addView(1, View{200, 2, 50, logs({0.7, 0.2, 0.1})});
+    t.addView(2, View{300, 3, 10, logs({0.6, 0.1, 0.3})});
+    t.addView(3, View{300, 3, 10, logs({0.2, 0.6, 0.2})});
+    t.addView(4, View{400, 4, 10, logs({0.3, 0.1, 0.6})});
+    // Voxel keys 40000 + i along x at 0.01: x from 72.32 to 73.32, y = z = 72.325.
+    t.addView(5, View{500, 5, 10, logs({0.6, 0.2, 0.2})});
+    t.addBoxPosition(5, Eigen::Vector3d(72.8, 72.325, 72.325), 0.3);
+    t.addView(6, View{500, 5, 10, logs({0.6, 0.2, 0.2})});
+    t.addBoxPosition(6, Eigen::Vector3d(75.0, 72.325, 72.325), 0.3);
+  };
+  int32_t next = 1;
+  ObjectTable t(0.01);
+  build(t);
+  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
+  std::map<std::vector<int32_t>, const Object*> by_group;
+  for (const auto& [id, o] : t.objects()) by_group[o.candidates] = &o;
+  ASSERT_EQ(by_group.size(), 4u);
+  ASSERT_TRUE(by_group.count({1, 2, 5}));
+  EXPECT_TRUE(by_group.count({3}) && by_group.count({4}) && by_group.count({6}));
+  const Object& mug = *by_group.at({1, 2, 5});
+  EXPECT_EQ(mug.label, 0);
+  EXPECT_EQ(mug.num_views, 4);
+  EXPECT_NEAR(mug.log_evidence[0], std::log(0.8) + std::log(0.7) + std::log(0.6) + std::log(0.6), 1e-5);
+  EXPECT_EQ(mug.num_voxels, 100);
+
+  GroupingOptions off;
+  off.same_label_overlap = 0;
+  ObjectTable apart(0.01);
+  build(apart);
+  apart.update([](VoxelKey) { return true; }, vo, off, 3, [&] { return next++; });
+  EXPECT_EQ(apart.objects().size(), 6u);
 }
 
 TEST(ObjectTable, RarelyVotedVoxelsAreForgotten) {
