@@ -326,18 +326,18 @@ size_t CandidateMap::points() const {
 // The median distance at which the map's points were seen: from their keyframe's centre when it
 // is known, else from the views' mean centre. Monocular maps have no metric scale; this is the
 // length every option is relative to.
-double CandidateMap::sceneScale(const std::vector<MapPoint>& all) const {
+static double sceneScale(const ClusterInput& in, const std::vector<MapPoint>& all) {
   std::vector<float> range;
   range.reserve(all.size() / 4 + 1);
-  for (const auto& [kf, pts] : by_keyframe_) {
-    const auto c = keyframe_centres_.find(kf);
-    if (c == keyframe_centres_.end()) continue;
+  for (const auto& [kf, pts] : in.by_keyframe) {
+    const auto c = in.keyframe_centres.find(kf);
+    if (c == in.keyframe_centres.end()) continue;
     for (size_t i = 0; i < pts.size(); i += 4) range.push_back((pts[i].p - c->second).norm());
   }
-  if (range.empty() && !views_.empty()) {
+  if (range.empty() && !in.views.empty()) {
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
-    for (const auto& v : views_) centre += v.centre;
-    centre /= static_cast<float>(views_.size());
+    for (const auto& v : in.views) centre += v.centre;
+    centre /= static_cast<float>(in.views.size());
     for (size_t i = 0; i < all.size(); i += 4) range.push_back((all[i].p - centre).norm());
   }
   if (range.empty()) return 1.0;
@@ -346,32 +346,29 @@ double CandidateMap::sceneScale(const std::vector<MapPoint>& all) const {
   return m > 0 ? m : 1.0;
 }
 
-bool CandidateMap::recluster() {
-  if (!dirty_) return false;
-  dirty_ = false;
+Clustering clusterMap(const ClusterInput& in) {
+  Clustering out;
+  out.map_id = in.map_id;
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<MapPoint> all;
-  all.reserve(points());
-  for (const auto& [kf, p] : by_keyframe_) all.insert(all.end(), p.begin(), p.end());
-  stats_ = ClusterStats{};
-  stats_.input_points = static_cast<int64_t>(all.size());
-  stats_.views = static_cast<int>(views_.size());
-  std::vector<Candidate> found;
-  ProposalOptions o = options_;
+  for (const auto& [kf, p] : in.by_keyframe) all.insert(all.end(), p.begin(), p.end());
+  out.stats.input_points = static_cast<int64_t>(all.size());
+  out.stats.views = static_cast<int>(in.views.size());
+  ProposalOptions o = in.options;
   bool has_support = false;
-  if (all.size() >= static_cast<size_t>(std::max(3, options_.min_points))) {
-    stats_.scene_scale = options_.relative_lengths ? sceneScale(all) : 1.0;
-    o = scaledLengths(options_, stats_.scene_scale);
-    const ViewPriors priors = viewPriors(views_);
-    stats_.look_at = priors.has_look_at;
+  if (all.size() >= static_cast<size_t>(std::max(3, in.options.min_points))) {
+    out.stats.scene_scale = in.options.relative_lengths ? sceneScale(in, all) : 1.0;
+    o = scaledLengths(in.options, out.stats.scene_scale);
+    const ViewPriors priors = viewPriors(in.views);
+    out.stats.look_at = priors.has_look_at;
     const size_t before = all.size();
     // A young map has few keyframes: ask for agreement of at most half of them.
-    const int keyframes = static_cast<int>(by_keyframe_.size());
+    const int keyframes = static_cast<int>(in.by_keyframe.size());
     const int min_keyframes = std::min(o.min_keyframes, std::max(1, keyframes / 2));
-    all = keepMultiView(by_keyframe_, o.multiview_voxel, min_keyframes);
-    stats_.single_view = static_cast<int64_t>(before - all.size());
+    all = keepMultiView(in.by_keyframe, o.multiview_voxel, min_keyframes);
+    out.stats.single_view = static_cast<int64_t>(before - all.size());
     all = cropRobust(all, o.crop_percentile, o.crop_margin);
-    stats_.cropped = static_cast<int64_t>(before) - stats_.single_view - static_cast<int64_t>(all.size());
+    out.stats.cropped = static_cast<int64_t>(before) - out.stats.single_view - static_cast<int64_t>(all.size());
     // Bounded cost: downsample until the map fits max_points.
     double voxel = o.voxel;
     std::vector<MapPoint> small = downsample(all, voxel);
@@ -379,39 +376,59 @@ bool CandidateMap::recluster() {
       voxel *= 1.26;
       small = downsample(all, voxel);
     }
-    stats_.voxel = voxel;
+    out.stats.voxel = voxel;
     std::vector<MapPoint> rest = std::move(small);
     const auto t1 = std::chrono::steady_clock::now();
-    stats_.filter_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    out.stats.filter_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     StructureStats ss;
-    rest = removeStructure(rest, views_, priors, o, &support_, &has_support, &ss);
+    rest = removeStructure(rest, in.views, priors, o, &out.support, &has_support, &ss);
     const auto t2 = std::chrono::steady_clock::now();
-    stats_.structure_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
-    stats_.planes = ss.planes;
-    stats_.plane_points = ss.structure_points;
-    stats_.support = has_support;
+    out.stats.structure_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
+    out.stats.planes = ss.planes;
+    out.stats.plane_points = ss.structure_points;
+    out.stats.support = has_support;
     if (has_support) {
       // What stands on the support: over its points' region and not higher than an object.
       std::vector<MapPoint> on;
       on.reserve(rest.size());
       for (const auto& m : rest) {
-        const float h = support_.plane.distance(m.p);
-        if (h > 0 && h <= o.max_height && support_.over(m.p, static_cast<float>(o.support_margin))) on.push_back(m);
+        const float h = out.support.plane.distance(m.p);
+        if (h > 0 && h <= o.max_height && out.support.over(m.p, static_cast<float>(o.support_margin))) on.push_back(m);
       }
       rest.swap(on);
     }
     int64_t seen_through = 0;
-    rest = removeSeenThrough(rest, by_keyframe_, keyframe_centres_, views_, o.free_space, &seen_through);
-    stats_.seen_through = seen_through;
-    stats_.clustered_points = static_cast<int64_t>(rest.size());
-    found = clusterPoints(rest, o);
-    if (has_support) standOnSupport(&found, support_.plane, o);
-    stats_.cluster_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
+    rest = removeSeenThrough(rest, in.by_keyframe, in.keyframe_centres, in.views, o.free_space, &seen_through);
+    out.stats.seen_through = seen_through;
+    out.stats.clustered_points = static_cast<int64_t>(rest.size());
+    out.found = clusterPoints(rest, o);
+    if (has_support) standOnSupport(&out.found, out.support.plane, o);
+    out.stats.cluster_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
   }
-  if (!has_support) support_ = Support{};
+  if (!has_support) out.support = Support{};
+  out.has_support = has_support;
+  out.key_voxel = 2 * o.radius;
+  out.stats.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+std::optional<ClusterInput> CandidateMap::takeClusterInput() {
+  if (!dirty_) return std::nullopt;
+  dirty_ = false;
+  return ClusterInput{map_id_, options_, by_keyframe_, keyframe_centres_, views_};
+}
+
+bool CandidateMap::recluster() {
+  std::optional<ClusterInput> in = takeClusterInput();
+  return in && adopt(clusterMap(*in));
+}
+
+bool CandidateMap::adopt(Clustering&& clustering) {
+  if (clustering.map_id != map_id_) return false;
+  std::vector<Candidate> found = std::move(clustering.found);
   // Stable ids: each new cluster takes the id of the old candidate it shares most voxels with
   // (one to one, greedily by overlap), if they share at least id_overlap.
-  const double key_voxel = 2 * o.radius;
+  const double key_voxel = clustering.key_voxel;
   std::vector<std::vector<int64_t>> old_keys, new_keys;
   for (const auto& c : candidates_) old_keys.push_back(voxelSet(c.points, key_voxel));
   for (const auto& c : found) new_keys.push_back(voxelSet(c.points, key_voxel));
@@ -438,8 +455,9 @@ bool CandidateMap::recluster() {
   for (auto& c : found)
     if (c.id < 0) c.id = (*ids_)++;
   candidates_ = std::move(found);
+  support_ = std::move(clustering.support);
+  stats_ = clustering.stats;
   stats_.clusters = static_cast<int>(candidates_.size());
-  stats_.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return true;
 }
 

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <vector>
 
 #include "common/geometry.h"
@@ -41,6 +42,30 @@ struct ClusterStats {
   double filter_ms = 0, structure_ms = 0, cluster_ms = 0;  ///< its parts: agreement + crop + grid, planes, clustering
 };
 
+/// What clustering a map needs of it (a copy: a worker thread can cluster it while the map goes on
+/// growing and its last candidates are projected).
+struct ClusterInput {
+  int32_t map_id = -1;
+  ProposalOptions options;
+  std::map<int32_t, std::vector<MapPoint>> by_keyframe;
+  std::map<int32_t, Eigen::Vector3f> keyframe_centres;
+  std::vector<View> views;
+};
+
+/// What clustering found; CandidateMap::adopt() gives the clusters their ids.
+struct Clustering {
+  int32_t map_id = -1;
+  std::vector<Candidate> found;  ///< ids not assigned
+  Support support;
+  bool has_support = false;
+  ClusterStats stats;
+  double key_voxel = 0;  ///< voxel for associating the clusters with the previous candidates
+};
+
+/// Filters and clusters a map (the heavy part of CandidateMap::recluster(); no state, so it may
+/// run on any thread).
+Clustering clusterMap(const ClusterInput& input);
+
 class CandidateMap {
  public:
   /// `ids`: where new candidate ids come from (shared by several maps so that ids are unique
@@ -60,7 +85,14 @@ class CandidateMap {
   /// from these). Poses of another map than the current one are ignored.
   void addView(int32_t map_id, const SE3& T_world_camera);
   /// Re-runs filtering and clustering when the map changed since the last call; true if it ran.
+  /// The same as adopt(clusterMap(*takeClusterInput())).
   bool recluster();
+  /// A copy of what clustering needs when the map changed since the last call (it then counts as
+  /// clustered), else nothing.
+  std::optional<ClusterInput> takeClusterInput();
+  /// Takes a clustering of this map as the candidates: each cluster keeps the id of the candidate
+  /// it shares most voxels with. False (nothing changes) when it is of another map id.
+  bool adopt(Clustering&& clustering);
 
   int32_t mapId() const { return map_id_; }
   const std::vector<Candidate>& candidates() const { return candidates_; }
@@ -71,7 +103,6 @@ class CandidateMap {
 
  private:
   void resetMap(int32_t map_id);
-  double sceneScale(const std::vector<MapPoint>& all) const;
 
   ProposalOptions options_;
   int32_t map_id_ = -1;

@@ -1,6 +1,8 @@
 #include "procs/proposals/proposal_engine.h"
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
 
 #include "common/bus/image_msg.h"
 
@@ -56,6 +58,39 @@ bool ProposalEngine::onMap(const point_cloud_t& c, std::string* why) {
   return true;
 }
 
+ProposalEngine::~ProposalEngine() {
+  if (job_.valid()) job_.wait();
+}
+
+bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
+  // A growing map is clustered again at most every recluster_interval_s of frame time (the
+  // message clock: lockstep replays stay deterministic); in between, the last candidates are
+  // projected. A map's first points are clustered at once, and a clock that goes back (a replay
+  // started again) is due at once.
+  auto last = reclustered_utime_.find(pose.map_id);
+  const bool due = last == reclustered_utime_.end() || pose.utime < last->second ||
+                   static_cast<double>(pose.utime - last->second) >= 1e6 * options_.recluster_interval_s;
+  if (!background_) {
+    if (!due || !map.recluster()) return false;
+    reclustered_utime_[pose.map_id] = pose.utime;
+    return true;
+  }
+  bool taken = false;
+  if (job_.valid() && job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    Clustering done = job_.get();
+    // Its map may have been dropped or started over (another map id) meanwhile.
+    const auto it = maps_.find(done.map_id);
+    taken = it != maps_.end() && it->second.adopt(std::move(done));
+  }
+  if (!job_.valid() && due) {
+    if (std::optional<ClusterInput> input = map.takeClusterInput()) {
+      reclustered_utime_[pose.map_id] = pose.utime;
+      job_ = std::async(std::launch::async, [in = std::move(*input)] { return clusterMap(in); });
+    }
+  }
+  return taken;
+}
+
 proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* reclustered) {
   proposals_t m{};
   m.utime = pose.utime;
@@ -74,17 +109,7 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
   if (!maps_.count(pose.map_id)) return m;  // no point of that map yet
   CandidateMap& map = mapOf(pose.map_id);
   map.addView(pose.map_id, T_wc);
-  // A growing map is clustered again at most every recluster_interval_s of frame time (the
-  // message clock: lockstep replays stay deterministic); in between, the last candidates are
-  // projected. A map's first points are clustered at once, and a clock that goes back (a replay
-  // started again) is due at once.
-  auto last = reclustered_utime_.find(pose.map_id);
-  const bool due = last == reclustered_utime_.end() || pose.utime < last->second ||
-                   static_cast<double>(pose.utime - last->second) >= 1e6 * options_.recluster_interval_s;
-  if (due && map.recluster()) {
-    reclustered_utime_[pose.map_id] = pose.utime;
-    if (reclustered) *reclustered = true;
-  }
+  if (recluster(map, pose) && reclustered) *reclustered = true;
   for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, &last_)) {
     box_t bx{};
     bx.x = b.x;

@@ -2,6 +2,12 @@
 // The proposals stage without the bus: CAMERA_INFO, SLAM_MAP and SLAM_POSE messages in, one
 // PROPOSALS message per pose out. The node feeds it from LCM; the evaluator feeds it from a
 // recorded log to re-run proposals with other options.
+//
+// Clustering a grown map takes 50-200 ms. In lockstep it runs before the frame's boxes are
+// projected (deterministic). With background clustering (the node in real time) it runs on a
+// worker thread from a copy of the map while the frames go on with the last candidates; a finished
+// clustering is taken at the next pose. Boxes then never wait for a clustering.
+#include <future>
 #include <map>
 #include <string>
 #include <vector>
@@ -18,7 +24,11 @@ namespace slamaware {
 
 class ProposalEngine {
  public:
-  explicit ProposalEngine(const ProposalOptions& options) : options_(options) {}
+  /// background_clustering: cluster on a worker thread (real time); false: in onPose (lockstep,
+  /// the evaluator, tests).
+  explicit ProposalEngine(const ProposalOptions& options, bool background_clustering = false)
+      : options_(options), background_(background_clustering) {}
+  ~ProposalEngine();
 
   /// False (and *why naming the message) for a camera that cannot be used.
   bool onCameraInfo(const camera_info_t& info, std::string* why);
@@ -26,7 +36,8 @@ class ProposalEngine {
   bool onMap(const point_cloud_t& cloud, std::string* why);
   /// The proposals of one frame: empty when the frame is not localised, its pose is not finite
   /// (*why is set), no camera is known yet, or nothing is in view. Re-clusters first when the
-  /// map changed (*reclustered = true).
+  /// map changed (*reclustered = true; with background clustering: a clustering finished and was
+  /// taken).
   proposals_t onPose(const pose_t& pose, std::string* why, bool* reclustered = nullptr);
 
   /// The candidates of the map the last pose was in (SLAM may go back to an older map: the
@@ -37,6 +48,9 @@ class ProposalEngine {
  private:
   ProposalOptions options_;
   CandidateMap& mapOf(int32_t map_id);
+  /// Clusters `map` when due: at once, or (background) takes a finished clustering and starts the
+  /// next one. True when new candidates were taken.
+  bool recluster(CandidateMap& map, const pose_t& pose);
 
   std::map<int32_t, CandidateMap> maps_;
   std::vector<int32_t> recent_;  ///< map ids, most recently used last
@@ -46,6 +60,8 @@ class ProposalEngine {
   CameraModel camera_;
   bool have_camera_ = false;
   ProjectionStats last_;
+  bool background_ = false;
+  std::future<Clustering> job_;  ///< the clustering running on the worker thread (background)
 };
 
 }  // namespace slamaware

@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("proposals"), ch.statusOf(node.nameOr("proposals")));
-    ProposalEngine engine(opts);
+    // Real time: clustering on a worker thread, so that no frame's boxes wait for it.
+    ProposalEngine engine(opts, /*background_clustering=*/!lockstep);
 
     bus.subscribe<camera_info_t>(
         ch.camera_info,

@@ -3,6 +3,9 @@
 // input (empty map, one point, NaN points, LOST or non-finite poses, malformed clouds).
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
+
 #include <cmath>
 #include <set>
 
@@ -282,6 +285,49 @@ TEST(ProposalEngineInput, AGrowingMapIsReclusteredAtMostOncePerInterval) {
   EXPECT_EQ(boxes, 2) << "the second object appears once the interval has passed";
   std::tie(ran, boxes) = step(30);
   EXPECT_FALSE(ran) << "no change, no clustering";
+}
+
+// Real time: clustering runs on a worker thread; the frames go on meanwhile (with the last
+// candidates: none at first) and the finished clustering gives the boxes clustering at once gives.
+TEST(ProposalEngineInput, BackgroundClusteringGivesTheSameBoxesWithoutHoldingFrames) {
+  ProposalOptions o = metricOptions();
+  o.recluster_interval_s = 0;
+  ProposalEngine now(o), background(o, /*background_clustering=*/true);
+  std::string why;
+  const SE3 T = lookingDown(1.0);
+  const auto scene = join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f),
+                                                    cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f)));
+  for (ProposalEngine* e : {&now, &background}) {
+    ASSERT_TRUE(e->onCameraInfo(vgaInfo(), &why)) << why;
+    ASSERT_TRUE(e->onMap(cloudMessage(1, scene), &why)) << why;
+  }
+  const proposals_t expected = now.onPose(poseMessage(0, pose_t::STATE_TRACKING, T), &why);
+  ASSERT_EQ(expected.num_boxes, 2);
+  bool taken = false;
+  proposals_t m = background.onPose(poseMessage(0, pose_t::STATE_TRACKING, T), &why, &taken);
+  EXPECT_FALSE(taken);
+  EXPECT_EQ(m.num_boxes, 0) << "the first frame does not wait for the clustering";
+  for (int seq = 1; seq < 2000 && !taken; ++seq) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    m = background.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &taken);
+  }
+  ASSERT_TRUE(taken) << "the clustering never finished";
+  ASSERT_EQ(m.num_boxes, expected.num_boxes);
+  for (int i = 0; i < m.num_boxes; ++i) {
+    EXPECT_EQ(m.candidate_ids[i], expected.candidate_ids[i]);
+    EXPECT_FLOAT_EQ(m.boxes[i].x, expected.boxes[i].x);
+    EXPECT_FLOAT_EQ(m.boxes[i].w, expected.boxes[i].w);
+  }
+  // A new map id while nothing runs: its clustering is taken for it, the old map's is not lost.
+  ASSERT_TRUE(background.onMap(cloudMessage(2, scene), &why)) << why;
+  taken = false;
+  for (int seq = 2000; seq < 4000 && !taken; ++seq) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    m = background.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T, 2), &why, &taken);
+  }
+  ASSERT_TRUE(taken);
+  EXPECT_EQ(m.num_boxes, 2);
+  EXPECT_EQ(m.map_id, 2);
 }
 
 TEST(ShippedConfig, ProposalsYamlEqualsDefaults) {
