@@ -421,6 +421,17 @@ TEST(MultiViewLabels, CandidatesOfOneObjectShareItsPosterior) {
   EXPECT_EQ(std::max_element(pa.begin(), pa.end()) - pa.begin(), objects[0].cls);
   // The bowl is an object of its own.
   EXPECT_NE(labeller.engine().objectOfCandidate(1, objects[1].candidate), a);
+
+  // The object map summary: every object labelled, none dominant (several objects apart).
+  const nlohmann::json summary = objectMapSummary(labeller.engine());
+  EXPECT_EQ(summary["objects"].get<int>(), static_cast<int>(labeller.engine().numObjects()));
+  EXPECT_EQ(summary["labelled_objects"], summary["objects"]);
+  EXPECT_EQ(summary["segments"].get<int>(), 1);
+  const double share = summary["largest_object_share"].get<double>();
+  EXPECT_GT(share, 0.0);
+  EXPECT_LT(share, 70.0) << "the mug is not most of a scene of several objects";
+  EXPECT_GE(summary["largest_object_voxels"].get<int>(), a->num_voxels);
+  EXPECT_GT(summary["main_segment_object_voxels"].get<int>(), summary["largest_object_voxels"].get<int>());
 }
 
 // A candidate the object map does not hold (its only box was refused: a log-probability above 0)

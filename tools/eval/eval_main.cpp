@@ -80,8 +80,18 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
     fs::create_directories(d);
     writeBoxesCsv(rr, (d / (name + ".csv")).string());
   }
+  out["object_map"] = rr.object_map;
+  if (!seq.hasBoxes()) {
+    spdlog::info("{}: object map: {} objects; in its main segment the largest holds {} of the {} object voxels; "
+                 "no ground-truth boxes: no single_view / multi_view", name, rr.object_map["objects"].dump(),
+                 rr.object_map["largest_object_voxels"].dump(), rr.object_map["main_segment_object_voxels"].dump());
+    return {};
+  }
   RecognitionResult res = scoreRecognition(rr, seq, RecognitionEvalOptions{});
   if (res.classes.empty()) {
+    spdlog::info("{}: object map: {} objects; in its main segment the largest holds {} of the {} object voxels", name,
+                 rr.object_map["objects"].dump(), rr.object_map["largest_object_voxels"].dump(),
+                 rr.object_map["main_segment_object_voxels"].dump());
     spdlog::info("{}: none of the model's classes is in the sequence: no single_view / multi_view", name);
     return res;
   }
@@ -228,7 +238,7 @@ int main(int argc, char** argv) {
           spdlog::info("{}: proposals recall {:.1f}% at IoU 0.5 ({:.1f}% at 0.7), {} boxes per frame", name,
                        p.value("recall_iou50", 0.0), p.value("recall_iou70", 0.0), p.value("boxes_per_frame", 0.0));
         }
-        if (!offline && seq.hasBoxes()) {
+        if (!offline) {
           const RecognitionResult res =
               recognitionSections(name, seq, log, system.channels, objectmap_options, out_dir, dump_boxes,
                                   report["sequences"][name]);

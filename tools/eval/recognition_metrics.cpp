@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <set>
 #include <tuple>
 #include <opencv2/imgproc.hpp>
 
@@ -373,6 +374,46 @@ std::vector<double> multiViewScores(const std::vector<double>& fused, const std:
   return out;
 }
 
+nlohmann::json objectMapSummary(const ObjectMapEngine& engine) {
+  const std::vector<std::string>& classes = engine.classes();
+  int objects = 0, labelled = 0;
+  size_t best_union = 0, best_largest = 0;
+  int best_objects = 0;
+  int32_t best_segment = -1;
+  for (const auto& [id, seg] : engine.segments()) {
+    std::set<VoxelKey> all;
+    size_t largest = 0;
+    for (const auto& [oid, o] : seg->table.objects()) {
+      ++objects;
+      labelled += o.label >= 0 && static_cast<size_t>(o.label) < classes.size() &&
+                  classes[static_cast<size_t>(o.label)] != kBackgroundClass;
+      std::set<VoxelKey> own;
+      for (int32_t c : o.candidates) {
+        const auto& v = seg->table.candidates().at(c).voxels;
+        own.insert(v.begin(), v.end());
+      }
+      largest = std::max(largest, own.size());
+      all.insert(own.begin(), own.end());
+    }
+    if (all.size() > best_union) {
+      best_union = all.size();
+      best_largest = largest;
+      best_objects = static_cast<int>(seg->table.objects().size());
+      best_segment = id;
+    }
+  }
+  nlohmann::json j;
+  j["segments"] = engine.segments().size();
+  j["objects"] = objects;
+  j["labelled_objects"] = labelled;
+  j["main_segment"] = best_segment;
+  j["main_segment_objects"] = best_objects;
+  j["main_segment_object_voxels"] = best_union;
+  j["largest_object_voxels"] = best_largest;
+  j["largest_object_share"] = percentOrNull(static_cast<double>(best_largest), static_cast<double>(best_union));
+  return j;
+}
+
 // ---- A sequence ------------------------------------------------------------------------------
 
 RecognitionRecording readRecognitionRecording(const std::string& log_path, const Channels& ch,
@@ -451,6 +492,7 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
       b.object = o && b.multi_from_object ? o->id : -1;
     }
   run.objects = static_cast<int>(labeller.engine().numObjects());
+  run.object_map = objectMapSummary(labeller.engine());
   run.candidates = static_cast<int>(labeller.engine().numCandidates());
   if (have_node_map) {
     // The node fused the same messages in lockstep: the replay must give its objects (labels,

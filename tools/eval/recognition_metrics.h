@@ -153,6 +153,7 @@ struct RecognitionRecording {
   std::map<int32_t, std::vector<Box>> frames;
   int objects = 0;  ///< objects of the object map at the end
   int candidates = 0;
+  nlohmann::json object_map;  ///< objectMapSummary() of the replayed map at the end
   /// The replay against the node: 1 when the replayed map's objects (labels, views, voxels) equal
   /// those of the last OBJECT_MAP the objectmap node published, 0 when not, -1 when the recording
   /// has no OBJECT_MAP.
@@ -160,6 +161,12 @@ struct RecognitionRecording {
 
   bool empty() const { return classes.empty(); }
 };
+
+/// What the object map holds (the "object_map" section of a sequence): segments, objects,
+/// labelled objects, and in the segment whose objects hold the most voxels: its objects, the voxels
+/// they hold together (union) and the share of them the largest object holds — near 100 % when the
+/// scene is one object and its parts lie in it (the Middlebury temple), so "one dominant object".
+nlohmann::json objectMapSummary(const ObjectMapEngine& engine);
 
 /// The multi-view detection scores of a box (log, in the model's class order, background last)
 /// from its object's fused posterior and its own view: p(c) = p(c | object's views) x (1 -
