@@ -102,7 +102,7 @@ void recognitionTables(const nlohmann::json& report, std::ostringstream& md) {
     md << paper;
     const nlohmann::json& fused = at(multi, "fused_posterior_only");
     if (!fused.is_null())
-      md << "| multi-view ranked by p(class | object) alone | | | " << pct(at(fused, "mAP")) << " | | | | "
+      md << "| multi-view ranked by the fused posterior alone | | | " << pct(at(fused, "mAP")) << " | | | | "
          << pct(at(fused, "recall")) << " |\n";
     md << "\n";
     md << plotLink(at(single, "plot"), "precision-recall per class, synthetic suite");
