@@ -130,9 +130,23 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
     voxels[uf.find(ri)] = std::move(merged);
   }
   // A group without voxels yet (seen, but not from enough localised views) whose boxes put it
-  // inside the bounds of a group of its class joins that group (the first, in order).
+  // inside the bounds of a group of its class joins that group (the first, in order). Bounds are
+  // those of the merged groups above (joining adds no voxel).
+  std::vector<bool> has_voxels(groups.size());
+  std::vector<Eigen::Vector3d> lo(groups.size()), hi(groups.size());
+  const Eigen::Vector3d half = Eigen::Vector3d::Constant(resolution_ / 2);
+  for (size_t h = 0; h < groups.size(); ++h) {
+    const std::vector<VoxelKey>& v = voxels[uf.find(h)];
+    has_voxels[h] = !v.empty();
+    lo[h] = Eigen::Vector3d::Constant(1e300);
+    hi[h] = -lo[h];
+    for (VoxelKey k : v) {
+      lo[h] = lo[h].cwiseMin(voxelCentre(k, resolution_) - half);
+      hi[h] = hi[h].cwiseMax(voxelCentre(k, resolution_) + half);
+    }
+  }
   for (size_t g = 0; g < groups.size(); ++g) {
-    if (!voxels[g].empty() || label[g] < 0 || label[g] == background) continue;
+    if (has_voxels[g] || label[g] < 0 || label[g] == background) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     int32_t n = 0;
     for (int32_t cid : groups[g]) {
@@ -141,22 +155,12 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
     }
     if (n == 0) continue;
     const Eigen::Vector3d p = sum / n;
-    for (size_t h = 0; h < groups.size(); ++h) {
-      const std::vector<VoxelKey>& v = voxels[uf.find(h)];
-      if (h == g || label[h] != label[g] || v.empty() || uf.find(h) == uf.find(g)) continue;
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-      for (VoxelKey k : v) {
-        lo = lo.cwiseMin(voxelCentre(k, resolution_));
-        hi = hi.cwiseMax(voxelCentre(k, resolution_));
-      }
-      const Eigen::Vector3d half = Eigen::Vector3d::Constant(resolution_ / 2);
-      if (((p - (lo - half)).array() >= 0).all() && (((hi + half) - p).array() >= 0).all()) {
-        const size_t rh = uf.find(h);
+    for (size_t h = 0; h < groups.size(); ++h)
+      if (has_voxels[h] && label[h] == label[g] && ((p - lo[h]).array() >= 0).all() &&
+          ((hi[h] - p).array() >= 0).all()) {
         uf.unite(g, h);
-        if (uf.find(h) != rh) voxels[uf.find(h)] = std::move(voxels[rh]);  // the union's voxels at its root
         break;
       }
-    }
   }
   std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index: groups stay in order
   for (size_t g = 0; g < groups.size(); ++g) {

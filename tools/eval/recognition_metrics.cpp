@@ -474,22 +474,28 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
   }
   if (run.classes.empty()) return run;
   // The labels at the end of the sequence.
-  std::map<std::pair<int32_t, int32_t>, std::pair<std::vector<double>, bool>> cache;
+  struct Label {
+    std::vector<double> log_p;
+    bool from_object = false;
+    int32_t object = -1;
+  };
+  std::map<std::pair<int32_t, int32_t>, Label> cache;  // (map, candidate) -> its label
   for (auto& [seq, boxes] : run.frames)
     for (auto& b : boxes) {
       auto it = cache.find({b.map_id, b.candidate});
       if (it == cache.end()) {
-        bool from_object = false;
-        std::vector<double> lp = labeller.logPosterior(b.map_id, b.candidate, run.classes, &from_object);
-        it = cache.emplace(std::make_pair(b.map_id, b.candidate), std::make_pair(std::move(lp), from_object)).first;
+        Label l;
+        l.log_p = labeller.logPosterior(b.map_id, b.candidate, run.classes, &l.from_object);
+        const Object* o = labeller.engine().objectOfCandidate(b.map_id, b.candidate);
+        l.object = o && l.from_object ? o->id : -1;
+        it = cache.emplace(std::make_pair(b.map_id, b.candidate), std::move(l)).first;
       }
       b.fused.box = b.single.box;
-      b.fused.log_p = it->second.first;
+      b.fused.log_p = it->second.log_p;
       b.multi.log_p = multiViewScores(b.fused.log_p, b.single.log_p);
       b.multi.label = argmaxOf(b.fused.log_p);
-      b.multi_from_object = it->second.second;
-      const Object* o = labeller.engine().objectOfCandidate(b.map_id, b.candidate);
-      b.object = o && b.multi_from_object ? o->id : -1;
+      b.multi_from_object = it->second.from_object;
+      b.object = it->second.object;
     }
   run.objects = static_cast<int>(labeller.engine().numObjects());
   run.object_map = objectMapSummary(labeller.engine());
