@@ -26,6 +26,53 @@ struct UnionFind {
   }
 };
 
+/// Joins items whose voxels overlap (the grouping of candidates, and the merging of same-label
+/// groups): every pair of items that shares voxels and that `listed(i, j, shared)` admits is tried in
+/// ascending `rank(shared, na, nb)` (then i, j), and the groups of the two are joined when their voxel
+/// unions pass `joins(shared, na, nb)` (tested on unions, so a chain of small overlaps cannot grow a
+/// group that swallows what lies in it). `voxels[i]`: item i's sorted voxels. Returns the union of
+/// each joined root (a root not in it has its item's own voxels).
+std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
+    const std::vector<const std::vector<VoxelKey>*>& voxels, UnionFind& uf,
+    const std::function<bool(size_t, size_t, size_t)>& listed,
+    const std::function<double(size_t, size_t, size_t)>& rank,
+    const std::function<bool(size_t, size_t, size_t)>& joins) {
+  std::unordered_map<VoxelKey, std::vector<size_t>> owners;
+  for (size_t i = 0; i < voxels.size(); ++i)
+    for (VoxelKey k : *voxels[i]) owners[k].push_back(i);
+  std::map<std::pair<size_t, size_t>, size_t> shared;
+  for (const auto& [key, list] : owners)
+    for (size_t a = 0; a < list.size(); ++a)
+      for (size_t b = a + 1; b < list.size(); ++b) ++shared[{list[a], list[b]}];
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  for (const auto& [pair, n] : shared)
+    if (listed(pair.first, pair.second, n))
+      pairs.emplace_back(rank(n, voxels[pair.first]->size(), voxels[pair.second]->size()), pair.first, pair.second);
+  std::sort(pairs.begin(), pairs.end());
+  std::map<size_t, std::vector<VoxelKey>> unions;  // by root, sorted
+  auto voxelsOf = [&](size_t root) -> std::vector<VoxelKey>& {
+    auto it = unions.find(root);
+    if (it == unions.end()) it = unions.emplace(root, *voxels[root]).first;
+    return it->second;
+  };
+  for (const auto& [r, i, j] : pairs) {
+    const size_t ri = uf.find(i), rj = uf.find(j);
+    if (ri == rj) continue;
+    std::vector<VoxelKey>& a = voxelsOf(ri);
+    std::vector<VoxelKey>& b = voxelsOf(rj);
+    std::vector<VoxelKey> both;
+    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
+    if (!joins(both.size(), a.size(), b.size())) continue;
+    std::vector<VoxelKey> merged;
+    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
+    unions.erase(ri);
+    unions.erase(rj);
+    uf.unite(ri, rj);
+    unions[uf.find(ri)] = std::move(merged);
+  }
+  return unions;
+}
+
 }  // namespace
 
 void ObjectTable::addView(int32_t candidate, View view) {
@@ -91,44 +138,25 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
     std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
     const std::function<int(const std::vector<int32_t>&)>& label_of, int background) const {
   std::vector<int> label(groups.size());
-  std::vector<std::vector<VoxelKey>> voxels(groups.size());
-  std::unordered_map<VoxelKey, std::vector<size_t>> owners;
+  std::vector<std::vector<VoxelKey>> own(groups.size());  // empty for background groups
   for (size_t g = 0; g < groups.size(); ++g) {
     label[g] = label_of(groups[g]);
     if (label[g] < 0 || label[g] == background) continue;
     std::set<VoxelKey> u;
     for (int32_t cid : groups[g]) u.insert(candidates_.at(cid).voxels.begin(), candidates_.at(cid).voxels.end());
-    voxels[g].assign(u.begin(), u.end());
-    for (VoxelKey k : voxels[g]) owners[k].push_back(g);
+    own[g].assign(u.begin(), u.end());
   }
-  std::map<std::pair<size_t, size_t>, size_t> shared;
-  for (const auto& [key, list] : owners)
-    for (size_t a = 0; a < list.size(); ++a)
-      for (size_t b = a + 1; b < list.size(); ++b)
-        if (label[list[a]] == label[list[b]]) ++shared[{list[a], list[b]}];
-  // Most overlapping first; merged groups keep their label (a sum of evidence that two groups
-  // both call c is called c), and are tested again by their voxel unions.
-  std::vector<std::tuple<double, size_t, size_t>> pairs;
-  for (const auto& [pair, n] : shared)
-    pairs.emplace_back(-static_cast<double>(n) /
-                           static_cast<double>(std::min(voxels[pair.first].size(), voxels[pair.second].size())),
-                       pair.first, pair.second);
-  std::sort(pairs.begin(), pairs.end());
+  std::vector<const std::vector<VoxelKey>*> sets;
+  for (const auto& v : own) sets.push_back(&v);
   UnionFind uf(groups.size());
-  for (const auto& [neg, i, j] : pairs) {
-    const size_t ri = uf.find(i), rj = uf.find(j);
-    if (ri == rj) continue;
-    std::vector<VoxelKey>& a = voxels[ri];
-    std::vector<VoxelKey>& b = voxels[rj];
-    std::vector<VoxelKey> both;
-    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
-    if (static_cast<double>(both.size()) < grouping.same_label_overlap * static_cast<double>(std::min(a.size(), b.size())))
-      continue;
-    std::vector<VoxelKey> merged;
-    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
-    uf.unite(ri, rj);
-    voxels[uf.find(ri)] = std::move(merged);
-  }
+  // Most overlapping (share of the smaller) first; joined groups keep their label (a sum of
+  // evidence that two groups both call c is called c).
+  const auto unions = joinOverlapping(
+      sets, uf, [&](size_t i, size_t j, size_t) { return label[i] == label[j]; },
+      [](size_t n, size_t na, size_t nb) { return -static_cast<double>(n) / static_cast<double>(std::min(na, nb)); },
+      [&](size_t n, size_t na, size_t nb) {
+        return static_cast<double>(n) >= grouping.same_label_overlap * static_cast<double>(std::min(na, nb));
+      });
   // A group without voxels yet (seen, but not from enough localised views) whose boxes put it
   // inside the bounds of a group of its class joins that group (the first, in order). Bounds are
   // those of the merged groups above (joining adds no voxel).
@@ -136,7 +164,8 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
   std::vector<Eigen::Vector3d> lo(groups.size()), hi(groups.size());
   const Eigen::Vector3d half = Eigen::Vector3d::Constant(resolution_ / 2);
   for (size_t h = 0; h < groups.size(); ++h) {
-    const std::vector<VoxelKey>& v = voxels[uf.find(h)];
+    const auto joined = unions.find(uf.find(h));
+    const std::vector<VoxelKey>& v = joined != unions.end() ? joined->second : own[uf.find(h)];
     has_voxels[h] = !v.empty();
     lo[h] = Eigen::Vector3d::Constant(1e300);
     hi[h] = -lo[h];
@@ -191,74 +220,50 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     std::sort(c.voxels.begin(), c.voxels.end());
   }
   // 2. Groups: pairs of candidates sharing voxels, most overlapping (IoU) first; two groups merge
-  // when their voxel unions pass the test, so a chain of small overlaps cannot grow a group that
-  // swallows what lies in it.
-  std::unordered_map<VoxelKey, std::vector<size_t>> owners;
-  for (size_t i = 0; i < cands.size(); ++i)
-    for (VoxelKey k : cands[i]->voxels) owners[k].push_back(i);
-  std::map<std::pair<size_t, size_t>, size_t> shared;
-  for (const auto& [key, list] : owners)
-    for (size_t a = 0; a < list.size(); ++a)
-      for (size_t b = a + 1; b < list.size(); ++b) ++shared[{list[a], list[b]}];
+  // when their voxel unions pass the test.
   auto passes = [&](size_t inter, size_t na, size_t nb) {
     const double small = static_cast<double>(std::min(na, nb));
     const double large = static_cast<double>(std::max(na, nb));
     return small > 0 && static_cast<double>(inter) >= grouping.merge_overlap * small &&
            small >= grouping.merge_size_ratio * large;
   };
-  std::vector<std::tuple<double, size_t, size_t>> pairs;  // (-IoU, i, j)
-  for (const auto& [pair, n] : shared) {
-    const size_t na = cands[pair.first]->voxels.size(), nb = cands[pair.second]->voxels.size();
-    if (passes(n, na, nb))
-      pairs.emplace_back(-static_cast<double>(n) / static_cast<double>(na + nb - n), pair.first,
-                         pair.second);
-  }
-  std::sort(pairs.begin(), pairs.end());
+  std::vector<const std::vector<VoxelKey>*> sets;
+  for (const Candidate* c : cands) sets.push_back(&c->voxels);
   UnionFind uf(cands.size());
-  std::map<size_t, std::vector<VoxelKey>> group_voxels;  // by root, sorted
-  auto voxelsOf = [&](size_t root) -> std::vector<VoxelKey>& {
-    auto it = group_voxels.find(root);
-    if (it == group_voxels.end()) it = group_voxels.emplace(root, cands[root]->voxels).first;
-    return it->second;
-  };
-  for (const auto& [neg_iou, i, j] : pairs) {
-    const size_t ri = uf.find(i), rj = uf.find(j);
-    if (ri == rj) continue;
-    std::vector<VoxelKey>& a = voxelsOf(ri);
-    std::vector<VoxelKey>& b = voxelsOf(rj);
-    std::vector<VoxelKey> both;
-    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
-    if (!passes(both.size(), a.size(), b.size())) continue;
-    std::vector<VoxelKey> merged;
-    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
-    group_voxels.erase(ri);
-    group_voxels.erase(rj);
-    uf.unite(ri, rj);
-    group_voxels[uf.find(ri)] = std::move(merged);
-  }
+  joinOverlapping(
+      sets, uf, [&](size_t i, size_t j, size_t n) { return passes(n, sets[i]->size(), sets[j]->size()); },
+      [](size_t n, size_t na, size_t nb) { return -static_cast<double>(n) / static_cast<double>(na + nb - n); },
+      passes);
   std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index = lowest candidate id
   for (size_t i = 0; i < cands.size(); ++i) by_root[uf.find(i)].push_back(cands[i]->id);
   std::vector<std::vector<int32_t>> groups;
   for (auto& [root, members] : by_root) groups.push_back(std::move(members));
 
-  // The views of a group: one per frame (the larger box).
-  auto viewsOf = [&](const std::vector<int32_t>& members) {
+  // The views of a group (one per frame: the larger box) and their evidence, computed once per
+  // group (the label of the groups below, and the objects of step 4).
+  struct Fused {
     std::map<ViewKey, const View*> views;
+    std::vector<double> evidence;
+  };
+  std::map<std::vector<int32_t>, Fused> fused;
+  auto fusionOf = [&](const std::vector<int32_t>& members) -> const Fused& {
+    auto [it, inserted] = fused.try_emplace(members);
+    if (!inserted) return it->second;
+    Fused& f = it->second;
     for (int32_t cid : members)
       for (const auto& [key, v] : candidates_.at(cid).views) {
-        auto [it, inserted] = views.emplace(key, &v);
-        if (!inserted && v.area > it->second->area) it->second = &v;
+        auto [view, added] = f.views.emplace(key, &v);
+        if (!added && v.area > view->second->area) view->second = &v;
       }
-    return views;
-  };
-  auto evidenceOf = [&](const std::map<ViewKey, const View*>& views) {
     std::vector<const std::vector<float>*> evidence;
-    for (const auto& [key, v] : views) evidence.push_back(&v->log_prob);
-    return sumLogProbabilities(evidence, num_classes, objectness_weights);
+    for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
+    f.evidence = sumLogProbabilities(evidence, num_classes, objectness_weights);
+    return f;
   };
-  if (grouping.same_label_overlap > 0 && num_classes > 1) groups = mergeSameLabel(groups, grouping, [&](const auto& m) {
-    return argmaxClass(evidenceOf(viewsOf(m)));
-  }, static_cast<int>(num_classes) - 1);
+  if (grouping.same_label_overlap > 0 && num_classes > 1)
+    groups = mergeSameLabel(
+        groups, grouping, [&](const auto& m) { return argmaxClass(fusionOf(m).evidence); },
+        static_cast<int>(num_classes) - 1);
 
   // 3. Stable ids: greedily give each previous object's id to the group sharing most of its
   // candidates (ties: lower previous id, then earlier group); the other groups get new ids.
@@ -290,7 +295,8 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     Object o;
     o.id = group_id[g];
     o.candidates = groups[g];
-    const std::map<ViewKey, const View*> views = viewsOf(o.candidates);
+    const Fused& f = fusionOf(o.candidates);
+    const std::map<ViewKey, const View*>& views = f.views;
     std::set<VoxelKey> voxels;
     Eigen::Vector3d box_sum = Eigen::Vector3d::Zero();
     int32_t box_n = 0;
@@ -302,7 +308,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
       box_n += c.box_positions;
       box_size = std::max(box_size, c.box_size);
     }
-    o.log_evidence = evidenceOf(views);
+    o.log_evidence = f.evidence;
     o.posterior = posteriorFromLogEvidence(o.log_evidence);
     o.label = argmaxClass(o.log_evidence);
     o.num_views = static_cast<int32_t>(views.size());

@@ -326,7 +326,7 @@ size_t CandidateMap::points() const {
 // The median distance at which the map's points were seen: from their keyframe's centre when it
 // is known, else from the views' mean centre. Monocular maps have no metric scale; this is the
 // length every option is relative to.
-static double sceneScale(const ClusterInput& in, const std::vector<MapPoint>& all) {
+static double sceneScale(const ClusterInputRef& in, const std::vector<MapPoint>& all) {
   std::vector<float> range;
   range.reserve(all.size() / 4 + 1);
   for (const auto& [kf, pts] : in.by_keyframe) {
@@ -347,6 +347,10 @@ static double sceneScale(const ClusterInput& in, const std::vector<MapPoint>& al
 }
 
 Clustering clusterMap(const ClusterInput& in) {
+  return clusterMap(ClusterInputRef{in.map_id, in.options, in.by_keyframe, in.keyframe_centres, in.views});
+}
+
+Clustering clusterMap(const ClusterInputRef& in) {
   Clustering out;
   out.map_id = in.map_id;
   const auto t0 = std::chrono::steady_clock::now();
@@ -406,7 +410,6 @@ Clustering clusterMap(const ClusterInput& in) {
     out.stats.cluster_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
   }
   if (!has_support) out.support = Support{};
-  out.has_support = has_support;
   out.key_voxel = 2 * o.radius;
   out.stats.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
@@ -419,8 +422,9 @@ std::optional<ClusterInput> CandidateMap::takeClusterInput() {
 }
 
 bool CandidateMap::recluster() {
-  std::optional<ClusterInput> in = takeClusterInput();
-  return in && adopt(clusterMap(*in));
+  if (!dirty_) return false;
+  dirty_ = false;
+  return adopt(clusterMap(ClusterInputRef{map_id_, options_, by_keyframe_, keyframe_centres_, views_}));
 }
 
 bool CandidateMap::adopt(Clustering&& clustering) {

@@ -52,18 +52,27 @@ struct ClusterInput {
   std::vector<View> views;
 };
 
+/// The same, without copying (CandidateMap::recluster() clusters its own map in place).
+struct ClusterInputRef {
+  int32_t map_id;
+  const ProposalOptions& options;
+  const std::map<int32_t, std::vector<MapPoint>>& by_keyframe;
+  const std::map<int32_t, Eigen::Vector3f>& keyframe_centres;
+  const std::vector<View>& views;
+};
+
 /// What clustering found; CandidateMap::adopt() gives the clusters their ids.
 struct Clustering {
   int32_t map_id = -1;
   std::vector<Candidate> found;  ///< ids not assigned
   Support support;
-  bool has_support = false;
   ClusterStats stats;
   double key_voxel = 0;  ///< voxel for associating the clusters with the previous candidates
 };
 
 /// Filters and clusters a map (the heavy part of CandidateMap::recluster(); no state, so it may
 /// run on any thread).
+Clustering clusterMap(const ClusterInputRef& input);
 Clustering clusterMap(const ClusterInput& input);
 
 class CandidateMap {
@@ -85,7 +94,7 @@ class CandidateMap {
   /// from these). Poses of another map than the current one are ignored.
   void addView(int32_t map_id, const SE3& T_world_camera);
   /// Re-runs filtering and clustering when the map changed since the last call; true if it ran.
-  /// The same as adopt(clusterMap(*takeClusterInput())).
+  /// The same as adopt(clusterMap(*takeClusterInput())), without the copy.
   bool recluster();
   /// A copy of what clustering needs when the map changed since the last call (it then counts as
   /// clustered), else nothing.

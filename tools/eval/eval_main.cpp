@@ -81,17 +81,15 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
     writeBoxesCsv(rr, (d / (name + ".csv")).string());
   }
   out["object_map"] = rr.object_map;
+  spdlog::info("{}: object map: {} objects; in its main segment the largest holds {} of the {} object voxels", name,
+               rr.object_map["objects"].dump(), rr.object_map["largest_object_voxels"].dump(),
+               rr.object_map["main_segment_object_voxels"].dump());
   if (!seq.hasBoxes()) {
-    spdlog::info("{}: object map: {} objects; in its main segment the largest holds {} of the {} object voxels; "
-                 "no ground-truth boxes: no single_view / multi_view", name, rr.object_map["objects"].dump(),
-                 rr.object_map["largest_object_voxels"].dump(), rr.object_map["main_segment_object_voxels"].dump());
+    spdlog::info("{}: no ground-truth boxes: no single_view / multi_view", name);
     return {};
   }
   RecognitionResult res = scoreRecognition(rr, seq, RecognitionEvalOptions{});
   if (res.classes.empty()) {
-    spdlog::info("{}: object map: {} objects; in its main segment the largest holds {} of the {} object voxels", name,
-                 rr.object_map["objects"].dump(), rr.object_map["largest_object_voxels"].dump(),
-                 rr.object_map["main_segment_object_voxels"].dump());
     spdlog::info("{}: none of the model's classes is in the sequence: no single_view / multi_view", name);
     return res;
   }
