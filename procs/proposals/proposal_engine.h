@@ -44,6 +44,8 @@ class ProposalEngine {
   /// `max_maps` most recently used maps are kept).
   const CandidateMap& map() const;
   const ProjectionStats& lastProjection() const { return last_; }
+  /// The camera of CAMERA_INFO, nullptr before one arrived.
+  const CameraModel* camera() const { return have_camera_ ? &camera_ : nullptr; }
 
  private:
   ProposalOptions options_;

@@ -178,8 +178,12 @@ int main(int argc, char** argv) {
     ProposalScores synthetic_proposals;
     bool any_proposals = false;
     const bool rerun = !proposals_config.empty();
-    const ProposalOptions proposal_options =
-        rerun ? loadConfig<ProposalOptions>(proposals_config, "proposals", false) : ProposalOptions{};
+    // The options the recorded run used (to find why boxes were missed), or the ones to try.
+    std::string proposals_path = proposals_config;
+    if (proposals_path.empty() && fs::exists(fs::path(pipeline.config_dir) / "proposals.yaml"))
+      proposals_path = (fs::path(pipeline.config_dir) / "proposals.yaml").string();
+    const ProposalOptions proposal_options = loadConfig<ProposalOptions>(proposals_path, "proposals", false);
+    ProposalMisses synthetic_misses;
     int failures = 0;
     for (const auto& dir : sequences) {
       const std::string name = fs::path(dir).filename().string();
@@ -218,19 +222,22 @@ int main(int argc, char** argv) {
                      slam.value("tracked_pct", 0.0), slam.value("ate_rmse", 0.0),
                      slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
         if (have_proposals && !offline && seq.hasBoxes()) {
-          const ProposalRecording pr = rerun ? rerunProposals(log, system.channels, proposal_options)
-                                             : readProposalRecording(log, system.channels);
+          ProposalMisses misses;
+          const ProposalRecording rerun_pr =
+              rerunProposals(log, system.channels, proposal_options, &seq, peo.stride, &misses);
+          const ProposalRecording pr = rerun ? rerun_pr : readProposalRecording(log, system.channels);
           const ProposalScores sc = scoreProposals(pr, seq, peo);
           if (draw_frames > 0) {
             const fs::path d = fs::path(out_dir) / "proposals" / name;
             fs::create_directories(d);
             drawProposalFrames(pr, seq, d.string(), peo.stride, draw_frames, 20);
           }
-          const nlohmann::json p =
-              proposalSection(sc, (fs::path(out_dir) / "plots" / (name + "_proposals.png")).string());
+          nlohmann::json p = proposalSection(sc, (fs::path(out_dir) / "plots" / (name + "_proposals.png")).string());
+          p["misses"] = missesSection(misses);
           report["sequences"][name]["proposals"] = p;
           if (isSyntheticSequence(seq)) {
             mergeScores(&synthetic_proposals, sc);
+            mergeMisses(&synthetic_misses, misses);
             any_proposals = true;
           }
           spdlog::info("{}: proposals recall {:.1f}% at IoU 0.5 ({:.1f}% at 0.7), {} boxes per frame", name,
@@ -255,9 +262,11 @@ int main(int argc, char** argv) {
       report["sequences"][name]["slam"] = section;
     }
     if (!synthetic.empty()) report["overall"]["slam"] = summarizeSlam(synthetic);
-    if (any_proposals)
+    if (any_proposals) {
       report["overall"]["proposals"] =
           proposalSection(synthetic_proposals, (fs::path(out_dir) / "plots" / "suite_proposals.png").string());
+      report["overall"]["proposals"]["misses"] = missesSection(synthetic_misses);
+    }
     if (any_recognition) {
       report["overall"]["single_view"] = recognitionSection(suite_single);
       report["overall"]["multi_view"] = recognitionSection(suite_multi);

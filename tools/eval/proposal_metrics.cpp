@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/segmentation.hpp>
 
 #include "common/bus/log_reader.h"
+#include "common/geometry.h"
 #include "common/image_codec.h"
 #include "procs/proposals/proposal_engine.h"
 #include "tools/eval/plot.h"
@@ -113,7 +115,54 @@ ProposalRecording readProposalRecording(const std::string& log_path, const Chann
   return run;
 }
 
-ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch, const ProposalOptions& options) {
+namespace {
+
+Box2 toBox2(const ProposalBox& b) { return {b.x, b.y, b.w, b.h}; }
+
+double bestIou(const std::vector<Box2>& boxes, const Box2& truth) {
+  double best = 0;
+  for (const auto& b : boxes) best = std::max(best, iou(b, truth));
+  return best;
+}
+
+// The cause of each uncovered ground-truth box of one frame (ProposalMisses).
+void countMisses(const ProposalEngine& engine, const ProposalOptions& options, const pose_t& pose,
+                 const std::vector<Box2>& published, bool any_before, const std::vector<Box2>& truth,
+                 ProposalMisses* m) {
+  std::vector<Box2> without_nms, without_culling;
+  const CameraModel* camera = engine.camera();
+  const bool localized = isLocalized(pose);
+  if (localized && camera && engine.map().mapId() == pose.map_id) {
+    const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
+    ProposalOptions o = options;
+    o.nms_iou = 2;  // nothing is suppressed
+    o.max_boxes = std::numeric_limits<int>::max();
+    for (const auto& b : projectCandidates(engine.map().candidates(), *camera, T_wc, o)) without_nms.push_back(toBox2(b));
+    o.occluded_fraction = 2;  // nothing is culled either
+    for (const auto& b : projectCandidates(engine.map().candidates(), *camera, T_wc, o))
+      without_culling.push_back(toBox2(b));
+  }
+  for (const auto& t : truth) {
+    ++m->boxes;
+    if (bestIou(published, t) >= 0.5) ++m->covered;
+    else if (!any_before) ++m->before_first;
+    else if (!localized) ++m->not_localized;
+    else if (bestIou(without_nms, t) >= 0.5) ++m->suppressed;
+    else if (bestIou(without_culling, t) >= 0.5) ++m->occluded;
+    else if (bestIou(without_culling, t) >= 0.3) ++m->partial;
+    else ++m->no_candidate;
+  }
+}
+
+}  // namespace
+
+ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch, const ProposalOptions& options,
+                                 const SequenceFolder* sequence, int stride, ProposalMisses* misses) {
+  std::map<int, std::vector<Box2>> truth;
+  if (sequence && misses)
+    for (const auto& b : sequence->boxes())
+      if (stride <= 1 || b.frame % stride == 0) truth[b.frame].push_back({b.x, b.y, b.w, b.h});
+  bool any_proposals = false;  // a frame so far had proposals
   ProposalRecording run;
   ProposalEngine engine(options);
   LogReader reader(log_path);
@@ -130,7 +179,15 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       if (!decodeRecord(*r, &m)) continue;
       run.localized[m.seq] = isLocalized(m);
       bool reclustered = false;
-      addProposals(&run, engine.onPose(m, &why, &reclustered));
+      const proposals_t p = engine.onPose(m, &why, &reclustered);
+      addProposals(&run, p);
+      any_proposals = any_proposals || p.num_boxes > 0;
+      if (const auto t = truth.find(m.seq); t != truth.end()) {
+        std::vector<Box2> published;
+        for (const auto& b : p.boxes) published.push_back({b.x, b.y, b.w, b.h});
+        countMisses(engine, options, m, published, any_proposals, t->second, misses);
+        truth.erase(t);
+      }
       if (reclustered) {
         const ClusterStats& s = engine.map().stats();
         spdlog::debug("frame {}: map {} points ({} cropped, {} single-view, voxel {:.4f}), {} planes with {} points, "
@@ -140,7 +197,28 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       }
     }
   }
+  // Frames SLAM never gave a pose for.
+  for (const auto& [frame, boxes] : truth) {
+    if (frame < 0 || static_cast<size_t>(frame) >= sequence->size()) continue;
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      ++misses->boxes;
+      ++(any_proposals ? misses->not_localized : misses->before_first);
+    }
+  }
   return run;
+}
+
+nlohmann::json missesSection(const ProposalMisses& m) {
+  nlohmann::json j;
+  ProposalMisses(m).forEach([&](const char* key, int n) { j[key] = n; });
+  return j;
+}
+
+void mergeMisses(ProposalMisses* into, const ProposalMisses& more) {
+  std::vector<int> counts;
+  ProposalMisses(more).forEach([&](const char*, int n) { counts.push_back(n); });
+  size_t i = 0;
+  into->forEach([&](const char*, int& n) { n += counts[i++]; });
 }
 
 ProposalScores scoreProposals(const ProposalRecording& run, const SequenceFolder& seq,

@@ -28,10 +28,42 @@ struct ProposalRecording {
 
 /// PROPOSALS and SLAM_POSE of a recorded log. Throws LogError for a damaged log.
 ProposalRecording readProposalRecording(const std::string& log_path, const Channels& channels);
+/// Why the ground-truth boxes of the evaluated frames that no proposal covers (IoU >= 0.5) are
+/// missed, found by running the proposals stage again on the log and projecting its candidates
+/// without the step that could have dropped the box. Counts of ground-truth boxes, each in the
+/// first cause that applies.
+struct ProposalMisses {
+  int boxes = 0;             ///< ground-truth boxes of the evaluated frames
+  int covered = 0;           ///< a proposal covers it
+  int before_first = 0;      ///< frame before the sequence's first proposal (the map is not built yet)
+  int not_localized = 0;     ///< SLAM did not localise the frame
+  int suppressed = 0;        ///< a candidate's box covers it, but a box ranked ahead overlapped that box (NMS)
+  int occluded = 0;          ///< a candidate's box covers it, but the depth buffer culled it
+  int partial = 0;           ///< the best candidate's box overlaps it at IoU 0.3-0.5 (a part, or too much)
+  int no_candidate = 0;      ///< no candidate's box overlaps it at IoU 0.3
+
+  /// f(report key, count) for every count.
+  template <class F>
+  void forEach(F&& f) {
+    f("ground_truth_boxes", boxes);
+    f("covered", covered);
+    f("before_first_proposals", before_first);
+    f("not_localized", not_localized);
+    f("suppressed", suppressed);
+    f("occluded", occluded);
+    f("partial", partial);
+    f("no_candidate", no_candidate);
+  }
+};
+
 /// Runs the proposals stage offline on the CAMERA_INFO, SLAM_MAP and SLAM_POSE of a recorded log
-/// (to try other options without running SLAM again).
+/// (to try other options without running SLAM again). With `misses` and `sequence`, also counts
+/// why the ground-truth boxes of every `stride`-th frame are missed.
 ProposalRecording rerunProposals(const std::string& log_path, const Channels& channels,
-                                 const ProposalOptions& options);
+                                 const ProposalOptions& options, const SequenceFolder* sequence = nullptr,
+                                 int stride = 5, ProposalMisses* misses = nullptr);
+nlohmann::json missesSection(const ProposalMisses& misses);
+void mergeMisses(ProposalMisses* into, const ProposalMisses& more);
 
 struct ProposalEvalOptions {
   int stride = 5;               ///< every stride-th frame is evaluated
