@@ -22,12 +22,18 @@ GroundTruthBox truth(int frame, double x, double y, double w, double h) {
   return t;
 }
 
+// Lengths in map units; every map change clustered at the next pose.
+ProposalOptions metricOptions() {
+  ProposalOptions o;
+  o.relative_lengths = false;
+  o.recluster_interval_s = 0;
+  return o;
+}
+
 }  // namespace
 
 TEST(ProposalMisses, EachUncoveredBoxHasItsCause) {
-  ProposalOptions o;
-  o.relative_lengths = false;  // map units
-  o.recluster_interval_s = 0;
+  const ProposalOptions o = metricOptions();
   const SE3 T = lookingDown(1.0);
   const auto scene = join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f));
   // The box the stage gives the cylinder.
@@ -79,9 +85,7 @@ TEST(ProposalMisses, ABoxTheRankingSuppressedIsCountedAsSuppressed) {
   // A can and a small one 2.5 cm beside it: apart at the fine density scales, one cluster at the
   // coarse ones. The pair's box overlaps the can's by IoU > 0.5, so only the can's (found at more
   // scales alike) is published; ground truth around the pair is covered by a candidate but suppressed.
-  ProposalOptions o;
-  o.relative_lengths = false;
-  o.recluster_interval_s = 0;
+  const ProposalOptions o = metricOptions();
   const SE3 T = lookingDown(1.0);
   const auto scene = join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f),
                                                     cylinder(-0.015f, 0, 0.02f, 0.12f, 0.004f)));

@@ -37,6 +37,14 @@ void addProposals(ProposalRecording* run, const proposals_t& m) {
   for (const auto& b : m.boxes) boxes.push_back({b.x, b.y, b.w, b.h});
 }
 
+// The ground-truth boxes of every `stride`-th frame, by frame.
+std::map<int, std::vector<Box2>> truthByFrame(const SequenceFolder& seq, int stride) {
+  std::map<int, std::vector<Box2>> truth;
+  for (const auto& b : seq.boxes())
+    if (stride <= 1 || b.frame % stride == 0) truth[b.frame].push_back({b.x, b.y, b.w, b.h});
+  return truth;
+}
+
 // The rank (1-based) of the first box covering `truth` at `threshold`, 0 if none.
 int rankOf(const std::vector<Box2>& ranked, const Box2& truth, double threshold) {
   for (size_t i = 0; i < ranked.size(); ++i)
@@ -132,7 +140,9 @@ void countMisses(const ProposalEngine& engine, const ProposalOptions& options, c
   std::vector<Box2> without_nms, without_culling;
   const CameraModel* camera = engine.camera();
   const bool localized = isLocalized(pose);
-  if (localized && camera && engine.map().mapId() == pose.map_id) {
+  const bool any_uncovered =
+      std::any_of(truth.begin(), truth.end(), [&](const Box2& t) { return bestIou(published, t) < 0.5; });
+  if (any_uncovered && localized && camera && engine.map().mapId() == pose.map_id) {
     const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
     ProposalOptions o = options;
     o.nms_iou = 2;  // nothing is suppressed
@@ -159,9 +169,7 @@ void countMisses(const ProposalEngine& engine, const ProposalOptions& options, c
 ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch, const ProposalOptions& options,
                                  const SequenceFolder* sequence, int stride, ProposalMisses* misses) {
   std::map<int, std::vector<Box2>> truth;
-  if (sequence && misses)
-    for (const auto& b : sequence->boxes())
-      if (stride <= 1 || b.frame % stride == 0) truth[b.frame].push_back({b.x, b.y, b.w, b.h});
+  if (sequence && misses) truth = truthByFrame(*sequence, stride);
   bool any_proposals = false;  // a frame so far had proposals
   ProposalRecording run;
   ProposalEngine engine(options);
@@ -183,9 +191,7 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       addProposals(&run, p);
       any_proposals = any_proposals || p.num_boxes > 0;
       if (const auto t = truth.find(m.seq); t != truth.end()) {
-        std::vector<Box2> published;
-        for (const auto& b : p.boxes) published.push_back({b.x, b.y, b.w, b.h});
-        countMisses(engine, options, m, published, any_proposals, t->second, misses);
+        countMisses(engine, options, m, run.boxes[m.seq], any_proposals, t->second, misses);
         truth.erase(t);
       }
       if (reclustered) {
@@ -210,23 +216,21 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
 
 nlohmann::json missesSection(const ProposalMisses& m) {
   nlohmann::json j;
-  ProposalMisses(m).forEach([&](const char* key, int n) { j[key] = n; });
+  ProposalMisses::forEach(m, [&](const char* key, int n) { j[key] = n; });
   return j;
 }
 
 void mergeMisses(ProposalMisses* into, const ProposalMisses& more) {
   std::vector<int> counts;
-  ProposalMisses(more).forEach([&](const char*, int n) { counts.push_back(n); });
+  ProposalMisses::forEach(more, [&](const char*, int n) { counts.push_back(n); });
   size_t i = 0;
-  into->forEach([&](const char*, int& n) { n += counts[i++]; });
+  ProposalMisses::forEach(*into, [&](const char*, int& n) { n += counts[i++]; });
 }
 
 ProposalScores scoreProposals(const ProposalRecording& run, const SequenceFolder& seq,
                               const ProposalEvalOptions& o) {
   ProposalScores sc;
-  std::map<int, std::vector<Box2>> truth;
-  for (const auto& b : seq.boxes())
-    if (o.stride <= 1 || b.frame % o.stride == 0) truth[b.frame].push_back({b.x, b.y, b.w, b.h});
+  std::map<int, std::vector<Box2>> truth = truthByFrame(seq, o.stride);
   std::vector<int> frames;
   for (const auto& [f, boxes] : truth) {
     if (f < 0 || static_cast<size_t>(f) >= seq.size()) continue;

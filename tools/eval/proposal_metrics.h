@@ -42,17 +42,17 @@ struct ProposalMisses {
   int partial = 0;           ///< the best candidate's box overlaps it at IoU 0.3-0.5 (a part, or too much)
   int no_candidate = 0;      ///< no candidate's box overlaps it at IoU 0.3
 
-  /// f(report key, count) for every count.
-  template <class F>
-  void forEach(F&& f) {
-    f("ground_truth_boxes", boxes);
-    f("covered", covered);
-    f("before_first_proposals", before_first);
-    f("not_localized", not_localized);
-    f("suppressed", suppressed);
-    f("occluded", occluded);
-    f("partial", partial);
-    f("no_candidate", no_candidate);
+  /// f(report key, count) for every count of `m` (const or not).
+  template <class M, class F>
+  static void forEach(M& m, F&& f) {
+    f("ground_truth_boxes", m.boxes);
+    f("covered", m.covered);
+    f("before_first_proposals", m.before_first);
+    f("not_localized", m.not_localized);
+    f("suppressed", m.suppressed);
+    f("occluded", m.occluded);
+    f("partial", m.partial);
+    f("no_candidate", m.no_candidate);
   }
 };
 
