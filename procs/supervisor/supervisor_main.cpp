@@ -98,6 +98,7 @@ int main(int argc, char** argv) {
     status.setState(StatusReporter::State::kRunning);
     const double period = 1.0 / std::max(0.1, cfg.options.status_rate_hz);
     double last_status = -1;
+    bool unpublished_change = false;  // a change within 0.1 s of the last status goes out 0.1 s after it
     while (!shutdownRequested()) {
       std::vector<pollfd> fds{{bus.fileno(), POLLIN, 0}};
       for (int fd : sup.outputFds()) fds.push_back({fd, POLLIN, 0});
@@ -105,10 +106,11 @@ int main(int argc, char** argv) {
       if (fds[0].revents & POLLIN) bus.handle(0);
       const double now = monotonic();
       sup.tick(now);
-      const bool changed = sup.takeChanged();
-      if (now - last_status >= period || (changed && now - last_status >= 0.1)) {
+      unpublished_change = sup.takeChanged() || unpublished_change;
+      if (now - last_status >= period || (unpublished_change && now - last_status >= 0.1)) {
         bus.publish(ch.proc_status, statusMessage(sup));
         last_status = now;
+        unpublished_change = false;
       }
       status.tick();
     }
