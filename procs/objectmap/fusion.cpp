@@ -6,24 +6,40 @@
 namespace slamaware {
 
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
-                                        size_t num_classes, bool objectness_weights) {
+                                        size_t num_classes, bool objectness_weights,
+                                        double* total_weight) {
   std::vector<double> sum(num_classes, 0.0);
+  double weight = 0;
   for (const auto* v : views) {
     double w = 1.0;
     if (objectness_weights && num_classes > 0 && v->size() >= num_classes)
       w = 1.0 - std::exp(std::min(0.0, static_cast<double>((*v)[num_classes - 1])));
+    weight += w;
     for (size_t c = 0; c < num_classes && c < v->size(); ++c)
       sum[c] += w * static_cast<double>((*v)[c]);
   }
+  if (total_weight) *total_weight = weight;
   return sum;
 }
 
-std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evidence) {
+std::vector<double> scaledLogEvidence(const std::vector<double>& log_evidence, double total_weight,
+                                      double views_exponent) {
+  std::vector<double> e = log_evidence;
+  if (views_exponent > 0 && total_weight > 1) {
+    const double scale = std::pow(total_weight, -views_exponent);
+    for (double& x : e) x *= scale;
+  }
+  return e;
+}
+
+std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evidence,
+                                             double total_weight, double views_exponent) {
   if (log_evidence.empty()) return {};
-  const double top = *std::max_element(log_evidence.begin(), log_evidence.end());
-  std::vector<double> p(log_evidence.size());
+  const std::vector<double> e = scaledLogEvidence(log_evidence, total_weight, views_exponent);
+  const double top = *std::max_element(e.begin(), e.end());
+  std::vector<double> p(e.size());
   double z = 0;
-  for (size_t c = 0; c < p.size(); ++c) z += p[c] = std::exp(log_evidence[c] - top);
+  for (size_t c = 0; c < p.size(); ++c) z += p[c] = std::exp(e[c] - top);
   for (double& x : p) x /= z;
   return p;
 }

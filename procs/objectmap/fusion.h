@@ -16,12 +16,26 @@ namespace slamaware {
 /// being background: the product of the views' p(c | x_i)^w_i. A view whose box the recognizer
 /// takes for background (the object cut by the image border, hidden, or the box off the object)
 /// says little about which object it is and counts little; views of the whole object count fully.
+/// total_weight (if given): sum_i w_i (the number of views without objectness weights).
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
-                                        size_t num_classes, bool objectness_weights = false);
+                                        size_t num_classes, bool objectness_weights = false,
+                                        double* total_weight = nullptr);
 
 /// p(c | all views) = softmax of the summed log evidence (shifted by its maximum, so that sums of
 /// hundreds of views do not underflow). Empty in, empty out.
-std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evidence);
+///
+/// views_exponent e > 0: softmax of log_evidence / W^e, W = the views' total weight (at least 1).
+/// The views of one object are far from independent (neighbouring frames see nearly the same
+/// image), and with e = 0 the posterior of an object seen in a few dozen views is 0 or 1 whatever
+/// its views said. e = 1 makes it the normalised weighted geometric mean of the views' posteriors
+/// (what the average view says); e = 0.5 lets the evidence grow with the square root of the views.
+/// The argmax, the label, is the same for every e.
+std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evidence,
+                                             double total_weight = 1, double views_exponent = 0);
+
+/// The evidence as posteriorFromLogEvidence() scales it: log_evidence / max(1, W)^e.
+std::vector<double> scaledLogEvidence(const std::vector<double>& log_evidence, double total_weight,
+                                      double views_exponent);
 
 /// The class with the highest value; ties go to the lower index; -1 for an empty vector.
 int argmaxClass(const std::vector<double>& values);

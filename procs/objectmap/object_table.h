@@ -54,7 +54,8 @@ struct Object {
   std::vector<int32_t> candidates;  ///< sorted candidate ids
   // Derived by ObjectTable::update():
   std::vector<double> log_evidence;  ///< per class, sum over the union of views
-  std::vector<double> posterior;     ///< softmax of log_evidence
+  double evidence_weight = 0;        ///< the views' total weight in log_evidence
+  std::vector<double> posterior;     ///< posteriorFromLogEvidence() of log_evidence (fusion.h)
   int label = -1;                    ///< argmax class, -1 without classes
   int32_t num_views = 0;
   bool has_position = false;                           ///< false: never seen from a localised frame
@@ -85,7 +86,8 @@ class ObjectTable {
   /// geometry.
   void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
               const GroupingOptions& grouping, size_t num_classes,
-              const std::function<int32_t()>& new_id, bool objectness_weights = false);
+              const std::function<int32_t()>& new_id, bool objectness_weights = false,
+              double views_exponent = 0);
 
   const std::map<int32_t, Candidate>& candidates() const { return candidates_; }
   Candidate* findCandidate(int32_t id);

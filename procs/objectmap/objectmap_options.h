@@ -112,6 +112,9 @@ struct ObjectMapOptions {
   double publish_period_s = 1.0;  ///< s, OBJECT_MAP also goes out this often (real time)
   /// Each view's log p weighted by 1 - p(background | view) in the sum (procs/objectmap/fusion.h).
   bool objectness_weights = true;
+  /// The posterior is the softmax of the summed evidence / W^e, W the views' total weight
+  /// (procs/objectmap/fusion.h: 0 = views independent, 1 = the average view). Labels do not change.
+  double posterior_views_exponent = 1;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
   int seq_buffer = 64;
   PersistenceOptions persistence;
@@ -124,6 +127,8 @@ struct ObjectMapOptions {
     v("publish_period_s", publish_period_s, "s between periodic OBJECT_MAP messages (real time)");
     v("objectness_weights", objectness_weights,
       "each view's log p weighted by 1 - p(background | view) in the fused sum (false: the paper's plain sum)");
+    v("posterior_views_exponent", posterior_views_exponent,
+      "posterior = softmax(fused sum / W^e), W the views' total weight (0: views independent, 1: the average view)");
     v("seq_buffer", seq_buffer,
       "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
     v.section("persistence", persistence);

@@ -21,10 +21,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The paper's plain sum of log p (the labels below are computed by hand with it).
+// The paper's plain sum of log p and its posterior (the labels below are computed by hand with it).
 ObjectMapOptions plainSum() {
   ObjectMapOptions o;
   o.objectness_weights = false;
+  o.posterior_views_exponent = 0;
   return o;
 }
 
@@ -302,6 +303,13 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
   }
   // The other candidate keeps its own (background) evidence.
   EXPECT_NEAR(std::exp(run.frames.at(0)[1].fused.log_p[2]), 0.8, 1e-6);
+  // The posterior of the average view (posterior_views_exponent 1): the sum over 3 views / 3.
+  ObjectMapOptions average = plainSum();
+  average.posterior_views_exponent = 1;
+  const RecognitionRecording avg = readRecognitionRecording(log_path, ch, average);
+  const double avg_norm = std::log(std::exp(cap / 3) + std::exp(mug / 3) + std::exp(bg / 3));
+  EXPECT_NEAR(avg.frames.at(0)[0].fused.log_p[1], mug / 3 - avg_norm, 1e-5);
+  EXPECT_EQ(avg.frames.at(0)[0].multi.label, 1);
 
   const std::string seq = makeSequence("eval_multiview_seq", 11, {"cap", "coffee_mug"},
                                        {truth(0, 100, 100, 50, 50, "coffee_mug"),

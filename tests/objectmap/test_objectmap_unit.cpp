@@ -122,6 +122,44 @@ TEST(Fusion, ObjectnessWeightsLetViewsOfTheWholeObjectDecide) {
   EXPECT_EQ(argmaxClass(sumLogProbabilities({&bg, &bg, &bg}, 3, true)), 2);
 }
 
+// posterior_views_exponent: forty views that all say (0.5, 0.3, 0.2) give a posterior of 1 for the
+// first class when taken as independent (e = 0), the views' own posterior when averaged (e = 1),
+// and something between for e = 0.5; the label is the same for every e. With objectness weights,
+// W is the sum of the weights and e = 1 gives the weighted geometric mean, normalised.
+TEST(Fusion, TheViewsExponentTempersTheConfidenceNotTheLabel) {
+  std::vector<std::vector<float>> views(40, logs({0.5, 0.3, 0.2}));
+  std::vector<const std::vector<float>*> ptrs;
+  for (const auto& v : views) ptrs.push_back(&v);
+  double w = 0;
+  const std::vector<double> sum = sumLogProbabilities(ptrs, 3, false, &w);
+  EXPECT_DOUBLE_EQ(w, 40);
+  const auto independent = posteriorFromLogEvidence(sum, w, 0);
+  const auto average = posteriorFromLogEvidence(sum, w, 1);
+  const auto between = posteriorFromLogEvidence(sum, w, 0.5);
+  EXPECT_GT(independent[0], 1 - 1e-6);
+  EXPECT_NEAR(average[0], 0.5, 1e-5);
+  EXPECT_NEAR(average[1], 0.3, 1e-5);
+  EXPECT_NEAR(average[2], 0.2, 1e-5);
+  EXPECT_GT(between[0], average[0]);
+  EXPECT_LT(between[0], independent[0]);
+  for (const auto* p : {&independent, &average, &between}) EXPECT_EQ(argmaxClass(*p), 0);
+  // A single view (W <= 1) is not sharpened.
+  const auto one = posteriorFromLogEvidence(sumLogProbabilities({ptrs[0]}, 3), 1, 1);
+  EXPECT_NEAR(one[0], 0.5, 1e-5);
+
+  // Weighted: two views, p(background) 0.2 and 0.6 -> weights 0.8 and 0.4, W = 1.2.
+  std::vector<float> a = logs({0.7, 0.1, 0.2}), b = logs({0.1, 0.3, 0.6});
+  const std::vector<double> ws = sumLogProbabilities({&a, &b}, 3, true, &w);
+  EXPECT_NEAR(w, 1.2, 1e-6);
+  const auto mean = posteriorFromLogEvidence(ws, w, 1);
+  std::vector<double> geo(3);
+  double z = 0;
+  for (int c = 0; c < 3; ++c)
+    z += geo[c] = std::exp((0.8 * a[c] + 0.4 * b[c]) / 1.2);  // (pa^0.8 pb^0.4)^(1/1.2)
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], geo[c] / z, 1e-6);
+  EXPECT_EQ(argmaxClass(mean), argmaxClass(ws));
+}
+
 TEST(Fusion, ThousandsOfViewsDoNotUnderflowAndTiesGoToTheLowerClass) {
   std::vector<std::vector<float>> views(5000, logs({0.3, 0.3, 0.4}));
   std::vector<const std::vector<float>*> ptrs;

@@ -279,7 +279,9 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& mult
 // ---- Multi-view labels ------------------------------------------------------------------------
 
 MultiViewLabeller::MultiViewLabeller(const ObjectMapOptions& options)
-    : engine_(options), objectness_weights_(options.objectness_weights) {}
+    : engine_(options),
+      objectness_weights_(options.objectness_weights),
+      views_exponent_(options.posterior_views_exponent) {}
 
 void MultiViewLabeller::countRefusal(bool accepted, const char* channel, const std::string& why) {
   if (accepted) return;
@@ -331,10 +333,12 @@ void MultiViewLabeller::onDetections(const detections_t& d) {
 std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t candidate,
                                                     const std::vector<std::string>& classes, bool* from_object) {
   std::vector<double> evidence;
+  double weight = 0;
   std::vector<std::string> names;
   const Object* o = engine_.objectOfCandidate(map_id, candidate);
   if (o && !o->log_evidence.empty()) {
     evidence = o->log_evidence;
+    weight = o->evidence_weight;
     names = engine_.classes();
   } else if (auto it = own_.find({map_id, candidate}); it != own_.end()) {
     // As the map fuses (procs/objectmap/fusion.h), each view clamped as the map clamps.
@@ -345,11 +349,12 @@ std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t cand
     }
     std::vector<const std::vector<float>*> views;
     for (const auto& v : clamped) views.push_back(&v);
-    evidence = sumLogProbabilities(views, own_classes_.size(), objectness_weights_);
+    evidence = sumLogProbabilities(views, own_classes_.size(), objectness_weights_, &weight);
     names = own_classes_;
   }
   if (from_object) *from_object = o && !o->log_evidence.empty();
-  const std::vector<double> lp = logSoftmax(evidence);
+  // As the map's posterior (posteriorFromLogEvidence), in logs.
+  const std::vector<double> lp = logSoftmax(scaledLogEvidence(evidence, weight, views_exponent_));
   std::vector<double> out(classes.size(), kNegInf);
   for (size_t k = 0; k < classes.size(); ++k)
     for (size_t n = 0; n < names.size(); ++n)

@@ -135,6 +135,7 @@ class MultiViewLabeller {
   std::map<std::pair<int32_t, int32_t>, std::map<int32_t, OwnView>> own_;  ///< (map, candidate) -> seq -> view
   int refused_ = 0;
   bool objectness_weights_;  ///< as the map fuses (ObjectMapOptions::objectness_weights)
+  double views_exponent_;    ///< as the map fuses (ObjectMapOptions::posterior_views_exponent)
 };
 
 // ---- A sequence ------------------------------------------------------------------------------
