@@ -9,6 +9,13 @@
 
 namespace slamaware {
 
+/// How the views of an object are fused (ObjectMapOptions: objectness_weights,
+/// posterior_views_exponent; see sumLogProbabilities() and posteriorFromLogEvidence()).
+struct FusionOptions {
+  bool objectness_weights = false;
+  double views_exponent = 0;
+};
+
 /// sum_i log p(c | x_i) per class over the views (each a vector of natural-log probabilities, one
 /// per class, num_classes long). Summed in double, in the order given.
 ///

@@ -386,7 +386,7 @@ void ObjectMapEngine::updateObjects() {
     Segment& s = *seg;
     s.table.update([&s](VoxelKey k) { return s.occupancy.isOccupied(k); }, options_.voting,
                    options_.grouping, classes_.size(), [this] { return next_object_id_++; },
-                   options_.objectness_weights, options_.posterior_views_exponent);
+                   options_.fusion());
     s.dirty = false;
   }
 }

@@ -207,7 +207,7 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
-                         bool objectness_weights, double views_exponent) {
+                         const FusionOptions& fusion) {
   // 1. Each candidate's voxels: voted often enough, and occupied now.
   std::vector<Candidate*> cands;
   for (auto& [id, c] : candidates_) {
@@ -258,7 +258,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
       }
     std::vector<const std::vector<float>*> evidence;
     for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
-    f.evidence = sumLogProbabilities(evidence, num_classes, objectness_weights, &f.weight);
+    f.evidence = sumLogProbabilities(evidence, num_classes, fusion.objectness_weights, &f.weight);
     return f;
   };
   if (grouping.same_label_overlap > 0 && num_classes > 1)
@@ -311,7 +311,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     }
     o.log_evidence = f.evidence;
     o.evidence_weight = f.weight;
-    o.posterior = posteriorFromLogEvidence(o.log_evidence, f.weight, views_exponent);
+    o.posterior = posteriorFromLogEvidence(o.log_evidence, f.weight, fusion.views_exponent);
     o.label = argmaxClass(o.log_evidence);
     o.num_views = static_cast<int32_t>(views.size());
     if (!views.empty()) {

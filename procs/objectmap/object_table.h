@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "procs/objectmap/fusion.h"
 #include "procs/objectmap/objectmap_options.h"
 #include "procs/objectmap/voxel_key.h"
 
@@ -86,8 +87,7 @@ class ObjectTable {
   /// geometry.
   void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
               const GroupingOptions& grouping, size_t num_classes,
-              const std::function<int32_t()>& new_id, bool objectness_weights = false,
-              double views_exponent = 0);
+              const std::function<int32_t()>& new_id, const FusionOptions& fusion = {});
 
   const std::map<int32_t, Candidate>& candidates() const { return candidates_; }
   Candidate* findCandidate(int32_t id);

@@ -4,6 +4,8 @@
 // first keyframe (for a camera about 1 m from a table, 0.01 is about 1 cm).
 #include <string>
 
+#include "procs/objectmap/fusion.h"
+
 namespace slamaware {
 
 /// The OctoMap occupancy of one map segment.
@@ -115,6 +117,7 @@ struct ObjectMapOptions {
   /// The posterior is the softmax of the summed evidence / W^e, W the views' total weight
   /// (procs/objectmap/fusion.h: 0 = views independent, 1 = the average view). Labels do not change.
   double posterior_views_exponent = 1;
+  FusionOptions fusion() const { return {objectness_weights, posterior_views_exponent}; }
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
   int seq_buffer = 64;
   PersistenceOptions persistence;

@@ -279,9 +279,7 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& mult
 // ---- Multi-view labels ------------------------------------------------------------------------
 
 MultiViewLabeller::MultiViewLabeller(const ObjectMapOptions& options)
-    : engine_(options),
-      objectness_weights_(options.objectness_weights),
-      views_exponent_(options.posterior_views_exponent) {}
+    : engine_(options), fusion_(options.fusion()) {}
 
 void MultiViewLabeller::countRefusal(bool accepted, const char* channel, const std::string& why) {
   if (accepted) return;
@@ -349,12 +347,12 @@ std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t cand
     }
     std::vector<const std::vector<float>*> views;
     for (const auto& v : clamped) views.push_back(&v);
-    evidence = sumLogProbabilities(views, own_classes_.size(), objectness_weights_, &weight);
+    evidence = sumLogProbabilities(views, own_classes_.size(), fusion_.objectness_weights, &weight);
     names = own_classes_;
   }
   if (from_object) *from_object = o && !o->log_evidence.empty();
   // As the map's posterior (posteriorFromLogEvidence), in logs.
-  const std::vector<double> lp = logSoftmax(scaledLogEvidence(evidence, weight, views_exponent_));
+  const std::vector<double> lp = logSoftmax(scaledLogEvidence(evidence, weight, fusion_.views_exponent));
   std::vector<double> out(classes.size(), kNegInf);
   for (size_t k = 0; k < classes.size(); ++k)
     for (size_t n = 0; n < names.size(); ++n)

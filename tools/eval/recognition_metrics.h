@@ -134,8 +134,7 @@ class MultiViewLabeller {
   std::vector<std::string> own_classes_;
   std::map<std::pair<int32_t, int32_t>, std::map<int32_t, OwnView>> own_;  ///< (map, candidate) -> seq -> view
   int refused_ = 0;
-  bool objectness_weights_;  ///< as the map fuses (ObjectMapOptions::objectness_weights)
-  double views_exponent_;    ///< as the map fuses (ObjectMapOptions::posterior_views_exponent)
+  FusionOptions fusion_;  ///< as the map fuses
 };
 
 // ---- A sequence ------------------------------------------------------------------------------
