@@ -164,7 +164,9 @@ struct DepthFilterOptions {
   int max_seeds_per_keyframe = 6000;   ///< seeds per keyframe, highest gradients first
   int seed_cell_px = 3;                ///< px, at most one seed per cell of this size
   double min_gradient = 10.0;          ///< grey levels per px, weakest gradient a seed may have
-  int max_keyframes = 3;               ///< seeds live until this many newer keyframes exist
+  int max_keyframes = 3;               ///< seeds live until this many newer keyframes exist...
+  int min_frames = 8;  ///< ...and they were searched in this many frames (or max_keyframes + this
+                       ///< newer keyframes exist): at low frame rates every frame is a keyframe
   double convergence_ratio = 200.0;    ///< converged when sigma < inverse-depth range / this
   double pixel_noise = 1.0;            ///< px, matching noise (tau of SVO's computeTau)
   double max_search_px = 400.0;        ///< px, longer epipolar segments are not searched
@@ -182,7 +184,8 @@ struct DepthFilterOptions {
     v("max_seeds_per_keyframe", max_seeds_per_keyframe, "seeds per keyframe");
     v("seed_cell_px", seed_cell_px, "px, at most one seed per cell of this size");
     v("min_gradient", min_gradient, "grey levels per px, weakest seed gradient");
-    v("max_keyframes", max_keyframes, "seeds live until this many newer keyframes exist");
+    v("max_keyframes", max_keyframes, "seeds live until this many newer keyframes exist...");
+    v("min_frames", min_frames, "...and they were searched in this many frames");
     v("convergence_ratio", convergence_ratio, "converged when sigma < inverse-depth range / this");
     v("pixel_noise", pixel_noise, "px, matching noise");
     v("max_search_px", max_search_px, "px, longer epipolar segments are not searched");

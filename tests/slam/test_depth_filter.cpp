@@ -140,3 +140,75 @@ TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
   EXPECT_LT(rel[rel.size() * 9 / 10], 0.02);  // 90% under 2%
   for (const auto& p : result.points) EXPECT_GT(p.depth_std, 0);
 }
+
+namespace {
+
+// Frame k of a camera sliding sideways over the plane by `step` m per frame; with
+// with_keyframe, the frame is also a new keyframe (id 7 + k), as at low frame rates.
+DepthFrameInput slidingFrame(const cv::Mat& texture, const test::PinholeCamera& cam, int k,
+                             double step, bool with_keyframe) {
+  SE3 T = SE3::Identity();
+  T.translation() = Eigen::Vector3d(step * k, 0, 0);
+  DepthFrameInput f;
+  f.map_id = 1;
+  f.located = true;
+  f.grey = renderPlane(texture, 0.0015, 2.0, T, cam);
+  f.T_world_camera = T;
+  if (with_keyframe) {
+    DepthKeyframeInput kf;
+    kf.id = 7 + k;
+    kf.map_id = 1;
+    kf.grey = f.grey;
+    cv::cvtColor(kf.grey, kf.bgr, cv::COLOR_GRAY2BGR);
+    kf.T_world_camera = T;
+    kf.min_depth = 1.0;
+    kf.mean_depth = 2.6;
+    f.new_keyframes.push_back(kf);
+  }
+  return f;
+}
+
+// Feeds frames 0, 1, ... (frame 0 seeds keyframe 7) until keyframe 7 is finished; returns the
+// number of the frame that finished it (-1: never, within 20 frames).
+int frameThatFinishesTheFirstKeyframe(DepthFilter& filter, const cv::Mat& texture,
+                                      const test::PinholeCamera& cam, double step) {
+  for (int k = 0; k < 20; ++k) {
+    const std::vector<int64_t> done = filter.process(slidingFrame(texture, cam, k, step, true));
+    if (std::find(done.begin(), done.end(), 7) != done.end()) return k;
+  }
+  return -1;
+}
+
+}  // namespace
+
+// At a low frame rate every frame is a keyframe: seeds that lived for max_keyframes newer
+// keyframes only would be searched in as few frames; min_frames keeps them for that many
+// searches, and more of them converge.
+TEST(DepthFilter, SeedsAreSearchedInMinFramesEvenWhenEveryFrameIsAKeyframe) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 5);
+  DepthFilterOptions options;
+  options.max_keyframes = 3;
+  options.min_frames = 3;  // as max_keyframes: the keyframe count alone decides
+  DepthFilter by_keyframes(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  EXPECT_EQ(frameThatFinishesTheFirstKeyframe(by_keyframes, texture, cam, 0.05), 3);
+  options.min_frames = 6;
+  DepthFilter by_frames(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  EXPECT_EQ(frameThatFinishesTheFirstKeyframe(by_frames, texture, cam, 0.05), 6);
+  EXPECT_GE(by_frames.keyframe(7).points.size(), by_keyframes.keyframe(7).points.size());
+  EXPECT_GT(by_frames.keyframe(7).points.size(), 1000u);
+}
+
+// Frames too close to the keyframe are not searched and do not count; the keyframe still
+// finishes once max_keyframes + min_frames newer keyframes exist.
+TEST(DepthFilter, SeedsWithoutUsableFramesStillEndAfterMaxKeyframesPlusMinFrames) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 5);
+  DepthFilterOptions options;
+  options.max_keyframes = 3;
+  options.min_frames = 4;
+  options.min_baseline_ratio = 1.0;  // no frame has this baseline: nothing is searched
+  DepthFilter filter(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  EXPECT_EQ(frameThatFinishesTheFirstKeyframe(filter, texture, cam, 0.05), 7);
+  EXPECT_EQ(filter.keyframe(7).points.size(), 0u);
+}

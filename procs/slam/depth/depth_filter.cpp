@@ -75,6 +75,7 @@ void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
   for (const auto& s : host.seeds) mean_inverse += s.mu;
   mean_inverse /= std::max<size_t>(1, host.seeds.size());
   if (t.norm() * mean_inverse < options_.min_baseline_ratio) return;
+  ++host.frames_searched;
 
   size_t kept = 0;
   for (size_t i = 0; i < host.seeds.size(); ++i) {
@@ -145,8 +146,12 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
   };
   for (const auto& kf : input.new_keyframes) {
     for (auto it = hosts_.begin(); it != hosts_.end();) {
-      if (it->second.store->map_id != kf.map_id ||
-          ++it->second.newer_keyframes >= options_.max_keyframes)
+      Host& h = it->second;
+      ++h.newer_keyframes;
+      const bool old = h.newer_keyframes >= options_.max_keyframes &&
+                       (h.frames_searched >= options_.min_frames ||
+                        h.newer_keyframes >= options_.max_keyframes + options_.min_frames);
+      if (h.store->map_id != kf.map_id || old)
         it = finish(it);
       else
         ++it;

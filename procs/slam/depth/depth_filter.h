@@ -3,8 +3,10 @@
 // (seed.h), updated by epipolar search (epipolar_search.h) in every later located frame of the
 // same map; seeds that converge become coloured points with a depth standard deviation, stored
 // in their keyframe's camera frame so that they move with it when bundle adjustment moves the
-// keyframe. A keyframe's seeds live until max_keyframes newer keyframes exist; then the keyframe
-// is finished and its points are final.
+// keyframe. A keyframe's seeds live until max_keyframes newer keyframes exist and they were
+// searched in min_frames frames (at low frame rates, when every frame is a keyframe, max_keyframes
+// alone would give each seed too few measurements to converge); then the keyframe is finished and
+// its points are final.
 //
 // The filter works only on the data handed to process() (images, poses snapshotted by the
 // caller), never on the live map, so that it can run on its own thread deterministically.
@@ -100,6 +102,7 @@ class DepthFilter {
     SE3 T_world_camera;
     std::vector<DepthSeed> seeds;
     int newer_keyframes = 0;
+    int frames_searched = 0;  ///< frames whose baseline sufficed to search the seeds
   };
   void updateHost(Host& host, const DepthFrameInput& input, std::vector<SemiDensePoint>* converged);
 
