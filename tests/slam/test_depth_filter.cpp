@@ -52,6 +52,21 @@ cv::Mat renderPlane(const cv::Mat& texture, double texel_m, double plane_z,
   return out;
 }
 
+constexpr double kPlaneZ = 2.0, kTexel = 0.0015;  // the plane of the tests, metres
+
+// A new keyframe of map 1 with the image `grey` taken at T_world_camera.
+DepthKeyframeInput makeKeyframe(int64_t id, const cv::Mat& grey, const SE3& T_world_camera) {
+  DepthKeyframeInput kf;
+  kf.id = id;
+  kf.map_id = 1;
+  kf.grey = grey;
+  cv::cvtColor(grey, kf.bgr, cv::COLOR_GRAY2BGR);
+  kf.T_world_camera = T_world_camera;
+  kf.min_depth = 1.0;  // what the sparse map would say, roughly
+  kf.mean_depth = 2.6;
+  return kf;
+}
+
 }  // namespace
 
 TEST(DepthSeedUpdate, ConvergesToTheTrueInverseDepthDespiteOutliers) {
@@ -96,7 +111,7 @@ TEST(DepthSeedUpdate, DepthUncertaintyGrowsWithDistanceAndShrinksWithBaseline) {
 TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
   const test::PinholeCamera cam;
   const cv::Mat texture = makeTexture(2048, 3);
-  const double plane_z = 2.0, texel = 0.0015;
+  const double plane_z = kPlaneZ;
   DepthFilterOptions options;
   options.max_keyframes = 100;  // keep the one keyframe's seeds alive through the sequence
   DepthFilter filter(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
@@ -104,13 +119,8 @@ TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
   DepthFrameInput first;
   first.map_id = 1;
   first.located = true;
-  DepthKeyframeInput kf;
-  kf.id = 7;
-  kf.map_id = 1;
-  kf.grey = renderPlane(texture, texel, plane_z, SE3::Identity(), cam);
-  cv::cvtColor(kf.grey, kf.bgr, cv::COLOR_GRAY2BGR);
-  kf.min_depth = 1.0;  // what the sparse map would say, roughly
-  kf.mean_depth = 2.6;
+  const DepthKeyframeInput kf =
+      makeKeyframe(7, renderPlane(texture, kTexel, plane_z, SE3::Identity(), cam), SE3::Identity());
   first.grey = kf.grey;
   first.new_keyframes.push_back(kf);
   filter.process(first);
@@ -125,7 +135,7 @@ TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
     DepthFrameInput f;
     f.map_id = 1;
     f.located = true;
-    f.grey = renderPlane(texture, texel, plane_z, T, cam);
+    f.grey = renderPlane(texture, kTexel, plane_z, T, cam);
     f.T_world_camera = T;
     f.keyframe_poses = {{7, SE3::Identity()}};
     filter.process(f);
@@ -143,8 +153,8 @@ TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {
 
 namespace {
 
-// Frame k of a camera sliding sideways over the plane by `step` m per frame; with
-// with_keyframe, the frame is also a new keyframe (id 7 + k), as at low frame rates.
+// Frame k of a camera sliding sideways over the plane by `step` m per frame. When
+// with_keyframe is set, the frame is also a new keyframe (id 7 + k), as at low frame rates.
 DepthFrameInput slidingFrame(const cv::Mat& texture, const test::PinholeCamera& cam, int k,
                              double step, bool with_keyframe) {
   SE3 T = SE3::Identity();
@@ -152,19 +162,9 @@ DepthFrameInput slidingFrame(const cv::Mat& texture, const test::PinholeCamera& 
   DepthFrameInput f;
   f.map_id = 1;
   f.located = true;
-  f.grey = renderPlane(texture, 0.0015, 2.0, T, cam);
+  f.grey = renderPlane(texture, kTexel, kPlaneZ, T, cam);
   f.T_world_camera = T;
-  if (with_keyframe) {
-    DepthKeyframeInput kf;
-    kf.id = 7 + k;
-    kf.map_id = 1;
-    kf.grey = f.grey;
-    cv::cvtColor(kf.grey, kf.bgr, cv::COLOR_GRAY2BGR);
-    kf.T_world_camera = T;
-    kf.min_depth = 1.0;
-    kf.mean_depth = 2.6;
-    f.new_keyframes.push_back(kf);
-  }
+  if (with_keyframe) f.new_keyframes.push_back(makeKeyframe(7 + k, f.grey, T));
   return f;
 }
 

@@ -148,10 +148,10 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
     for (auto it = hosts_.begin(); it != hosts_.end();) {
       Host& h = it->second;
       ++h.newer_keyframes;
-      const bool old = h.newer_keyframes >= options_.max_keyframes &&
+      const bool retired = h.newer_keyframes >= options_.max_keyframes &&
                        (h.frames_searched >= options_.min_frames ||
                         h.newer_keyframes >= options_.max_keyframes + options_.min_frames);
-      if (h.store->map_id != kf.map_id || old)
+      if (h.store->map_id != kf.map_id || retired)
         it = finish(it);
       else
         ++it;
