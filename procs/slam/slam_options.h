@@ -165,8 +165,8 @@ struct DepthFilterOptions {
   int seed_cell_px = 3;                ///< px, at most one seed per cell of this size
   double min_gradient = 10.0;          ///< grey levels per px, weakest gradient a seed may have
   int max_keyframes = 3;               ///< seeds live until this many newer keyframes exist...
-  int min_frames = 8;  ///< ...and they were searched in this many frames (or max_keyframes + this
-                       ///< newer keyframes exist): at low frame rates every frame is a keyframe
+  int min_frames = 8;                  ///< ...and were searched in this many frames (bounded by
+                                       ///< max_keyframes + this newer keyframes; depth_filter.h)
   double convergence_ratio = 200.0;    ///< converged when sigma < inverse-depth range / this
   double pixel_noise = 1.0;            ///< px, matching noise (tau of SVO's computeTau)
   double max_search_px = 400.0;        ///< px, longer epipolar segments are not searched

@@ -149,8 +149,8 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       Host& h = it->second;
       ++h.newer_keyframes;
       const bool retired = h.newer_keyframes >= options_.max_keyframes &&
-                       (h.frames_searched >= options_.min_frames ||
-                        h.newer_keyframes >= options_.max_keyframes + options_.min_frames);
+                           (h.frames_searched >= options_.min_frames ||
+                            h.newer_keyframes >= options_.max_keyframes + options_.min_frames);
       if (h.store->map_id != kf.map_id || retired)
         it = finish(it);
       else
