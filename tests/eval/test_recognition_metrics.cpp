@@ -360,6 +360,42 @@ TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
   EXPECT_DOUBLE_EQ(averagePrecision(mug.ranked, mug.truth), 1.0);
 }
 
+// One object, one detection per frame: of two boxes of the same object in a frame, the one its own
+// view finds more object-like keeps its scores; the other ranks below every detection (its label
+// stays the object's), and a box of another object (or of none) is untouched.
+TEST(MultiViewLabels, DuplicatesOfAnObjectInAFrameAreDemoted) {
+  auto box = [](int32_t object, double log_bg, std::vector<double> multi) {
+    RecognitionRecording::Box b;
+    b.object = object;
+    b.single.log_p = {-3.0, -3.0, log_bg};
+    b.multi.log_p = std::move(multi);
+    b.multi.label = 1;
+    return b;
+  };
+  const std::vector<double> mug{std::log(0.02), std::log(0.9), std::log(0.08)};
+  std::vector<RecognitionRecording::Box> boxes{box(4, std::log(0.6), mug), box(4, std::log(0.1), mug),
+                                               box(7, std::log(0.9), mug), box(-1, std::log(0.9), mug)};
+  EXPECT_EQ(demoteDuplicateBoxes(&boxes), 1);
+  EXPECT_EQ(boxes[1].multi.log_p, mug) << "the more object-like box of object 4 keeps its scores";
+  EXPECT_EQ(boxes[2].multi.log_p, mug);
+  EXPECT_EQ(boxes[3].multi.log_p, mug);
+  EXPECT_NEAR(boxes[0].multi.log_p[1], std::log(0.9) - 100, 1e-9);
+  EXPECT_NEAR(boxes[0].multi.log_p[0], std::log(0.02) - 100, 1e-9);
+  EXPECT_NEAR(boxes[0].multi.log_p[2], 0.0, 1e-9);
+  EXPECT_EQ(boxes[0].multi.label, 1) << "a duplicate keeps its object's label";
+
+  // Scored: the kept box matches the mug; the duplicate is a false positive ranked last.
+  RecognitionScores s = emptyScores({"cap", "coffee_mug"});
+  std::vector<LabelledBox> frame;
+  for (auto& b : boxes) b.multi.box = {100, 100, 50, 50}, frame.push_back(b.multi);
+  frame[0].box = {100, 100, 30, 30};
+  scoreFrame(kModel, frame, {truth(0, 100, 100, 50, 50, "coffee_mug")}, 0.5, &s);
+  const ClassTally& t = s.classes.at("coffee_mug");
+  ASSERT_EQ(t.ranked.size(), 4u);
+  EXPECT_FALSE(t.ranked.back().true_positive);
+  EXPECT_LT(t.ranked.back().score, -90.0);
+}
+
 // Two candidates of one object (the proposals stage over-segments; here two clusters of the same
 // mug) are grouped by the object map: the boxes of both get the object's posterior, over the union
 // of their views, the same for both.

@@ -98,6 +98,7 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
   out["multi_view"]["fused_posterior_only"] = fusedOnlySummary(res.fused);
   out["multi_view"]["objects"] = rr.objects;
   out["multi_view"]["candidates"] = rr.candidates;
+  out["multi_view"]["duplicate_boxes"] = rr.duplicates;
   out["multi_view"]["replay_matches_node"] =
       rr.matches_node < 0 ? nlohmann::json(nullptr) : nlohmann::json(rr.matches_node == 1);
   const std::string plot = (fs::path(out_dir) / "plots" / (name + "_pr.png")).string();

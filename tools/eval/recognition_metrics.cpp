@@ -377,6 +377,33 @@ std::vector<double> multiViewScores(const std::vector<double>& fused, const std:
   return out;
 }
 
+int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
+  std::map<int32_t, size_t> best;  // object -> its most object-like box
+  const auto background = [](const RecognitionRecording::Box& b) {
+    return b.single.log_p.empty() ? 0.0 : b.single.log_p.back();
+  };
+  for (size_t i = 0; i < boxes->size(); ++i) {
+    const int32_t o = (*boxes)[i].object;
+    if (o < 0) continue;
+    const auto [it, added] = best.emplace(o, i);
+    if (!added && background((*boxes)[i]) < background((*boxes)[it->second])) it->second = i;
+  }
+  int duplicates = 0;
+  for (size_t i = 0; i < boxes->size(); ++i) {
+    RecognitionRecording::Box& b = (*boxes)[i];
+    if (b.object < 0 || best.at(b.object) == i || b.multi.log_p.empty()) continue;
+    const size_t bg = b.multi.log_p.size() - 1;
+    double object_sum = 0;
+    for (size_t c = 0; c < bg; ++c) {
+      b.multi.log_p[c] += kMinLogProb;
+      object_sum += std::exp(b.multi.log_p[c]);
+    }
+    b.multi.log_p[bg] = std::log1p(-std::min(1.0, object_sum));
+    ++duplicates;
+  }
+  return duplicates;
+}
+
 nlohmann::json objectMapSummary(const ObjectMapEngine& engine) {
   const std::vector<std::string>& classes = engine.classes();
   int objects = 0, labelled = 0;
@@ -500,6 +527,7 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
       b.multi_from_object = it->second.from_object;
       b.object = it->second.object;
     }
+  for (auto& [seq, boxes] : run.frames) run.duplicates += demoteDuplicateBoxes(&boxes);
   run.objects = static_cast<int>(labeller.engine().numObjects());
   run.object_map = objectMapSummary(labeller.engine());
   run.candidates = static_cast<int>(labeller.engine().numCandidates());

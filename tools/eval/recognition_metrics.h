@@ -153,6 +153,7 @@ struct RecognitionRecording {
   std::map<int32_t, std::vector<Box>> frames;
   int objects = 0;  ///< objects of the object map at the end
   int candidates = 0;
+  int duplicates = 0;  ///< boxes demoted by demoteDuplicateBoxes()
   nlohmann::json object_map;  ///< objectMapSummary() of the replayed map at the end
   /// The replay against the node: 1 when the replayed map's objects (labels, views, voxels) equal
   /// those of the last OBJECT_MAP the objectmap node published, 0 when not, -1 when the recording
@@ -175,6 +176,14 @@ nlohmann::json objectMapSummary(const ObjectMapEngine& engine);
 /// (a box on a part of a mug, or on the mug and half the table, is a view of the mug's object but
 /// not a mug detection). The reported label stays the fused posterior's argmax.
 std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, const std::vector<double>& single_log_p);
+
+/// An object is one detection per frame. Of the boxes of one frame (`boxes`) whose candidates
+/// belong to the same object of the map, the one its own view finds most object-like (lowest
+/// p(background | box); ties: the earlier box) keeps its multi-view scores; the others are
+/// duplicates of it: their object classes are scaled by e^-100, so that they rank below every
+/// detection (in their order); their label, the object's, stays. Boxes without an object (-1) are
+/// left alone. Returns the number of duplicates.
+int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes);
 
 /// Reads DETECTIONS of a recorded log and replays it through MultiViewLabeller (`options`: the
 /// objectmap stage's). Throws LogError for a damaged log. Empty when the log has no DETECTIONS.
