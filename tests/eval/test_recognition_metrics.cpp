@@ -295,10 +295,12 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
     EXPECT_NEAR(b.fused.log_p[0], cap - norm, 1e-5);
     EXPECT_NEAR(b.fused.log_p[1], mug - norm, 1e-5);
     EXPECT_NEAR(b.fused.log_p[2], bg - norm, 1e-5);
-    // Labelled by the fused evidence, scored with the box's own objectness.
+    // Labelled by the fused evidence, scored with the objectness of the box's view and of its
+    // candidate's three views (0.9, 0.9, 0.95).
     EXPECT_EQ(b.multi.label, 1);
     ASSERT_EQ(b.multi.log_p.size(), 3u);
-    EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(1 - (f == 10 ? 0.05 : 0.1)), 1e-5);
+    const double objectness = std::sqrt((f == 10 ? 0.95 : 0.9) * (0.9 + 0.9 + 0.95) / 3);
+    EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(objectness), 1e-5);
     EXPECT_NEAR(b.single.log_p[1], std::log(f == 10 ? 0.9 : 0.4), 1e-6);
   }
   // The other candidate keeps its own (background) evidence.
@@ -336,16 +338,17 @@ TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
     return p;
   };
   const std::vector<double> fused = lg({0.02, 0.97, 0.01});  // the object is a mug
-  const std::vector<double> framed = multiViewScores(fused, lg({0.1, 0.8, 0.1}));
-  const std::vector<double> part = multiViewScores(fused, lg({0.05, 0.05, 0.9}));
+  const std::vector<double> framed = multiViewScores(fused, logObjectness(lg({0.1, 0.8, 0.1})));
+  const std::vector<double> part = multiViewScores(fused, logObjectness(lg({0.05, 0.05, 0.9})));
   ASSERT_EQ(framed.size(), 3u);
   EXPECT_NEAR(std::exp(framed[1]), 0.97 * 0.9, 1e-9);
   EXPECT_NEAR(std::exp(framed[0]), 0.02 * 0.9, 1e-9);
   EXPECT_NEAR(std::exp(framed[0]) + std::exp(framed[1]) + std::exp(framed[2]), 1.0, 1e-9);
   EXPECT_NEAR(std::exp(part[1]), 0.97 * 0.1, 1e-9);
   // A box whose view is sure it frames an object (log p(background) = -800) scores as the object.
-  EXPECT_NEAR(multiViewScores(fused, {-1, -0.5, -800})[1], std::log(0.97), 1e-9);
-  EXPECT_EQ(multiViewScores({}, {}), std::vector<double>{});
+  EXPECT_NEAR(multiViewScores(fused, logObjectness({-1, -0.5, -800}))[1], std::log(0.97), 1e-9);
+  EXPECT_EQ(multiViewScores({}, 0.0), std::vector<double>{});
+  EXPECT_EQ(logObjectness({}), 0.0);
 
   // Both boxes over a mug in one frame: the framing one is ranked first and matched; the part
   // (IoU < 0.5) is a false positive ranked below it, and both are still labelled mug.
@@ -358,6 +361,32 @@ TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
   EXPECT_FALSE(mug.ranked[1].true_positive);
   EXPECT_EQ(mug.labelled, 2) << "the label is the fused one, not the argmax of the scores";
   EXPECT_DOUBLE_EQ(averagePrecision(mug.ranked, mug.truth), 1.0);
+}
+
+// A box's p(object | box) is the geometric mean of its own view's and of its candidate's mean over
+// every box of the candidate: a part that one view takes for a whole object is held back by the
+// candidate's other views.
+TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesViews) {
+  auto box = [](int32_t candidate, double p_background) {
+    RecognitionRecording::Box b;
+    b.map_id = 1;
+    b.candidate = candidate;
+    b.single.log_p = {std::log((1 - p_background) / 2), std::log((1 - p_background) / 2), std::log(p_background)};
+    b.fused.log_p = {std::log(0.1), std::log(0.9), -100};
+    return b;
+  };
+  std::map<int32_t, std::vector<RecognitionRecording::Box>> frames;
+  frames[0] = {box(3, 0.2), box(5, 0.2)};
+  frames[1] = {box(3, 0.9)};
+  frames[2] = {box(3, 0.9), box(5, 0.4)};
+  scoreMultiView(&frames);
+  // Candidate 3: views 0.8, 0.1, 0.1 -> mean 1/3; candidate 5: 0.8, 0.6 -> 0.7.
+  EXPECT_NEAR(frames[0][0].log_objectness, 0.5 * std::log(0.8) + 0.5 * std::log(1.0 / 3), 1e-9);
+  EXPECT_NEAR(frames[0][1].log_objectness, 0.5 * std::log(0.8) + 0.5 * std::log(0.7), 1e-9);
+  EXPECT_NEAR(frames[2][1].log_objectness, 0.5 * std::log(0.6) + 0.5 * std::log(0.7), 1e-9);
+  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::sqrt(0.8 * 0.7), 1e-9);
+  EXPECT_LT(frames[0][0].multi.log_p[1], frames[0][1].multi.log_p[1])
+      << "the same view, but the candidate's other views say it is not a whole object";
 }
 
 // One object, one detection per frame: of two boxes of the same object in a frame, the one its own

@@ -361,12 +361,16 @@ std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t cand
   return out;
 }
 
-std::vector<double> multiViewScores(const std::vector<double>& fused, const std::vector<double>& single) {
-  if (fused.empty() || single.size() != fused.size()) return fused;
+double logObjectness(const std::vector<double>& log_p) {
+  if (log_p.empty()) return 0.0;
+  // log(1 - p(background)), exact also for p(background) near 0 or 1.
+  const double lb = std::min(0.0, log_p.back());
+  return lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
+}
+
+std::vector<double> multiViewScores(const std::vector<double>& fused, double log_objectness) {
+  if (fused.empty()) return fused;
   const size_t bg = fused.size() - 1;
-  // log(1 - p(background | box)), exact also for p(background) near 0 or 1.
-  const double lb = std::min(0.0, single[bg]);
-  const double log_objectness = lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
   std::vector<double> out(fused.size());
   double object_sum = 0;
   for (size_t c = 0; c < bg; ++c) {
@@ -377,8 +381,25 @@ std::vector<double> multiViewScores(const std::vector<double>& fused, const std:
   return out;
 }
 
+void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames) {
+  // The candidates' objectness over all their views: mean p(object | box).
+  std::map<std::pair<int32_t, int32_t>, std::pair<double, int>> views;  // (map, candidate) -> sum, boxes
+  for (const auto& [seq, boxes] : *frames)
+    for (const auto& b : boxes) {
+      auto& v = views[{b.map_id, b.candidate}];
+      v.first += std::exp(logObjectness(b.single.log_p));
+      ++v.second;
+    }
+  for (auto& [seq, boxes] : *frames)
+    for (auto& b : boxes) {
+      const auto& v = views.at({b.map_id, b.candidate});
+      b.log_objectness = 0.5 * logObjectness(b.single.log_p) + 0.5 * std::log(std::max(1e-300, v.first / v.second));
+      b.multi.log_p = multiViewScores(b.fused.log_p, b.log_objectness);
+    }
+}
+
 int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
-  std::map<int32_t, size_t> best;  // object -> its most object-like box
+  std::map<int32_t, size_t> best;  // object -> the box its own view finds most object-like
   const auto background = [](const RecognitionRecording::Box& b) {
     return b.single.log_p.empty() ? 0.0 : b.single.log_p.back();
   };
@@ -522,11 +543,11 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
       }
       b.fused.box = b.single.box;
       b.fused.log_p = it->second.log_p;
-      b.multi.log_p = multiViewScores(b.fused.log_p, b.single.log_p);
       b.multi.label = argmaxOf(b.fused.log_p);
       b.multi_from_object = it->second.from_object;
       b.object = it->second.object;
     }
+  scoreMultiView(&run.frames);
   for (auto& [seq, boxes] : run.frames) run.duplicates += demoteDuplicateBoxes(&boxes);
   run.objects = static_cast<int>(labeller.engine().numObjects());
   run.object_map = objectMapSummary(labeller.engine());

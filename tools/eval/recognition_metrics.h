@@ -144,9 +144,10 @@ struct RecognitionRecording {
   struct Box {
     LabelledBox single;  ///< the box's own p(class | box)
     LabelledBox fused;   ///< p(class | every view of its object): label and score
-    LabelledBox multi;   ///< label of `fused`, scored by multiViewScores()
+    LabelledBox multi;   ///< label of `fused`, scored by scoreMultiView()
     int32_t map_id = -1, candidate = -1;
     int32_t object = -1;  ///< id of its object in the replayed map (-1: fallback)
+    double log_objectness = 0;  ///< log p(object | box) of its multi-view score (scoreMultiView)
     bool multi_from_object = true;
   };
   std::vector<std::string> classes;  ///< the model's, background last
@@ -169,13 +170,23 @@ struct RecognitionRecording {
 /// scene is one object and its parts lie in it (the Middlebury temple), so "one dominant object".
 nlohmann::json objectMapSummary(const ObjectMapEngine& engine);
 
+/// log(1 - p(background)) from log-probabilities with the background last (0 for none).
+double logObjectness(const std::vector<double>& log_p);
+
 /// The multi-view detection scores of a box (log, in the model's class order, background last)
-/// from its object's fused posterior and its own view: p(c) = p(c | object's views) x (1 -
-/// p(background | box)) for each object class, p(background) the rest. The object's views say
-/// which object it is; only the box's own view can say whether this box frames the whole object
-/// (a box on a part of a mug, or on the mug and half the table, is a view of the mug's object but
-/// not a mug detection). The reported label stays the fused posterior's argmax.
-std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, const std::vector<double>& single_log_p);
+/// from its object's fused posterior and p(object | box): p(c) = p(c | object's views) x p(object |
+/// box) for each object class, p(background) the rest. The object's views say which object it is;
+/// only the box's views can say whether this box frames the whole object (a box on a part of a mug,
+/// or on the mug and half the table, is a view of the mug's object but not a mug detection). The
+/// reported label stays the fused posterior's argmax.
+std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, double log_objectness);
+
+/// Scores every box of a recording (`frames`, their single and fused log p set) as a multi-view
+/// detection: multiViewScores() with p(object | box) the geometric mean of the box's own view's
+/// 1 - p(background | box) and the mean of that over every box of its candidate in the recording
+/// (a candidate that is a part of an object, or an object with a stretch of table, is boxed alike in
+/// most of its views, and most of them say so; one view alone is noisy).
+void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames);
 
 /// An object is one detection per frame. Of the boxes of one frame (`boxes`) whose candidates
 /// belong to the same object of the map, the one its own view finds most object-like (lowest
