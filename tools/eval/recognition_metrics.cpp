@@ -368,16 +368,26 @@ double logObjectness(const std::vector<double>& log_p) {
   return lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
 }
 
-std::vector<double> multiViewScores(const std::vector<double>& fused, double log_objectness) {
-  if (fused.empty()) return fused;
-  const size_t bg = fused.size() - 1;
-  std::vector<double> out(fused.size());
+namespace {
+
+// Adds `log_factor` to the object classes of `log_p` (background last) and gives the background the
+// rest of the probability.
+void scaleObjectClasses(std::vector<double>* log_p, double log_factor) {
+  if (log_p->empty()) return;
+  const size_t bg = log_p->size() - 1;
   double object_sum = 0;
   for (size_t c = 0; c < bg; ++c) {
-    out[c] = fused[c] + log_objectness;
-    object_sum += std::exp(out[c]);
+    (*log_p)[c] += log_factor;
+    object_sum += std::exp((*log_p)[c]);
   }
-  out[bg] = std::log(std::max(1e-300, 1.0 - std::min(1.0, object_sum)));
+  (*log_p)[bg] = std::log(std::max(1e-300, 1.0 - std::min(1.0, object_sum)));
+}
+
+}  // namespace
+
+std::vector<double> multiViewScores(const std::vector<double>& fused, double log_objectness) {
+  std::vector<double> out = fused;
+  scaleObjectClasses(&out, log_objectness);
   return out;
 }
 
@@ -400,6 +410,8 @@ void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* f
 
 int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
   std::map<int32_t, size_t> best;  // object -> the box its own view finds most object-like
+  // By log p(background | box) itself: 1 - p(background) rounds to 1 for the many boxes whose
+  // view is sure (log p(background) of -800), and they would tie.
   const auto background = [](const RecognitionRecording::Box& b) {
     return b.single.log_p.empty() ? 0.0 : b.single.log_p.back();
   };
@@ -413,13 +425,7 @@ int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
   for (size_t i = 0; i < boxes->size(); ++i) {
     RecognitionRecording::Box& b = (*boxes)[i];
     if (b.object < 0 || best.at(b.object) == i || b.multi.log_p.empty()) continue;
-    const size_t bg = b.multi.log_p.size() - 1;
-    double object_sum = 0;
-    for (size_t c = 0; c < bg; ++c) {
-      b.multi.log_p[c] += kMinLogProb;
-      object_sum += std::exp(b.multi.log_p[c]);
-    }
-    b.multi.log_p[bg] = std::log1p(-std::min(1.0, object_sum));
+    scaleObjectClasses(&b.multi.log_p, kMinLogProb);
     ++duplicates;
   }
   return duplicates;
