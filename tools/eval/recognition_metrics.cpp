@@ -392,18 +392,19 @@ std::vector<double> multiViewScores(const std::vector<double>& fused, double log
 }
 
 void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames) {
-  // The candidates' objectness over all their views: mean p(object | box).
+  // Each box's own view, and its candidate's over all its views: mean p(object | box).
   std::map<std::pair<int32_t, int32_t>, std::pair<double, int>> views;  // (map, candidate) -> sum, boxes
-  for (const auto& [seq, boxes] : *frames)
-    for (const auto& b : boxes) {
+  for (auto& [seq, boxes] : *frames)
+    for (auto& b : boxes) {
+      b.log_objectness = logObjectness(b.single.log_p);
       auto& v = views[{b.map_id, b.candidate}];
-      v.first += std::exp(logObjectness(b.single.log_p));
+      v.first += std::exp(b.log_objectness);
       ++v.second;
     }
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
       const auto& v = views.at({b.map_id, b.candidate});
-      b.log_objectness = 0.5 * logObjectness(b.single.log_p) + 0.5 * std::log(std::max(1e-300, v.first / v.second));
+      b.log_objectness = 0.5 * b.log_objectness + 0.5 * std::log(std::max(1e-300, v.first / v.second));
       b.multi.log_p = multiViewScores(b.fused.log_p, b.log_objectness);
     }
 }
