@@ -178,12 +178,90 @@ void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, cons
   *candidates = std::move(kept);
 }
 
+// What of an object lies as low as the support's depth noise (a cap's brim, a bowl's foot) was
+// removed with the support's band. A band point whose colour is more likely the candidate's than
+// the support's (RGB histograms of band_colour_bin levels: the candidate's own points against the
+// band, which is mostly the support) and that is connected to the candidate's base through such
+// points (steps of 2 x radius), within band_grow of its bounds, is the candidate's. `coloured`:
+// the clustered points, on a grid of `voxel` (candidates' points are positions of these).
+// Returns the points taken (summed over candidates).
+int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<MapPoint>& band,
+                       const std::vector<MapPoint>& coloured, double voxel, const Plane& plane, const ProposalOptions& o) {
+  if (!(o.band_grow > 0) || band.empty() || candidates->empty()) return 0;
+  const int bin = std::max(1, o.band_colour_bin);
+  const int levels = 255 / bin + 1;
+  const size_t bins = static_cast<size_t>(levels * levels * levels);
+  const auto colourBin = [&](uint8_t r, uint8_t g, uint8_t b) {
+    return static_cast<size_t>((r / bin * levels + g / bin) * levels + b / bin);
+  };
+  std::vector<double> support(bins, 0);
+  for (const auto& m : band) support[colourBin(m.r, m.g, m.b)] += 1.0 / static_cast<double>(band.size());
+  std::unordered_map<int64_t, size_t> colour_of;  // voxel key of a clustered point -> its colour bin
+  colour_of.reserve(coloured.size());
+  for (const auto& m : coloured) colour_of.emplace(voxelKey(m.p, voxel), colourBin(m.r, m.g, m.b));
+  std::vector<size_t> band_bin(band.size());
+  for (size_t i = 0; i < band.size(); ++i) band_bin[i] = colourBin(band[i].r, band[i].g, band[i].b);
+
+  const float step = static_cast<float>(2 * o.radius);
+  const auto cellOf = [&](const Eigen::Vector3f& p) -> Eigen::Vector3i { return (p / step).array().floor().cast<int>(); };
+  const auto keyOf = [&](const Eigen::Vector3i& c) {
+    return voxelKey((c.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * step, step);
+  };
+  std::unordered_map<int64_t, std::vector<int>> grid;
+  for (size_t i = 0; i < band.size(); ++i) grid[keyOf(cellOf(band[i].p))].push_back(static_cast<int>(i));
+  std::vector<int> taken_by(band.size(), -1);
+  int64_t taken = 0;
+  const float base = static_cast<float>(2 * o.support_distance);
+  std::vector<double> own(bins);
+  for (size_t k = 0; k < candidates->size(); ++k) {
+    Candidate& c = (*candidates)[k];
+    std::fill(own.begin(), own.end(), 0.0);
+    double n = 0;
+    for (const auto& p : c.points)
+      if (const auto it = colour_of.find(voxelKey(p, voxel)); it != colour_of.end()) {
+        own[it->second] += 1;
+        n += 1;
+      }
+    if (n == 0) continue;
+    const Eigen::Vector3f lo = c.min.array() - static_cast<float>(o.band_grow);
+    const Eigen::Vector3f hi = c.max.array() + static_cast<float>(o.band_grow);
+    std::vector<Eigen::Vector3f> front;
+    for (const auto& p : c.points)
+      if (plane.distance(p) <= base) front.push_back(p);
+    const size_t before = c.points.size();
+    for (size_t q = 0; q < front.size(); ++q) {
+      const Eigen::Vector3i at = cellOf(front[q]);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto cell = grid.find(keyOf(at + Eigen::Vector3i(dx, dy, dz)));
+            if (cell == grid.end()) continue;
+            for (int i : cell->second) {
+              const size_t u = static_cast<size_t>(i);
+              const Eigen::Vector3f& p = band[u].p;
+              if (taken_by[u] == static_cast<int>(k) || own[band_bin[u]] / n <= o.band_colour_ratio * support[band_bin[u]] ||
+                  (p - front[q]).squaredNorm() > step * step || (p.array() < lo.array()).any() || (p.array() > hi.array()).any())
+                continue;
+              taken_by[u] = static_cast<int>(k);
+              front.push_back(p);
+              c.points.push_back(p);
+            }
+          }
+    }
+    if (c.points.size() > before) {
+      taken += static_cast<int64_t>(c.points.size() - before);
+      setBounds(&c);
+    }
+  }
+  return taken;
+}
+
 }  // namespace
 
 ProposalOptions scaledLengths(const ProposalOptions& options, double scale) {
   ProposalOptions o = options;
   for (double* v : {&o.voxel, &o.multiview_voxel, &o.max_depth_std, &o.plane_distance, &o.structure_cell, &o.structure_extent, &o.support_radius, &o.support_below, &o.support_distance, &o.support_margin,
-                    &o.min_height, &o.max_height, &o.radius, &o.max_extent, &o.min_extent})
+                    &o.min_height, &o.max_height, &o.band_grow, &o.radius, &o.max_extent, &o.min_extent})
     *v *= scale;
   return o;
 }
@@ -385,7 +463,8 @@ Clustering clusterMap(const ClusterInputRef& in) {
     const auto t1 = std::chrono::steady_clock::now();
     out.stats.filter_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     StructureStats ss;
-    rest = removeStructure(rest, in.views, priors, o, &out.support, &has_support, &ss);
+    std::vector<MapPoint> band;
+    rest = removeStructure(rest, in.views, priors, o, &out.support, &has_support, &ss, &band);
     const auto t2 = std::chrono::steady_clock::now();
     out.stats.structure_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
     out.stats.planes = ss.planes;
@@ -406,7 +485,11 @@ Clustering clusterMap(const ClusterInputRef& in) {
     out.stats.seen_through = seen_through;
     out.stats.clustered_points = static_cast<int64_t>(rest.size());
     out.found = clusterPoints(rest, o);
-    if (has_support) standOnSupport(&out.found, out.support.plane, o);
+    if (has_support) {
+      standOnSupport(&out.found, out.support.plane, o);
+      out.stats.band_points = static_cast<int64_t>(band.size());
+      out.stats.band_taken = takeBandPoints(&out.found, band, rest, voxel, out.support.plane, o);
+    }
     out.stats.cluster_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
   }
   if (!has_support) out.support = Support{};

@@ -31,6 +31,8 @@ struct ClusterStats {
   int64_t input_points = 0, clustered_points = 0, plane_points = 0, cropped = 0;
   int64_t single_view = 0;   ///< points dropped because too few keyframes agree on them
   int64_t seen_through = 0;  ///< points dropped by free-space carving
+  int64_t band_points = 0;   ///< points of the support's band (removed with it)
+  int64_t band_taken = 0;    ///< of them, taken back by candidates (summed over candidates)
   int planes = 0;
   bool support = false;  ///< a support plane was found and the map restricted to what stands on it
   int clusters = 0;

@@ -253,7 +253,7 @@ ViewPriors viewPriors(const std::vector<View>& views) {
 
 std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
                                       const ViewPriors& priors, const ProposalOptions& o, Support* support,
-                                      bool* has_support, StructureStats* stats) {
+                                      bool* has_support, StructureStats* stats, std::vector<MapPoint>* band) {
   *has_support = false;
   *stats = StructureStats{};
   const size_t total = points.size();
@@ -396,7 +396,10 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
   if (best >= 0)
     for (const auto& key : region)
       for (int i : found[static_cast<size_t>(best)].dense.at(key))
-        if (std::abs(support->plane.distance(points[static_cast<size_t>(i)].p)) <= o.support_distance) mark({i});
+        if (std::abs(support->plane.distance(points[static_cast<size_t>(i)].p)) <= o.support_distance) {
+          mark({i});
+          if (band) band->push_back(points[static_cast<size_t>(i)]);
+        }
   for (size_t k = 0; k < found.size(); ++k) {
     const bool remove = best < 0 || std::abs(found[k].plane.n.dot(support->plane.n)) < 0.5f;
     if (!remove) continue;

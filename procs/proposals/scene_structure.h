@@ -66,9 +66,11 @@ struct StructureStats {
 /// object (o.structure_extent) are structure and removed. The support is the near-horizontal
 /// structure plane (normal within o.support_max_tilt_deg of the views' up) that the views' optical
 /// axes hit first most often; `support` is set when there is one. Returns the points that are
-/// not structure.
+/// not structure. `band`, when given, receives the support's own points (its band of
+/// o.support_distance), which are removed.
 std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
                                       const ViewPriors& priors, const ProposalOptions& o, Support* support,
-                                      bool* has_support, StructureStats* stats);
+                                      bool* has_support, StructureStats* stats,
+                                      std::vector<MapPoint>* band = nullptr);
 
 }  // namespace slamaware

@@ -108,6 +108,43 @@ TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
   EXPECT_GE(short_, 1);
 }
 
+// A cap: a dark crown and its brim, which lies flat in the support's band (as low as the table's
+// depth noise) and is removed with it. The brim is the crown's colour, which the table hardly
+// has: it is taken back by the crown's candidates. The table, and a flat towel of another colour
+// touching the brim, are not.
+TEST(ProposalClustering, AnObjectsPartInTheSupportsBandIsTheObjects) {
+  std::vector<MapPoint> brim, towel;
+  for (float x = -0.1f; x <= 0.1f; x += 0.004f)
+    for (float y = -0.1f; y <= 0.1f; y += 0.004f) {
+      const float r = std::hypot(x, y);
+      if (x > 0 && r > 0.042f && r < 0.1f) brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
+    }
+  for (float x = 0.106f; x <= 0.2f; x += 0.004f)
+    for (float y = -0.05f; y <= 0.05f; y += 0.004f) towel.push_back({Eigen::Vector3f(x, y, 0.004f), 120, 60, 60});
+  const auto points = join(join(table(0.8f, 0.004f), cylinder(0, 0, 0.04f, 0.1f, 0.004f, 40)), join(brim, towel));
+  for (const double grow : {0.0, 0.06}) {
+    ProposalOptions o = metricOptions();
+    o.band_grow = grow;
+    CandidateMap map(o);
+    map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
+    ASSERT_TRUE(reclusterFromAbove(map));
+    ASSERT_TRUE(map.stats().support);
+    float reach = 0;  // how far in +x the crown's candidates reach
+    for (const auto& c : map.candidates()) {
+      for (const auto& p : c.points) EXPECT_LT(p.x(), 0.104f) << "the towel was taken (band_grow " << grow << ")";
+      EXPECT_LT((c.max - c.min).head<2>().maxCoeff(), 0.21f) << "the table was taken (band_grow " << grow << ")";
+      reach = std::max(reach, c.max.x());
+    }
+    if (grow > 0) {
+      EXPECT_GT(reach, 0.09f) << "the brim was not taken";
+      EXPECT_GT(map.stats().band_taken, static_cast<int64_t>(brim.size() / 2));
+    } else {
+      EXPECT_LT(reach, 0.05f);
+      EXPECT_EQ(map.stats().band_taken, 0);
+    }
+  }
+}
+
 // Of two candidates on one line of sight, the far one is culled; moved aside, both are kept.
 TEST(ProposalProjection, FarCandidateBehindANearOneIsCulled) {
   const ProposalOptions o = metricOptions();
