@@ -217,8 +217,8 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
     Candidate& c = (*candidates)[k];
     std::fill(own.begin(), own.end(), 0.0);
     double n = 0;
-    for (const auto& p : c.points)
-      if (const auto it = colour_of.find(voxelKey(p, voxel)); it != colour_of.end()) {
+    for (size_t i = 0; i < c.points.size(); i += 4)  // every 4th point: plenty for a histogram
+      if (const auto it = colour_of.find(voxelKey(c.points[i], voxel)); it != colour_of.end()) {
         own[it->second] += 1;
         n += 1;
       }
@@ -270,43 +270,66 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
   std::vector<Candidate> out;
   std::vector<std::vector<int64_t>> keys;  // per kept cluster, at the finest clustering voxel
   const double key_voxel = 2 * o.radius;
+  // Each coarser scale clusters a grid of half its radius (the map itself is on a grid of about
+  // half the finest radius): a bounded number of neighbours per point, and about the same density
+  // threshold (neighbours per radius) at every scale. Clusters are then made of the map's own
+  // points (each takes the cluster of its grid cell), so that sizes and overlaps compare across
+  // scales. The grids are built once for both passes.
+  struct Grid {
+    std::vector<Eigen::Vector3f> xyz, rgb;
+    std::vector<int> cell_of;  // per map point, its grid point (-1: none)
+  };
+  std::vector<Grid> grids;
   for (int s = 0; s < o.scales; ++s) {
     const double r = o.radius * std::pow(2.0, s);
-    // Each coarser scale clusters a grid of half its radius (the map itself is on a grid of about
-    // half the finest radius): a bounded number of neighbours per point, and about the same
-    // density threshold (neighbours per radius) at every scale. Clusters are then made of the
-    // map's own points (each takes the cluster of its grid cell), so that sizes and overlaps
-    // compare across scales.
     const std::vector<MapPoint> cloud = s == 0 ? points : downsample(points, r / 2);
     if (cloud.empty()) break;
-    std::vector<Eigen::Vector3f> xyz(cloud.size()), rgb(cloud.size());
+    Grid g;
+    g.xyz.resize(cloud.size());
+    g.rgb.resize(cloud.size());
     for (size_t i = 0; i < cloud.size(); ++i) {
-      xyz[i] = cloud[i].p;
-      rgb[i] = Eigen::Vector3f(cloud[i].r, cloud[i].g, cloud[i].b);
+      g.xyz[i] = cloud[i].p;
+      g.rgb[i] = Eigen::Vector3f(cloud[i].r, cloud[i].g, cloud[i].b);
     }
-    DensityClusterOptions dc;
-    dc.radius = static_cast<float>(r);
-    dc.min_neighbours = o.min_neighbours;
-    dc.colour_distance = static_cast<float>(o.colour_distance);
-    int count = 0;
-    const std::vector<int> label = densityClusters(xyz, rgb, dc, &count);
-    std::vector<Candidate> found(static_cast<size_t>(count));
+    g.cell_of.resize(points.size());
     if (s == 0) {
-      for (size_t i = 0; i < xyz.size(); ++i)
-        if (label[i] >= 0) found[static_cast<size_t>(label[i])].points.push_back(xyz[i]);
+      for (size_t i = 0; i < points.size(); ++i) g.cell_of[i] = static_cast<int>(i);
     } else {
-      std::unordered_map<int64_t, int> cell_label;  // downsample() keeps one point per cell, in key order
-      cell_label.reserve(cloud.size());
-      for (size_t i = 0; i < cloud.size(); ++i) cell_label.emplace(voxelKey(cloud[i].p, r / 2), label[i]);
-      for (const auto& m : points) {
-        const auto it = cell_label.find(voxelKey(m.p, r / 2));
-        if (it != cell_label.end() && it->second >= 0) found[static_cast<size_t>(it->second)].points.push_back(m.p);
+      std::unordered_map<int64_t, int> cell;  // downsample() keeps one point per cell
+      cell.reserve(cloud.size());
+      for (size_t i = 0; i < cloud.size(); ++i) cell.emplace(voxelKey(cloud[i].p, r / 2), static_cast<int>(i));
+      for (size_t i = 0; i < points.size(); ++i) {
+        const auto it = cell.find(voxelKey(points[i].p, r / 2));
+        g.cell_of[i] = it == cell.end() ? -1 : it->second;
       }
+    }
+    grids.push_back(std::move(g));
+  }
+  // Position alone, then (colour_distance > 0) position and colour, at every scale but the finest
+  // (where objects are apart anyway): touching objects of different colours that no density
+  // threshold separates are split by the second pass, while an object of many colours (a printed
+  // box) stays whole in the first.
+  const int passes = o.colour_distance > 0 ? 2 : 1;
+  for (int pass = 0; pass < passes; ++pass)
+  for (int s = pass; s < static_cast<int>(grids.size()); ++s) {
+    const Grid& g = grids[static_cast<size_t>(s)];
+    DensityClusterOptions dc;
+    dc.radius = static_cast<float>(o.radius * std::pow(2.0, s));
+    dc.min_neighbours = o.min_neighbours;
+    dc.colour_distance = pass == 1 ? static_cast<float>(o.colour_distance) : 0.0f;
+    int count = 0;
+    const std::vector<int> label = densityClusters(g.xyz, g.rgb, dc, &count);
+    std::vector<Candidate> found(static_cast<size_t>(count));
+    for (size_t i = 0; i < points.size(); ++i) {
+      const int cell = g.cell_of[i];
+      if (cell >= 0 && label[static_cast<size_t>(cell)] >= 0)
+        found[static_cast<size_t>(label[static_cast<size_t>(cell)])].points.push_back(points[i].p);
     }
     const int min_points = o.min_points;
     for (auto& c : found) {
       if (static_cast<int>(c.points.size()) < min_points) continue;
       c.scale = s;
+      c.by_colour = pass == 1;
       setBounds(&c);
       const Eigen::Vector3f extent = c.max - c.min;
       if (extent.maxCoeff() > o.max_extent || extent.maxCoeff() < o.min_extent) continue;
@@ -315,7 +338,9 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
       bool duplicate = false;
       for (size_t i = 0; i < keys.size(); ++i)
         if (jaccard(k, keys[i]) >= o.same_cluster_overlap) {
-          ++out[i].stability;  // found again: an isolated object rather than a fragment
+          // Found again: an isolated object rather than a fragment. (The colour pass only adds
+          // clusters: it does not change the standing of the position-only ones.)
+          if (pass == 0 || out[i].by_colour) ++out[i].stability;
           duplicate = true;
           break;
         }

@@ -21,6 +21,7 @@ struct Candidate {
   int32_t id = -1;
   int scale = 0;                       ///< 0 = finest radius
   int stability = 1;                   ///< scales at which the same cluster was found
+  bool by_colour = false;              ///< found only by the clustering on position and colour
   std::vector<Eigen::Vector3f> points; ///< world frame, map units
   Eigen::Vector3f min, max;            ///< axis-aligned bounds
   Eigen::Vector3f centroid;

@@ -16,6 +16,7 @@ struct ProposalBox {
   float median_depth = 0;            ///< map units
   int scale = 0;
   int stability = 1;
+  bool by_colour = false;            ///< the candidate was found only on position and colour
   int points = 0;                    ///< projected points inside the image
 };
 

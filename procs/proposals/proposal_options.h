@@ -66,7 +66,8 @@ struct ProposalOptions {
   double radius = 0.008;         ///< map units, neighbourhood radius of the finest scale
   int scales = 4;                ///< density thresholds, a factor 2 apart
   int min_neighbours = 4;        ///< points within the radius (on a grid of half of it) of a core point
-  double colour_distance = 0;    ///< RGB distance (0..441) under which core points join; <= 0: position only
+  double colour_distance = 40;   ///< RGB distance (0..441) under which core points join in a second clustering,
+                                 ///< on position and colour, whose clusters are added (<= 0: position only)
   int min_points = 60;           ///< smallest cluster, in map points (on the voxel grid) at every scale
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
@@ -120,7 +121,7 @@ struct ProposalOptions {
     v("radius", radius, "map units, clustering radius of the finest scale (x2 per scale)");
     v("scales", scales, "density thresholds, a factor 2 apart");
     v("min_neighbours", min_neighbours, "points within the radius that make a core point");
-    v("colour_distance", colour_distance, "RGB distance for core points to join (<= 0: position only)");
+    v("colour_distance", colour_distance, "RGB distance for core points to join in a second, colour-aware clustering (<= 0: position only)");
     v("min_points", min_points, "smallest cluster");
     v("max_extent", max_extent, "map units, largest object along any axis");
     v("min_extent", min_extent, "map units, smallest object along its largest axis");

@@ -85,6 +85,28 @@ TEST(ProposalClustering, MergesObjectsCloserThanTheRadius) {
   EXPECT_EQ(sidesOf(found[0], 0.0f).size(), 2u);
 }
 
+// Touching objects of different colours: position alone cannot split them at either scale; the
+// second clustering, on position and colour (at the coarser scale), adds each of them alone (the
+// merged pair stays too).
+TEST(ProposalClustering, TouchingObjectsOfDifferentColoursAreAlsoCandidatesAlone) {
+  const float rad = 0.04f, gap = 0.01f;
+  const auto points = join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f, 60),
+                           cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f, 200));
+  for (const double colour : {0.0, 40.0}) {
+    ProposalOptions o = metricOptions();
+    o.scales = 2;
+    o.radius = 0.032;
+    o.max_extent = 1.0;
+    o.colour_distance = colour;
+    std::multiset<size_t> sides;
+    for (const auto& c : clusterPoints(points, o)) sides.insert(sidesOf(c, 0.0f).size());
+    if (colour > 0)
+      EXPECT_EQ(sides, (std::multiset<size_t>{1, 1, 2})) << "each object alone, and the pair";
+    else
+      EXPECT_EQ(sides, (std::multiset<size_t>{2})) << "position alone merges them";
+  }
+}
+
 // The whole map path: a table with two objects on it; the table is removed as the support plane
 // and each object is a candidate spanning its own extent (down to the table) at every scale.
 TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
