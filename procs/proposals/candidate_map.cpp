@@ -17,6 +17,14 @@ int64_t voxelKey(const Eigen::Vector3f& p, double voxel) {
   return (q(p.x()) << 42) | (q(p.y()) << 21) | q(p.z());
 }
 
+// The voxel of a point, and the key of a voxel given by its indices (a neighbour's).
+Eigen::Vector3i voxelOf(const Eigen::Vector3f& p, double voxel) {
+  return (p / static_cast<float>(voxel)).array().floor().cast<int>();
+}
+int64_t voxelKeyAt(const Eigen::Vector3i& v, double voxel) {
+  return voxelKey(Eigen::Vector3f((v.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * static_cast<float>(voxel)), voxel);
+}
+
 // One point per occupied voxel: the centroid and mean colour of its points, in voxel-key order.
 std::vector<MapPoint> downsample(const std::vector<MapPoint>& in, double voxel) {
   if (!(voxel > 0) || in.empty()) return in;
@@ -133,14 +141,12 @@ std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint
       const int64_t key = voxelKey(m.p, voxel);
       auto it = keep.find(key);
       if (it == keep.end()) {
-        const Eigen::Vector3i c = (m.p / static_cast<float>(voxel)).array().floor().cast<int>();
+        const Eigen::Vector3i c = voxelOf(m.p, voxel);
         Mask all;
         for (int dx = -1; dx <= 1; ++dx)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
-              const auto n = masks.find(voxelKey((c + Eigen::Vector3i(dx, dy, dz)).cast<float>() * static_cast<float>(voxel) +
-                                                     Eigen::Vector3f::Constant(0.5f * static_cast<float>(voxel)),
-                                                 voxel));
+              const auto n = masks.find(voxelKeyAt(c + Eigen::Vector3i(dx, dy, dz), voxel));
               if (n == masks.end()) continue;
               all.bits[0] |= n->second.bits[0];
               all.bits[1] |= n->second.bits[1];
@@ -202,13 +208,9 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
   std::vector<size_t> band_bin(band.size());
   for (size_t i = 0; i < band.size(); ++i) band_bin[i] = colourBin(band[i].r, band[i].g, band[i].b);
 
-  const float step = static_cast<float>(2 * o.radius);
-  const auto cellOf = [&](const Eigen::Vector3f& p) -> Eigen::Vector3i { return (p / step).array().floor().cast<int>(); };
-  const auto keyOf = [&](const Eigen::Vector3i& c) {
-    return voxelKey((c.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * step, step);
-  };
+  const double step = 2 * o.radius;
   std::unordered_map<int64_t, std::vector<int>> grid;
-  for (size_t i = 0; i < band.size(); ++i) grid[keyOf(cellOf(band[i].p))].push_back(static_cast<int>(i));
+  for (size_t i = 0; i < band.size(); ++i) grid[voxelKeyAt(voxelOf(band[i].p, step), step)].push_back(static_cast<int>(i));
   std::vector<int> taken_by(band.size(), -1);
   int64_t taken = 0;
   const float base = static_cast<float>(2 * o.support_distance);
@@ -230,17 +232,17 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
       if (plane.distance(p) <= base) front.push_back(p);
     const size_t before = c.points.size();
     for (size_t q = 0; q < front.size(); ++q) {
-      const Eigen::Vector3i at = cellOf(front[q]);
+      const Eigen::Vector3i at = voxelOf(front[q], step);
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
-            const auto cell = grid.find(keyOf(at + Eigen::Vector3i(dx, dy, dz)));
+            const auto cell = grid.find(voxelKeyAt(at + Eigen::Vector3i(dx, dy, dz), step));
             if (cell == grid.end()) continue;
             for (int i : cell->second) {
               const size_t u = static_cast<size_t>(i);
               const Eigen::Vector3f& p = band[u].p;
               if (taken_by[u] == static_cast<int>(k) || own[band_bin[u]] / n <= o.band_colour_ratio * support[band_bin[u]] ||
-                  (p - front[q]).squaredNorm() > step * step || (p.array() < lo.array()).any() || (p.array() > hi.array()).any())
+                  (p - front[q]).squaredNorm() > static_cast<float>(step * step) || (p.array() < lo.array()).any() || (p.array() > hi.array()).any())
                 continue;
               taken_by[u] = static_cast<int>(k);
               front.push_back(p);
@@ -310,43 +312,46 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
   // threshold separates are split by the second pass, while an object of many colours (a printed
   // box) stays whole in the first.
   const int passes = o.colour_distance > 0 ? 2 : 1;
-  for (int pass = 0; pass < passes; ++pass)
-  for (int s = pass; s < static_cast<int>(grids.size()); ++s) {
-    const Grid& g = grids[static_cast<size_t>(s)];
-    DensityClusterOptions dc;
-    dc.radius = static_cast<float>(o.radius * std::pow(2.0, s));
-    dc.min_neighbours = o.min_neighbours;
-    dc.colour_distance = pass == 1 ? static_cast<float>(o.colour_distance) : 0.0f;
-    int count = 0;
-    const std::vector<int> label = densityClusters(g.xyz, g.rgb, dc, &count);
-    std::vector<Candidate> found(static_cast<size_t>(count));
-    for (size_t i = 0; i < points.size(); ++i) {
-      const int cell = g.cell_of[i];
-      if (cell >= 0 && label[static_cast<size_t>(cell)] >= 0)
-        found[static_cast<size_t>(label[static_cast<size_t>(cell)])].points.push_back(points[i].p);
-    }
-    const int min_points = o.min_points;
-    for (auto& c : found) {
-      if (static_cast<int>(c.points.size()) < min_points) continue;
-      c.scale = s;
-      c.by_colour = pass == 1;
-      setBounds(&c);
-      const Eigen::Vector3f extent = c.max - c.min;
-      if (extent.maxCoeff() > o.max_extent || extent.maxCoeff() < o.min_extent) continue;
-      // The same cluster found again at a coarser scale is one candidate.
-      std::vector<int64_t> k = voxelSet(c.points, key_voxel);
-      bool duplicate = false;
-      for (size_t i = 0; i < keys.size(); ++i)
-        if (jaccard(k, keys[i]) >= o.same_cluster_overlap) {
-          // Found again: an isolated object rather than a fragment. (The colour pass only adds
-          // clusters: it does not change the standing of the position-only ones.)
-          if (pass == 0 || out[i].by_colour) ++out[i].stability;
-          duplicate = true;
-          break;
-        }
-      if (duplicate) continue;
-      keys.push_back(std::move(k));
-      out.push_back(std::move(c));
+  for (int pass = 0; pass < passes; ++pass) {
+    const int first_scale = pass == 0 ? 0 : 1;
+    for (int s = first_scale; s < static_cast<int>(grids.size()); ++s) {
+      const Grid& g = grids[static_cast<size_t>(s)];
+      DensityClusterOptions dc;
+      dc.radius = static_cast<float>(o.radius * std::pow(2.0, s));
+      dc.min_neighbours = o.min_neighbours;
+      dc.colour_distance = pass == 1 ? static_cast<float>(o.colour_distance) : 0.0f;
+      int count = 0;
+      const std::vector<int> label = densityClusters(g.xyz, g.rgb, dc, &count);
+      std::vector<Candidate> found(static_cast<size_t>(count));
+      for (size_t i = 0; i < points.size(); ++i) {
+        const int cell = g.cell_of[i];
+        if (cell >= 0 && label[static_cast<size_t>(cell)] >= 0)
+          found[static_cast<size_t>(label[static_cast<size_t>(cell)])].points.push_back(
+              points[i].p);
+      }
+      const int min_points = o.min_points;
+      for (auto& c : found) {
+        if (static_cast<int>(c.points.size()) < min_points) continue;
+        c.scale = s;
+        c.by_colour = pass == 1;
+        setBounds(&c);
+        const Eigen::Vector3f extent = c.max - c.min;
+        if (extent.maxCoeff() > o.max_extent || extent.maxCoeff() < o.min_extent) continue;
+        // The same cluster found again at a coarser scale is one candidate.
+        std::vector<int64_t> k = voxelSet(c.points, key_voxel);
+        bool duplicate = false;
+        for (size_t i = 0; i < keys.size(); ++i)
+          if (jaccard(k, keys[i]) >= o.same_cluster_overlap) {
+            // Found again: an isolated object rather than a fragment. (The colour pass only adds
+            // clusters: it does not change the standing of the position-only ones.)
+            if (pass == 0 || out[i].by_colour) ++out[i].stability;
+            duplicate = true;
+            break;
+          }
+        if (duplicate) continue;
+        keys.push_back(std::move(k));
+        out.push_back(std::move(c));
+      }
     }
   }
   // A deterministic order: by scale, then by position.

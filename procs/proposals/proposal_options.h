@@ -67,7 +67,8 @@ struct ProposalOptions {
   int scales = 4;                ///< density thresholds, a factor 2 apart
   int min_neighbours = 4;        ///< points within the radius (on a grid of half of it) of a core point
   double colour_distance = 40;   ///< RGB distance (0..441) under which core points join in a second clustering,
-                                 ///< on position and colour, whose clusters are added (<= 0: position only)
+                                 ///< on position and colour at the coarser scales, whose clusters are added
+                                 ///< (<= 0: position only)
   int min_points = 60;           ///< smallest cluster, in map points (on the voxel grid) at every scale
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
