@@ -215,6 +215,7 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
   int64_t taken = 0;
   const float base = static_cast<float>(2 * o.support_distance);
   std::vector<double> own(bins);
+  std::vector<char> own_colour(bins);  // per bin: the candidate's colour rather than the support's
   for (size_t k = 0; k < candidates->size(); ++k) {
     Candidate& c = (*candidates)[k];
     std::fill(own.begin(), own.end(), 0.0);
@@ -225,6 +226,7 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
         n += 1;
       }
     if (n == 0) continue;
+    for (size_t b = 0; b < bins; ++b) own_colour[b] = own[b] / n > o.band_colour_ratio * support[b];
     const Eigen::Vector3f lo = c.min.array() - static_cast<float>(o.band_grow);
     const Eigen::Vector3f hi = c.max.array() + static_cast<float>(o.band_grow);
     std::vector<Eigen::Vector3f> front;
@@ -241,7 +243,7 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
             for (int i : cell->second) {
               const size_t u = static_cast<size_t>(i);
               const Eigen::Vector3f& p = band[u].p;
-              if (taken_by[u] == static_cast<int>(k) || own[band_bin[u]] / n <= o.band_colour_ratio * support[band_bin[u]] ||
+              if (taken_by[u] == static_cast<int>(k) || !own_colour[band_bin[u]] ||
                   (p - front[q]).squaredNorm() > static_cast<float>(step * step) || (p.array() < lo.array()).any() || (p.array() > hi.array()).any())
                 continue;
               taken_by[u] = static_cast<int>(k);

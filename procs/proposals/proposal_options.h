@@ -53,11 +53,11 @@ struct ProposalOptions {
   double max_height = 0.5;       ///< map units: points higher than this over the support are not on it
   bool add_footprint = true;     ///< a candidate over the support plane includes its footprint on it
   // What of an object lies in the support's band (a cap's brim, a bowl's foot): band points of a
-  // colour the support rarely has, connected to a candidate's base, are the candidate's.
+  // colour far more common on a candidate than in the band, connected to its base, are its own.
   double band_grow = 0.06;       ///< map units, how far past its bounds a candidate takes band points (<= 0: off)
   double band_colour_ratio = 5;  ///< a band point's colour is the candidate's when its share of the candidate's
                                  ///< points is over this x its share of the band
-  int band_colour_bin = 32;      ///< RGB levels per colour bin of the support's colour histogram
+  int band_colour_bin = 32;      ///< RGB levels per bin of the candidate's and the band's colour histograms
   FreeSpaceOptions free_space;   ///< points seen through by other keyframes are not objects
   int max_maps = 4;              ///< SLAM maps whose candidates are kept (SLAM may relocalise into an older one)
   int max_views = 512;           ///< camera poses kept for the up / look-at priors (thinned beyond)
@@ -114,7 +114,7 @@ struct ProposalOptions {
     v("add_footprint", add_footprint, "candidates over the support plane include their footprint on it");
     v("band_grow", band_grow, "map units, how far past its bounds a candidate takes support-band points (<= 0: off)");
     v("band_colour_ratio", band_colour_ratio, "a band point is the candidate's when its colour's share of the candidate is over this x its share of the band");
-    v("band_colour_bin", band_colour_bin, "RGB levels per bin of the support's colour histogram");
+    v("band_colour_bin", band_colour_bin, "RGB levels per bin of the candidate's and the band's colour histograms");
     v.section("free_space", free_space);
     v("max_maps", max_maps, "SLAM maps whose candidates are kept (SLAM may return to an older one)");
     v("max_views", max_views, "camera poses kept for the up and look-at priors");
