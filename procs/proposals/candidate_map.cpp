@@ -260,6 +260,17 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
   return taken;
 }
 
+// The clusters of `finer_label` (per map point, -1: none) holding at least `share` of `members`.
+int countParts(const std::vector<int>& members, const std::vector<int>& finer_label, double share) {
+  std::unordered_map<int, int> count;
+  for (const int i : members)
+    if (const int l = finer_label[static_cast<size_t>(i)]; l >= 0) ++count[l];
+  int parts = 0;
+  for (const auto& [label, n] : count)
+    if (n >= share * static_cast<double>(members.size())) ++parts;
+  return parts;
+}
+
 }  // namespace
 
 ProposalOptions scaledLengths(const ProposalOptions& options, double scale) {
@@ -314,6 +325,7 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
   // threshold separates are split by the second pass, while an object of many colours (a printed
   // box) stays whole in the first.
   const int passes = o.colour_distance > 0 ? 2 : 1;
+  std::vector<std::vector<int>> point_label(grids.size());  // per scale, each map point's position-pass cluster
   for (int pass = 0; pass < passes; ++pass) {
     const int first_scale = pass == 0 ? 0 : 1;
     for (int s = first_scale; s < static_cast<int>(grids.size()); ++s) {
@@ -325,12 +337,22 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
       int count = 0;
       const std::vector<int> label = densityClusters(g.xyz, g.rgb, dc, &count);
       std::vector<Candidate> found(static_cast<size_t>(count));
+      std::vector<std::vector<int>> members(static_cast<size_t>(count));
+      if (pass == 0) point_label[static_cast<size_t>(s)].assign(points.size(), -1);
       for (size_t i = 0; i < points.size(); ++i) {
         const int cell = g.cell_of[i];
-        if (cell >= 0 && label[static_cast<size_t>(cell)] >= 0)
-          found[static_cast<size_t>(label[static_cast<size_t>(cell)])].points.push_back(
-              points[i].p);
+        if (cell >= 0 && label[static_cast<size_t>(cell)] >= 0) {
+          const int l = label[static_cast<size_t>(cell)];
+          found[static_cast<size_t>(l)].points.push_back(points[i].p);
+          members[static_cast<size_t>(l)].push_back(static_cast<int>(i));
+          if (pass == 0) point_label[static_cast<size_t>(s)][i] = l;
+        }
       }
+      // Its parts: the clusters of the next finer scale (position pass) that hold split_share of
+      // its points each. Two are two objects that the coarser threshold joins where they touch.
+      if (s > 0)
+        for (size_t l = 0; l < found.size(); ++l)
+          found[l].parts = countParts(members[l], point_label[static_cast<size_t>(s - 1)], o.split_share);
       const int min_points = o.min_points;
       for (auto& c : found) {
         if (static_cast<int>(c.points.size()) < min_points) continue;

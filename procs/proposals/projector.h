@@ -17,6 +17,7 @@ struct ProposalBox {
   int scale = 0;
   int stability = 1;
   bool by_colour = false;            ///< the candidate was found only on position and colour
+  int parts = 1;                     ///< the candidate's parts: 2 or more are touching objects
   int points = 0;                    ///< projected points inside the image
 };
 

@@ -73,6 +73,9 @@ struct ProposalOptions {
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
   double same_cluster_overlap = 0.9; ///< clusters of two scales sharing this share of points are one
+  double split_share = 0.35;     ///< a cluster whose points fall into two or more clusters of the next finer
+                                 ///< scale, each holding this share of them, is two touching objects: its box
+                                 ///< ranks after those of single objects (> 0.5: off)
   double id_overlap = 0.3;       ///< a new cluster keeps the id of an old one sharing this share of voxels
   // Projection into each frame.
   int max_points_per_candidate = 400; ///< points projected per candidate (evenly subsampled)
@@ -127,6 +130,7 @@ struct ProposalOptions {
     v("max_extent", max_extent, "map units, largest object along any axis");
     v("min_extent", min_extent, "map units, smallest object along its largest axis");
     v("same_cluster_overlap", same_cluster_overlap, "share of points for clusters of two scales to be one");
+    v("split_share", split_share, "share of a cluster's points that each of two finer-scale clusters must hold for it to rank as two objects (> 0.5: off)");
     v("id_overlap", id_overlap, "share of voxels for a new cluster to keep an old id");
     v("max_points_per_candidate", max_points_per_candidate, "points projected per candidate");
     v("depth_buffer_cell_px", depth_buffer_cell_px, "px, depth-buffer cell");

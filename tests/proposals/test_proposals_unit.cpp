@@ -107,6 +107,31 @@ TEST(ProposalClustering, TouchingObjectsOfDifferentColoursAreAlsoCandidatesAlone
   }
 }
 
+// Two objects whose gap lies between the radii of two scales: the coarser scale joins them, and
+// that cluster has two parts (the finer scale's clusters, each half of it); each object alone has
+// one. With split_share over 0.5 no cluster can have two parts.
+TEST(ProposalClustering, TouchingObjectsJoinedAtACoarserScaleAreTwoParts) {
+  const float rad = 0.04f, gap = 0.012f;  // between the radii 0.008 and 0.016
+  const auto points = join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f), cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f));
+  for (const double share : {0.35, 0.6}) {
+    ProposalOptions o = metricOptions();
+    o.scales = 2;
+    o.split_share = share;
+    int pairs = 0, singles = 0;
+    for (const auto& c : clusterPoints(points, o)) {
+      if (sidesOf(c, 0.0f).size() == 2) {
+        ++pairs;
+        EXPECT_EQ(c.parts, share < 0.5 ? 2 : 0) << "split_share " << share;
+      } else {
+        ++singles;
+        EXPECT_LE(c.parts, 1);
+      }
+    }
+    EXPECT_EQ(pairs, 1);
+    EXPECT_EQ(singles, 2);
+  }
+}
+
 // The whole map path: a table with two objects on it; the table is removed as the support plane
 // and each object is a candidate spanning its own extent (down to the table) at every scale.
 TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
@@ -210,6 +235,28 @@ TEST(ProposalProjection, SmallBoxesAreDroppedAndOverlapsSuppressed) {
   ASSERT_EQ(boxes.size(), 1u);
   EXPECT_EQ(boxes[0].candidate_id, 3);
   EXPECT_NEAR(boxes[0].w, 100, 3);
+}
+
+// Two touching objects, found alike at more scales than the larger of them alone, and boxed
+// almost as that one: the pair would suppress it. A cluster of two parts ranks after single
+// objects, so the larger object keeps its box and the pair is suppressed.
+TEST(ProposalProjection, APairOfTouchingObjectsRanksAfterAnObjectAlone) {
+  const ProposalOptions o = metricOptions();
+  auto square = [](int id, float x, float half, int stability, int parts) {
+    Candidate c;
+    c.id = id;
+    c.stability = stability;
+    c.parts = parts;
+    for (float u = -half; u <= half; u += half / 10)
+      for (float v = -half; v <= half; v += half / 10) c.points.emplace_back(x + u, v, 1.0f);
+    return c;
+  };
+  for (const int pair_parts : {1, 2}) {
+    const auto boxes =
+        projectCandidates({square(1, 0, 0.1f, 3, pair_parts), square(2, -0.02f, 0.085f, 1, 1)}, vga(), SE3::Identity(), o);
+    ASSERT_EQ(boxes.size(), 1u) << "the two boxes overlap by IoU > 0.5";
+    EXPECT_EQ(boxes[0].candidate_id, pair_parts == 2 ? 2 : 1) << "pair of " << pair_parts << " parts";
+  }
 }
 
 // Ids survive incremental updates: an object seen from more keyframes keeps its id, a new one
