@@ -348,13 +348,9 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
           if (pass == 0) point_label[static_cast<size_t>(s)][i] = l;
         }
       }
-      // Its parts: the clusters of the next finer scale (position pass) that hold split_share of
-      // its points each. Two are two objects that the coarser threshold joins where they touch.
-      if (s > 0)
-        for (size_t l = 0; l < found.size(); ++l)
-          found[l].parts = countParts(members[l], point_label[static_cast<size_t>(s - 1)], o.split_share);
       const int min_points = o.min_points;
-      for (auto& c : found) {
+      for (size_t l = 0; l < found.size(); ++l) {
+        Candidate& c = found[l];
         if (static_cast<int>(c.points.size()) < min_points) continue;
         c.scale = s;
         c.by_colour = pass == 1;
@@ -373,6 +369,9 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
             break;
           }
         if (duplicate) continue;
+        // Its parts: the clusters of the next finer scale (position pass) that hold split_share
+        // of its points each. Two are two objects that the coarser threshold joins where they touch.
+        if (s > 0) c.parts = countParts(members[l], point_label[static_cast<size_t>(s - 1)], o.split_share);
         keys.push_back(std::move(k));
         out.push_back(std::move(c));
       }

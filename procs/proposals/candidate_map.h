@@ -22,7 +22,7 @@ struct Candidate {
   int scale = 0;                       ///< 0 = finest radius
   int stability = 1;                   ///< scales at which the same cluster was found
   bool by_colour = false;              ///< found only by the clustering on position and colour
-  int parts = 1;                       ///< clusters of the next finer scale holding split_share of its points each
+  int parts = 1;                       ///< clusters of the next finer scale holding split_share of its points each (1 at the finest)
   std::vector<Eigen::Vector3f> points; ///< world frame, map units
   Eigen::Vector3f min, max;            ///< axis-aligned bounds
   Eigen::Vector3f centroid;
