@@ -46,7 +46,7 @@ struct ProposalOptions {
   double support_max_tilt_deg = 40; ///< deg, a support's normal is this close to the views' up
   double support_radius = 0.8;   ///< map units, the support's region: its cells this close to where the views look
   double support_below = 0.1;    ///< map units, the views' look-at point is at most this far under a support
-  double support_fill = 0.3;     ///< share of plane cells around where a view's axis meets a support that hold points
+  double support_fill = 0.2;     ///< share of plane cells around where a view's axis meets a support that hold points
   double support_distance = 0.012; ///< map units, points this close to the support are its own
   double support_margin = 0.03;  ///< map units, objects stand over the support's region grown by this
   double min_height = 0.015;     ///< map units: clusters lower than this over the support are its texture
