@@ -105,7 +105,8 @@ std::string ChildProcess::log() const {
 const char* const BusRecorder::kProbeChannel = "TEST_RECORDER_PROBE";
 
 BusRecorder::BusRecorder(const std::string& path, const std::string& channels)
-    : logger_({"lcm-logger", "--lcm-url=" + testUrl(), "--flush-interval=10", "-f", "-c",
+    : path_(path),
+      logger_({"lcm-logger", "--lcm-url=" + testUrl(), "--flush-interval=10", "-f", "-c",
                "(" + channels + ")|" + kProbeChannel, path},
               path + ".out") {
   // lcm-logger has no ready signal: publish probes until one of them reaches the file, so that
@@ -124,10 +125,35 @@ BusRecorder::BusRecorder(const std::string& path, const std::string& channels)
 
 BusRecorder::~BusRecorder() { stop(); }
 
+namespace {
+
+size_t probesInFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  size_t n = 0;
+  for (size_t at = bytes.find(BusRecorder::kProbeChannel); at != std::string::npos;
+       at = bytes.find(BusRecorder::kProbeChannel, at + 1))
+    ++n;
+  return n;
+}
+
+}  // namespace
+
 void BusRecorder::stop() {
   if (stopped_) return;
   stopped_ = true;
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let the last messages land
+  // What was published before this probe is queued ahead of it in the logger's socket: once the
+  // probe is in the file, so is the rest (a logger short of CPU reads its queue late, and SIGINT
+  // would drop what it has not read yet).
+  const size_t before = probesInFile(path_);
+  lcm::LCM lcm(testUrl());
+  const uint8_t probe[1] = {1};
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < end) {
+    lcm.publish(kProbeChannel, probe, sizeof(probe));
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    if (probesInFile(path_) > before) break;
+  }
   logger_.stop();
 }
 

@@ -51,8 +51,8 @@ class ChildProcess {
 };
 
 /// lcm-logger recording the test bus into `path` while alive (stopped with SIGINT). The
-/// constructor returns once the logger is recording; the log also holds a few messages on
-/// kProbeChannel from that handshake.
+/// constructor returns once the logger is recording, and stop() once everything published before
+/// it is in the file; the log also holds a few messages on kProbeChannel from these handshakes.
 class BusRecorder {
  public:
   static const char* const kProbeChannel;
@@ -61,6 +61,7 @@ class BusRecorder {
   void stop();
 
  private:
+  std::string path_;
   ChildProcess logger_;
   bool stopped_ = false;
 };
