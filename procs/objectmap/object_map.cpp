@@ -157,7 +157,10 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
     return false;
   }
   Segment& seg = segmentFor(c.map_id);
-  if (c.full) seg.occupancy.clear();
+  if (c.full) {
+    seg.occupancy.clear();
+    seg.inserted.clear();  // refilled below: a full cloud holds every keyframe's points so far
+  }
   std::unordered_map<int32_t, Eigen::Vector3f> origins;
   for (size_t k = 0; k < nk; ++k) {
     const Eigen::Vector3f o(c.kf_x[k], c.kf_y[k], c.kf_z[k]);
@@ -171,7 +174,14 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
   CloudReport r;
   r.full = c.full;
   r.segment = seg.id;
+  std::map<int32_t, size_t> seen;  // points of each keyframe in this cloud
+  if (c.full)
+    for (size_t i = 0; i < n; ++i) ++seen[c.keyframe_ids[i]];
   for (size_t i = 0; i < n; i += stride) {
+    if (!c.full && seen[c.keyframe_ids[i]]++ < seg.inserted[c.keyframe_ids[i]]) {
+      ++r.repeated;
+      continue;
+    }
     if (options_.occupancy.max_depth_std > 0 &&
         !(c.depth_std[i] <= options_.occupancy.max_depth_std)) {
       ++r.insert.dropped;
@@ -179,6 +189,7 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
     }
     batches[c.keyframe_ids[i]].emplace_back(c.x[i], c.y[i], c.z[i]);
   }
+  for (const auto& [kf, count] : seen) seg.inserted[kf] = std::max(seg.inserted[kf], count);
   for (const auto& [kf, points] : batches) {
     auto o = origins.find(kf);
     const InsertStats s = seg.occupancy.insert(points, o == origins.end() ? nullptr : &o->second);

@@ -53,6 +53,9 @@ struct Segment {
   OccupancyMap occupancy;
   ObjectTable table;
   bool dirty = true;  ///< objects need regrouping
+  /// SLAM keyframe -> its points already inserted from incremental clouds. SLAM republishes a
+  /// keyframe as its points converge, appending to them: only the new ones are inserted.
+  std::map<int32_t, size_t> inserted;
   Segment(int32_t id, int32_t slam_map_id, OccupancyMap map)
       : id(id),
         slam_map_id(slam_map_id),
@@ -64,6 +67,7 @@ struct CloudReport {
   int32_t segment = -1;
   bool full = false;
   InsertStats insert;
+  size_t repeated = 0;  ///< points of a republished keyframe that were inserted before
   double ms = 0;
 };
 

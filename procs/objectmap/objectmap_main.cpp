@@ -164,9 +164,9 @@ class ObjectMapNode {
     if (r.full) status_.count("clouds_full");
     status_.count("cloud_points", static_cast<int64_t>(r.insert.points));
     status_.setCounter("map_insert_ms", static_cast<int64_t>(r.ms));
-    spdlog::debug("{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped) in {:.0f} ms",
+    spdlog::debug("{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped, {} inserted before) in {:.0f} ms",
                   r.full ? "full" : "incremental", m.seq, m.map_id, r.segment, r.insert.points,
-                  r.insert.dropped, r.ms);
+                  r.insert.dropped, r.repeated, r.ms);
   }
 
   void onDetections(const detections_t& m) {

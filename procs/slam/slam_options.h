@@ -203,10 +203,19 @@ struct DepthFilterOptions {
 /// What the process publishes besides poses.
 struct OutputOptions {
   double full_map_period_s = 5.0;  ///< s of sequence time between full SLAM_MAP messages
+  /// A keyframe is published (incremental) when its seeds are finished. Before that, a keyframe
+  /// of the active map has its points so far published once they number live_cloud_min_points,
+  /// and again whenever they have grown by this share since (0: finished keyframes only): a young
+  /// map shows its first objects while its first keyframes' seeds are still converging.
+  double live_cloud_growth = 0.5;
+  int live_cloud_min_points = 200;
 
   template <class V>
   void visit(V& v) {
     v("full_map_period_s", full_map_period_s, "s of sequence time between full maps");
+    v("live_cloud_growth", live_cloud_growth,
+      "unfinished keyframes are republished after growing by this share (0: off)");
+    v("live_cloud_min_points", live_cloud_min_points, "points an unfinished keyframe needs to be published");
   }
 };
 

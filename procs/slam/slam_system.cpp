@@ -333,12 +333,14 @@ void SlamSystem::collect(int64_t utime, int32_t seq,
     finished.swap(depth_finished_);
   }
   for (int64_t id : finished) {
+    live_published_.erase(id);
     CloudOutput c = keyframeCloud(id, utime, seq);
     if (!c.points.empty()) out->clouds.push_back(std::move(c));
   }
 
   std::shared_ptr<Map> map = tracker_->activeMap();
   if (!map || !options_.depth.enabled) return;
+  publishLiveClouds(map->id, utime, seq, out);
   if (map->id != last_full_map_id_ || utime < last_full_utime_) {
     last_full_map_id_ = map->id;  // a new map (or a restarted clock) starts the period
     last_full_utime_ = utime;
@@ -346,6 +348,19 @@ void SlamSystem::collect(int64_t utime, int32_t seq,
              static_cast<int64_t>(options_.output.full_map_period_s * 1e6)) {
     out->clouds.push_back(fullCloud(map, utime, seq));
     last_full_utime_ = utime;
+  }
+}
+
+void SlamSystem::publishLiveClouds(int map_id, int64_t utime, int32_t seq, SlamOutput* out) {
+  const double growth = options_.output.live_cloud_growth;
+  if (growth <= 0) return;
+  const auto min_points = static_cast<size_t>(std::max(1, options_.output.live_cloud_min_points));
+  for (const auto& [id, points] : depth_->liveKeyframeSizes(map_id)) {
+    if (points < min_points) continue;
+    size_t& published = live_published_[id];
+    if (published > 0 && static_cast<double>(points) < (1.0 + growth) * static_cast<double>(published)) continue;
+    published = points;
+    out->clouds.push_back(keyframeCloud(id, utime, seq));
   }
 }
 

@@ -8,6 +8,7 @@
 // since, and depth-filter frames are skipped (and counted) when the filter falls behind.
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <opencv2/core/mat.hpp>
@@ -137,6 +138,8 @@ class SlamSystem {
   KeyframeOutput describeKeyframe(const KeyFrame& kf) const;
   CloudOutput fullCloud(const std::shared_ptr<Map>& map, int64_t utime, int32_t seq) const;
   CloudOutput keyframeCloud(int64_t keyframe_id, int64_t utime, int32_t seq) const;
+  /// Incremental clouds of the map's unfinished keyframes that grew enough (OutputOptions).
+  void publishLiveClouds(int map_id, int64_t utime, int32_t seq, SlamOutput* out);
   void postDepthWork(const TrackResult& r, const Frame& frame);
 
   SlamOptions options_;
@@ -161,6 +164,7 @@ class SlamSystem {
   int first_map_id_ = -1;
   int last_full_map_id_ = -1;
   int64_t last_full_utime_ = 0;
+  std::map<int64_t, size_t> live_published_;  ///< unfinished keyframe -> points last published
 
   mutable std::mutex finished_mutex_;
   std::vector<int64_t>

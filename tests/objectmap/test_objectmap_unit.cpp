@@ -648,6 +648,47 @@ TEST(ObjectMapEngine, MalformedInputIsRefusedWithAReason) {
   EXPECT_EQ(e.objectMap().num_objects, d.num_boxes - 1);
 }
 
+// SLAM publishes a keyframe again as its points converge, with the earlier points first: the
+// engine inserts only the points it has not inserted yet; a full cloud starts over.
+TEST(ObjectMapEngine, ARepublishedKeyframeInsertsOnlyItsNewPoints) {
+  ObjectMapEngine e(ObjectMapOptions{});
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  const point_cloud_t whole = w.keyframeClouds(1)[0];
+  ASSERT_FALSE(whole.full);
+  ASSERT_GT(whole.num_points, 100);
+  const int n = whole.num_points, k = n * 2 / 5;
+  auto firstPoints = [k](point_cloud_t c) {
+    c.num_points = k;
+    for (auto* v : {&c.x, &c.y, &c.z, &c.depth_std}) v->resize(static_cast<size_t>(k));
+    for (auto* v : {&c.r, &c.g, &c.b}) v->resize(static_cast<size_t>(k));
+    c.keyframe_ids.resize(static_cast<size_t>(k));
+    return c;
+  };
+  const point_cloud_t first = firstPoints(whole);  // the keyframe while its seeds converge
+  std::string why;
+  CloudReport r;
+  ASSERT_TRUE(e.onMap(first, &why, &r)) << why;
+  EXPECT_EQ(r.repeated, 0u);
+  EXPECT_EQ(r.insert.points + r.insert.dropped, static_cast<size_t>(k));
+  ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;
+  EXPECT_EQ(r.repeated, static_cast<size_t>(k));
+  EXPECT_EQ(r.insert.points + r.insert.dropped, static_cast<size_t>(n - k));
+  ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;  // the same again: nothing new
+  EXPECT_EQ(r.repeated, static_cast<size_t>(n));
+  EXPECT_EQ(r.insert.points, 0u);
+  point_cloud_t full = whole;
+  full.full = true;
+  full.keyframe_id = -1;
+  ASSERT_TRUE(e.onMap(full, &why, &r)) << why;
+  EXPECT_EQ(r.repeated, 0u);
+  ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;  // the full cloud held them all
+  EXPECT_EQ(r.repeated, static_cast<size_t>(n));
+  ASSERT_TRUE(e.onMap(firstPoints(full), &why, &r)) << why;  // a full cloud of the first points
+  ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;                // then the rest are new again
+  EXPECT_EQ(r.repeated, static_cast<size_t>(k));
+  EXPECT_EQ(r.insert.points + r.insert.dropped, static_cast<size_t>(n - k));
+}
+
 TEST(ObjectMapEngine, ANewClassFromAnotherModelIsAddedBeforeBackground) {
   ObjectMapEngine e(ObjectMapOptions{});
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());

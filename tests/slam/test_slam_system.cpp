@@ -3,6 +3,8 @@
 // rendered tabletop video it tracks every frame after initialisation with a small error.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "common/geometry.h"
 #include "procs/slam/slam_system.h"
 #include "procs/synth/scene.h"
@@ -40,12 +42,18 @@ const Rendered& sampleFrames() {
 struct SlamRun {
   std::vector<PoseOutput> poses;
   std::vector<std::vector<float>> clouds;  // every point coordinate of every cloud, in order
+  struct Cloud {
+    int frame;
+    int64_t keyframe_id;
+    bool full;
+    size_t points;
+  };
+  std::vector<Cloud> cloud_info;  // the same clouds: when, of what, how big
   std::vector<std::pair<int64_t, std::array<double, 7>>> keyframes;
 };
 
-SlamRun runSlam(bool threaded) {
+SlamRun runSlam(bool threaded, SlamOptions options = {}) {
   const Rendered& r = sampleFrames();
-  SlamOptions options;
   options.mapping.threaded = threaded;
   options.depth.threaded = threaded;
   SlamSystem slam(options, true);
@@ -65,6 +73,7 @@ SlamRun runSlam(bool threaded) {
       for (const auto& p : c.points)
         xyz.insert(xyz.end(), {p.p_world.x(), p.p_world.y(), p.p_world.z(), p.depth_std});
       run.clouds.push_back(xyz);
+      run.cloud_info.push_back({static_cast<int>(i), c.keyframe_id, c.full, c.points.size()});
     }
   }
   return run;
@@ -106,4 +115,47 @@ TEST(SlamSystem, TracksARenderedTabletopVideo) {
   for (size_t i = 0; i < est.size(); ++i) sq += (s * est[i] - truth[i]).squaredNorm();
   const double ate = std::sqrt(sq / est.size());
   EXPECT_LT(ate, 0.01 * path) << "ATE " << ate << " m over " << path << " m";
+}
+
+// A keyframe's points are published while its seeds still converge (each time they have grown by
+// live_cloud_growth), so a young map shows its surfaces keyframes earlier than when only finished
+// keyframes are published; the finished keyframe's cloud is the same either way.
+TEST(SlamSystem, KeyframesArePublishedWhileTheirSeedsConverge) {
+  SlamOptions off, live;
+  off.output.live_cloud_growth = 0;
+  live.output.live_cloud_growth = 0.5;
+  const SlamRun a = runSlam(false, off), b = runSlam(false, live);
+  auto firstIncremental = [](const SlamRun& r) {
+    for (const auto& c : r.cloud_info)
+      if (!c.full) return c.frame;
+    return -1;
+  };
+  const int first_off = firstIncremental(a), first_live = firstIncremental(b);
+  ASSERT_GE(first_off, 0);
+  ASSERT_GE(first_live, 0);
+  EXPECT_LE(first_live + 3, first_off) << "live " << first_live << ", finished only " << first_off;
+
+  // Every cloud of a keyframe is at least 1.5 times its previous one, and at least 200 points.
+  std::map<int64_t, std::vector<size_t>> sizes_live;
+  for (const auto& c : b.cloud_info)
+    if (!c.full) sizes_live[c.keyframe_id].push_back(c.points);
+  int republished = 0;
+  for (const auto& [id, sizes] : sizes_live) {
+    republished += sizes.size() > 1;
+    for (size_t i = 1; i + 1 < sizes.size(); ++i) EXPECT_GE(sizes[i], 1.5 * sizes[i - 1]) << "keyframe " << id;
+  }
+  EXPECT_GT(republished, 0);
+  // The last incremental cloud of each keyframe finished in both runs holds the same points.
+  std::map<int64_t, std::vector<float>> last_off, last_live;
+  for (size_t i = 0; i < a.clouds.size(); ++i)
+    if (!a.cloud_info[i].full) last_off[a.cloud_info[i].keyframe_id] = a.clouds[i];
+  for (size_t i = 0; i < b.clouds.size(); ++i)
+    if (!b.cloud_info[i].full) last_live[b.cloud_info[i].keyframe_id] = b.clouds[i];
+  int compared = 0;
+  for (const auto& [id, xyz] : last_off) {
+    ASSERT_TRUE(last_live.count(id)) << "keyframe " << id;
+    EXPECT_EQ(last_live[id], xyz) << "keyframe " << id;
+    ++compared;
+  }
+  EXPECT_GT(compared, 0);
 }

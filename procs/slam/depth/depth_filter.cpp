@@ -224,6 +224,14 @@ std::vector<SemiDenseKeyframe> DepthFilter::mapKeyframes(int map_id) const {
   return out;
 }
 
+std::vector<std::pair<int64_t, size_t>> DepthFilter::liveKeyframeSizes(int map_id) const {
+  std::lock_guard<std::mutex> lock(store_mutex_);
+  std::vector<std::pair<int64_t, size_t>> out;
+  for (const auto& [id, kf] : store_)
+    if (kf.map_id == map_id && !kf.finished) out.emplace_back(id, kf.points.size());
+  return out;
+}
+
 DepthFilterStats DepthFilter::stats() const {
   std::lock_guard<std::mutex> lock(store_mutex_);
   return stats_;

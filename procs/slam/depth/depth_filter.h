@@ -89,6 +89,9 @@ class DepthFilter {
   SemiDenseKeyframe keyframe(int64_t id) const;
   /// Copies of all stored keyframes of a map, by id. Thread-safe.
   std::vector<SemiDenseKeyframe> mapKeyframes(int map_id) const;
+  /// (id, points so far) of a map's keyframes whose seeds are still converging, by id.
+  /// Thread-safe.
+  std::vector<std::pair<int64_t, size_t>> liveKeyframeSizes(int map_id) const;
   DepthFilterStats stats() const;
 
  private:
