@@ -127,8 +127,10 @@ BusRecorder::~BusRecorder() { stop(); }
 
 namespace {
 
-size_t probesInFile(const std::string& path) {
+// Probe messages in the file beyond byte `from`.
+size_t probesInFile(const std::string& path, std::streamoff from) {
   std::ifstream in(path, std::ios::binary);
+  in.seekg(from);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   size_t n = 0;
   for (size_t at = bytes.find(BusRecorder::kProbeChannel); at != std::string::npos;
@@ -145,14 +147,17 @@ void BusRecorder::stop() {
   // What was published before this probe is queued ahead of it in the logger's socket: once the
   // probe is in the file, so is the rest (a logger short of CPU reads its queue late, and SIGINT
   // would drop what it has not read yet).
-  const size_t before = probesInFile(path_);
+  std::error_code ec;
+  const auto size = fs::file_size(path_, ec);
+  const std::streamoff from = ec ? 0 : static_cast<std::streamoff>(size);
+  const size_t before = probesInFile(path_, from);
   lcm::LCM lcm(testUrl());
   const uint8_t probe[1] = {1};
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < end) {
     lcm.publish(kProbeChannel, probe, sizeof(probe));
     std::this_thread::sleep_for(std::chrono::milliseconds(30));
-    if (probesInFile(path_) > before) break;
+    if (probesInFile(path_, from) > before) break;
   }
   logger_.stop();
 }
