@@ -175,10 +175,12 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
   r.full = c.full;
   r.segment = seg.id;
   std::map<int32_t, size_t> seen;  // points of each keyframe in this cloud
-  if (c.full)
-    for (size_t i = 0; i < n; ++i) ++seen[c.keyframe_ids[i]];
-  for (size_t i = 0; i < n; i += stride) {
-    if (!c.full && seen[c.keyframe_ids[i]]++ < seg.inserted[c.keyframe_ids[i]]) {
+  for (size_t i = 0; i < n; ++i) {
+    // Its index among its keyframe's points: those before seg.inserted are in the tree already
+    // (none after a full cloud, which cleared it).
+    const size_t index = seen[c.keyframe_ids[i]]++;
+    if (i % stride != 0) continue;
+    if (index < seg.inserted[c.keyframe_ids[i]]) {
       ++r.repeated;
       continue;
     }

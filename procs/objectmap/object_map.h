@@ -53,8 +53,9 @@ struct Segment {
   OccupancyMap occupancy;
   ObjectTable table;
   bool dirty = true;  ///< objects need regrouping
-  /// SLAM keyframe -> its points already inserted from incremental clouds. SLAM republishes a
-  /// keyframe as its points converge, appending to them: only the new ones are inserted.
+  /// SLAM keyframe -> its points already in the tree (from incremental clouds or the last full
+  /// one). SLAM republishes a keyframe as its points converge, appending to them: only the new
+  /// ones are inserted.
   std::map<int32_t, size_t> inserted;
   Segment(int32_t id, int32_t slam_map_id, OccupancyMap map)
       : id(id),

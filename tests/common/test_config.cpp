@@ -45,9 +45,9 @@ struct ToyOptions {
 
 std::string writeYaml(const std::string& name, const std::string& text) {
   // A folder per test: ctest runs the cases of this file in parallel.
-  static const std::string dir =
-      test::tempDir(std::string("config_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  const std::string path = dir + "/" + name;
+  const std::string path =
+      test::tempDir(std::string("config_") + ::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+      "/" + name;
   std::ofstream(path) << text;
   return path;
 }

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -104,28 +105,21 @@ std::string ChildProcess::log() const {
 
 const char* const BusRecorder::kProbeChannel = "TEST_RECORDER_PROBE";
 
-BusRecorder::BusRecorder(const std::string& path, const std::string& channels)
-    : path_(path),
-      logger_({"lcm-logger", "--lcm-url=" + testUrl(), "--flush-interval=10", "-f", "-c",
-               "(" + channels + ")|" + kProbeChannel, path},
-              path + ".out") {
-  // lcm-logger has no ready signal: publish probes until one of them reaches the file, so that
-  // nothing published after the constructor returns can be missed by a logger still starting.
+namespace {
+
+// Publishes a probe on BusRecorder::kProbeChannel every 30 ms until `landed` (it looks at the
+// log file) is true; false after 20 s.
+bool publishProbesUntil(const std::function<bool()>& landed) {
   lcm::LCM lcm(testUrl());
   const uint8_t probe[1] = {0};
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  std::error_code ec;
   while (std::chrono::steady_clock::now() < end) {
-    lcm.publish(kProbeChannel, probe, sizeof(probe));
+    lcm.publish(BusRecorder::kProbeChannel, probe, sizeof(probe));
     std::this_thread::sleep_for(std::chrono::milliseconds(30));
-    if (fs::exists(path, ec) && fs::file_size(path, ec) > 0) return;
+    if (landed()) return true;
   }
-  ADD_FAILURE() << "lcm-logger recording " << path << " did not start within 20 s: " << logger_.log();
+  return false;
 }
-
-BusRecorder::~BusRecorder() { stop(); }
-
-namespace {
 
 // Probe messages in the file beyond byte `from`.
 size_t probesInFile(const std::string& path, std::streamoff from) {
@@ -141,6 +135,20 @@ size_t probesInFile(const std::string& path, std::streamoff from) {
 
 }  // namespace
 
+BusRecorder::BusRecorder(const std::string& path, const std::string& channels)
+    : path_(path),
+      logger_({"lcm-logger", "--lcm-url=" + testUrl(), "--flush-interval=10", "-f", "-c",
+               "(" + channels + ")|" + kProbeChannel, path},
+              path + ".out") {
+  // lcm-logger has no ready signal: publish probes until one of them reaches the file, so that
+  // nothing published after the constructor returns can be missed by a logger still starting.
+  std::error_code ec;
+  if (!publishProbesUntil([&] { return fs::exists(path, ec) && fs::file_size(path, ec) > 0; }))
+    ADD_FAILURE() << "lcm-logger recording " << path << " did not start within 20 s: " << logger_.log();
+}
+
+BusRecorder::~BusRecorder() { stop(); }
+
 void BusRecorder::stop() {
   if (stopped_) return;
   stopped_ = true;
@@ -151,14 +159,7 @@ void BusRecorder::stop() {
   const auto size = fs::file_size(path_, ec);
   const std::streamoff from = ec ? 0 : static_cast<std::streamoff>(size);
   const size_t before = probesInFile(path_, from);
-  lcm::LCM lcm(testUrl());
-  const uint8_t probe[1] = {1};
-  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (std::chrono::steady_clock::now() < end) {
-    lcm.publish(kProbeChannel, probe, sizeof(probe));
-    std::this_thread::sleep_for(std::chrono::milliseconds(30));
-    if (probesInFile(path_, from) > before) break;
-  }
+  publishProbesUntil([&] { return probesInFile(path_, from) > before; });
   logger_.stop();
 }
 
