@@ -28,7 +28,7 @@ struct ProposalOptions {
   bool relative_lengths = true;  ///< lengths in units of the median viewing distance (else map units)
   // Map filtering.
   double multiview_voxel = 0.008; ///< map units, voxel of the multi-keyframe check
-  int min_keyframes = 5;         ///< a point is kept if its voxel and neighbours hold points of this many
+  int min_keyframes = 4;         ///< a point is kept if its voxel and neighbours hold points of this many
                                  ///< keyframes (at most half of the map's keyframes)
   double voxel = 0.004;          ///< map units, the map is downsampled to one point per voxel
   int max_points = 120000;       ///< points clustered at most (bounded cost); the voxel grows to fit
