@@ -46,9 +46,8 @@ TEST(Replay, LockstepReplayTwiceIsByteIdentical) {
     const std::string out = dir + "/replay" + std::to_string(run) + ".lcm";
     test::BusRecorder recorder(out, "CAMERA.*");
     // The replayer is its own last stage here: each frame waits until it is seen on CAMERA. At
-    // the camera's rate, not as fast as possible: an LCM subscriber keeps at most 30 unhandled
-    // messages (LCM's default queue capacity), and a logger short of CPU on a loaded machine
-    // dropped the newest of a 40-frame burst (frames 32-39).
+    // the camera's rate, not as fast as possible: 40 frames in a burst are more than the recorder
+    // keeps (BusRecorder; a loaded machine lost frames 32-39).
     test::ChildProcess replay({test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(), "--lockstep",
                                "CAMERA", "--speed", "1"},
                               dir + "/replay" + std::to_string(run) + ".txt");

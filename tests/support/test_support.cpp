@@ -152,9 +152,9 @@ BusRecorder::~BusRecorder() { stop(); }
 void BusRecorder::stop() {
   if (stopped_) return;
   stopped_ = true;
-  // What was published before this probe is queued ahead of it in the logger's socket: once the
-  // probe is in the file, so is the rest (a logger short of CPU reads its queue late, and SIGINT
-  // would drop what it has not read yet).
+  // What the logger received before this probe is queued ahead of it: once the probe is in the
+  // file, so is the rest (a logger short of CPU reads its queue late, and SIGINT would drop what
+  // it has not read yet). What it dropped from a full queue stays lost (see the header).
   std::error_code ec;
   const auto size = fs::file_size(path_, ec);
   const std::streamoff from = ec ? 0 : static_cast<std::streamoff>(size);

@@ -51,8 +51,11 @@ class ChildProcess {
 };
 
 /// lcm-logger recording the test bus into `path` while alive (stopped with SIGINT). The
-/// constructor returns once the logger is recording, and stop() once everything published before
-/// it is in the file; the log also holds a few messages on kProbeChannel from these handshakes.
+/// constructor returns once the logger is recording, and stop() once everything the logger
+/// received before it is in the file; the log also holds a few messages on kProbeChannel from
+/// these handshakes. Pace what a test records: lcm-logger keeps at most 30 received, unhandled
+/// messages (LCM's default subscription queue; it has no option to raise it), so a logger short of
+/// CPU drops the newest of a longer burst, and no handshake can bring them back.
 class BusRecorder {
  public:
   static const char* const kProbeChannel;
