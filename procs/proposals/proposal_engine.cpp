@@ -15,7 +15,7 @@ CandidateMap& ProposalEngine::mapOf(int32_t map_id) {
   recent_.push_back(map_id);
   while (static_cast<int>(recent_.size()) > std::max(1, options_.max_maps)) {
     maps_.erase(recent_.front());
-    reclustered_utime_.erase(recent_.front());
+    reclustered_.erase(recent_.front());
     recent_.erase(recent_.begin());
   }
   return it->second;
@@ -64,15 +64,21 @@ ProposalEngine::~ProposalEngine() {
 
 bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
   // A growing map is clustered again at most every recluster_interval_s of frame time (the
-  // message clock: lockstep replays stay deterministic); in between, the last candidates are
-  // projected. A map's first points are clustered at once, and a clock that goes back (a replay
-  // started again) is due at once.
-  auto last = reclustered_utime_.find(pose.map_id);
-  const bool due = last == reclustered_utime_.end() || pose.utime < last->second ||
-                   static_cast<double>(pose.utime - last->second) >= 1e6 * options_.recluster_interval_s;
+  // message clock: lockstep replays stay deterministic), or sooner once it holds recluster_growth
+  // times the points of its last clustering: a young map grows many times over in its first
+  // frames, and candidates of a fraction of it miss most objects (a bounded number of extra
+  // clusterings: the growth is geometric). In between, the last candidates are projected. A map's
+  // first points are clustered at once, and a clock that goes back (a replay started again) is
+  // due at once.
+  const auto last = reclustered_.find(pose.map_id);
+  const size_t points = map.points();
+  const bool due = last == reclustered_.end() || pose.utime < last->second.utime ||
+                   static_cast<double>(pose.utime - last->second.utime) >= 1e6 * options_.recluster_interval_s ||
+                   (options_.recluster_growth > 1 &&
+                    static_cast<double>(points) >= options_.recluster_growth * static_cast<double>(last->second.points));
   if (!background_) {
     if (!due || !map.recluster()) return false;
-    reclustered_utime_[pose.map_id] = pose.utime;
+    reclustered_[pose.map_id] = {pose.utime, points};
     return true;
   }
   bool taken = false;
@@ -84,7 +90,7 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
   }
   if (!job_.valid() && due) {
     if (std::optional<ClusterInput> input = map.takeClusterInput()) {
-      reclustered_utime_[pose.map_id] = pose.utime;
+      reclustered_[pose.map_id] = {pose.utime, points};
       job_ = std::async(std::launch::async, [in = std::move(*input)] { return clusterMap(in); });
     }
   }

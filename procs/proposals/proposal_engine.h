@@ -56,7 +56,11 @@ class ProposalEngine {
 
   std::map<int32_t, CandidateMap> maps_;
   std::vector<int32_t> recent_;  ///< map ids, most recently used last
-  std::map<int32_t, int64_t> reclustered_utime_;  ///< map id -> frame time of its last re-clustering
+  struct LastClustering {
+    int64_t utime = 0;   ///< frame time
+    size_t points = 0;   ///< the map's points then
+  };
+  std::map<int32_t, LastClustering> reclustered_;  ///< map id -> its last re-clustering
   int32_t next_candidate_id_ = 1;  ///< shared by the maps: ids are unique across maps
   CandidateMap empty_{options_};
   CameraModel camera_;

@@ -62,6 +62,8 @@ struct ProposalOptions {
   int max_maps = 4;              ///< SLAM maps whose candidates are kept (SLAM may relocalise into an older one)
   int max_views = 512;           ///< camera poses kept for the up / look-at priors (thinned beyond)
   double recluster_interval_s = 0.25; ///< s of frame time between re-clusterings of a growing map
+  double recluster_growth = 1.5; ///< ...or sooner, once the map holds this many times the points of its last
+                                 ///< clustering (a young map grows fast; <= 1: off)
   // Density-based clustering (DBSCAN) at `scales` radii, each twice the previous.
   double radius = 0.008;         ///< map units, neighbourhood radius of the finest scale
   int scales = 4;                ///< density thresholds, a factor 2 apart
@@ -122,6 +124,7 @@ struct ProposalOptions {
     v("max_maps", max_maps, "SLAM maps whose candidates are kept (SLAM may return to an older one)");
     v("max_views", max_views, "camera poses kept for the up and look-at priors");
     v("recluster_interval_s", recluster_interval_s, "s of frame time between re-clusterings of a growing map (0: every change)");
+    v("recluster_growth", recluster_growth, "or sooner, once the map holds this many times the points of its last clustering (<= 1: off)");
     v("radius", radius, "map units, clustering radius of the finest scale (x2 per scale)");
     v("scales", scales, "density thresholds, a factor 2 apart");
     v("min_neighbours", min_neighbours, "points within the radius that make a core point");

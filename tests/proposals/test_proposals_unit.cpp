@@ -393,6 +393,48 @@ TEST(ProposalEngineInput, AGrowingMapIsReclusteredAtMostOncePerInterval) {
   EXPECT_FALSE(ran) << "no change, no clustering";
 }
 
+// A young map grows many times over between two intervals: once it holds recluster_growth times
+// the points of its last clustering it is clustered at once; smaller growth waits for the interval.
+TEST(ProposalEngineInput, AMapThatGrewByTheGrowthFactorIsReclusteredBeforeTheInterval) {
+  const SE3 T = lookingDown(1.0);
+  const auto young = join(table(0.8f, 0.008f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f));
+  const auto grown = join(join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f)),
+                          cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f));
+  const auto more = join(grown, cylinder(-0.15f, -0.15f, 0.04f, 0.12f, 0.004f));
+  ASSERT_GT(grown.size(), 2 * young.size());
+  ASSERT_LT(more.size(), 1.5 * grown.size());
+  for (const double growth : {1.5, 0.0}) {
+    ProposalOptions o = metricOptions();
+    o.recluster_interval_s = 10;
+    o.recluster_growth = growth;
+    ProposalEngine engine(o);
+    std::string why;
+    ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
+    auto step = [&](int seq) {
+      bool reclustered = false;
+      const proposals_t m = engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
+      return std::make_pair(reclustered, m.num_boxes);
+    };
+    ASSERT_TRUE(engine.onMap(cloudMessage(1, young), &why));
+    auto [ran, boxes] = step(0);
+    EXPECT_TRUE(ran) << "the first points are clustered at once";
+    EXPECT_EQ(boxes, 1);
+    ASSERT_TRUE(engine.onMap(cloudMessage(1, grown), &why));
+    std::tie(ran, boxes) = step(1);
+    if (growth > 1) {
+      EXPECT_TRUE(ran) << "the map more than doubled: clustered without waiting for the interval";
+      EXPECT_EQ(boxes, 2);
+      ASSERT_TRUE(engine.onMap(cloudMessage(1, more), &why));
+      std::tie(ran, boxes) = step(2);
+      EXPECT_FALSE(ran) << "grown by less than the factor: waits for the interval";
+      EXPECT_EQ(boxes, 2) << "the last candidates are projected meanwhile";
+    } else {
+      EXPECT_FALSE(ran) << "growth off: only the interval counts";
+      EXPECT_EQ(boxes, 1);
+    }
+  }
+}
+
 // Real time: clustering runs on a worker thread; the frames go on meanwhile (with the last
 // candidates: none at first) and the finished clustering gives the boxes clustering at once gives.
 TEST(ProposalEngineInput, BackgroundClusteringGivesTheSameBoxesWithoutHoldingFrames) {
