@@ -28,6 +28,14 @@ ProposalOptions metricOptions() {
   return o;
 }
 
+// One tracked pose at T: whether the engine re-clustered first, and how many boxes it gave.
+std::pair<bool, int> trackedPose(ProposalEngine& engine, int seq, const SE3& T) {
+  std::string why;
+  bool reclustered = false;
+  const proposals_t m = engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
+  return {reclustered, m.num_boxes};
+}
+
 // Which of the objects (split at x = split) a candidate's points (above the table) come from.
 std::set<int> sidesOf(const Candidate& c, float split) {
   std::set<int> sides;
@@ -370,12 +378,9 @@ TEST(ProposalEngineInput, AGrowingMapIsReclusteredAtMostOncePerInterval) {
   ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
   const SE3 T = lookingDown(1.0);
   const auto one = join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f));
+  // The second object adds less than recluster_growth times the points: the interval decides.
   const auto two = join(one, cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f));
-  auto step = [&](int seq) {
-    bool reclustered = false;
-    const proposals_t m = engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
-    return std::make_pair(reclustered, m.num_boxes);
-  };
+  auto step = [&](int seq) { return trackedPose(engine, seq, T); };
   ASSERT_TRUE(engine.onMap(cloudMessage(1, one), &why));
   auto [ran, boxes] = step(0);
   EXPECT_TRUE(ran) << "the first points are clustered at once";
@@ -410,11 +415,7 @@ TEST(ProposalEngineInput, AMapThatGrewByTheGrowthFactorIsReclusteredBeforeTheInt
     ProposalEngine engine(o);
     std::string why;
     ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
-    auto step = [&](int seq) {
-      bool reclustered = false;
-      const proposals_t m = engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
-      return std::make_pair(reclustered, m.num_boxes);
-    };
+    auto step = [&](int seq) { return trackedPose(engine, seq, T); };
     ASSERT_TRUE(engine.onMap(cloudMessage(1, young), &why));
     auto [ran, boxes] = step(0);
     EXPECT_TRUE(ran) << "the first points are clustered at once";
