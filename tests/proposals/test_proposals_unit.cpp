@@ -36,6 +36,17 @@ std::pair<bool, int> trackedPose(ProposalEngine& engine, int seq, const SE3& T) 
   return {reclustered, m.num_boxes};
 }
 
+// Gives `engine` the camera and a map's first points: they are clustered at once, at the first
+// pose (seq 0, at T), into `boxes` boxes.
+void startWith(ProposalEngine& engine, const std::vector<MapPoint>& first, const SE3& T, int boxes) {
+  std::string why;
+  ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, first), &why)) << why;
+  const auto [ran, n] = trackedPose(engine, 0, T);
+  EXPECT_TRUE(ran) << "the first points are clustered at once";
+  EXPECT_EQ(n, boxes);
+}
+
 // Which of the objects (split at x = split) a candidate's points (above the table) come from.
 std::set<int> sidesOf(const Candidate& c, float split) {
   std::set<int> sides;
@@ -374,17 +385,15 @@ TEST(ProposalEngineInput, AGrowingMapIsReclusteredAtMostOncePerInterval) {
   ProposalOptions o = metricOptions();
   o.recluster_interval_s = 0.01;
   ProposalEngine engine(o);
-  std::string why;
-  ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
   const SE3 T = lookingDown(1.0);
   const auto one = join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f));
   // The second object adds less than recluster_growth times the points: the interval decides.
   const auto two = join(one, cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f));
   auto step = [&](int seq) { return trackedPose(engine, seq, T); };
-  ASSERT_TRUE(engine.onMap(cloudMessage(1, one), &why));
-  auto [ran, boxes] = step(0);
-  EXPECT_TRUE(ran) << "the first points are clustered at once";
-  EXPECT_EQ(boxes, 1);
+  startWith(engine, one, T, 1);
+  std::string why;
+  bool ran = false;
+  int boxes = 0;
   ASSERT_TRUE(engine.onMap(cloudMessage(1, two), &why));
   for (int seq = 1; seq < 10; ++seq) {
     std::tie(ran, boxes) = step(seq);
@@ -413,13 +422,11 @@ TEST(ProposalEngineInput, AMapThatGrewByTheGrowthFactorIsReclusteredBeforeTheInt
     o.recluster_interval_s = 10;
     o.recluster_growth = growth;
     ProposalEngine engine(o);
-    std::string why;
-    ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
     auto step = [&](int seq) { return trackedPose(engine, seq, T); };
-    ASSERT_TRUE(engine.onMap(cloudMessage(1, young), &why));
-    auto [ran, boxes] = step(0);
-    EXPECT_TRUE(ran) << "the first points are clustered at once";
-    EXPECT_EQ(boxes, 1);
+    startWith(engine, young, T, 1);
+    std::string why;
+    bool ran = false;
+    int boxes = 0;
     ASSERT_TRUE(engine.onMap(cloudMessage(1, grown), &why));
     std::tie(ran, boxes) = step(1);
     if (growth > 1) {
