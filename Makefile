@@ -52,9 +52,10 @@ sample: deps build
 	scripts/make-sample
 
 # Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set and
-# the training scenes of config/training, full training options; about 35 minutes here, 12 GB).
+# the training scenes of config/training with the boxes the proposals stage draws on them, full
+# training options; about 45 minutes here, 12 GB).
 model: deps build
-	FORCE=1 TRAIN_CONFIG= scripts/demo-model
+	FORCE=1 TRAIN_CONFIG= PROPOSALS=1 scripts/demo-model
 
 spy: build
 	scripts/lcm-spy

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
@@ -182,7 +184,54 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
   return crops;
 }
 
-std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs) {
+std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw DatasetError(path + ": cannot read the proposal boxes");
+  std::map<int, std::vector<cv::Rect2d>> boxes;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (number == 1 || line.empty()) continue;  // header
+    std::istringstream ss(line);
+    std::string field;
+    std::vector<double> v;
+    while (std::getline(ss, field, ',')) {
+      char* end = nullptr;
+      const double x = std::strtod(field.c_str(), &end);
+      if (end == field.c_str() || *end != '\0' || !std::isfinite(x)) break;
+      v.push_back(x);
+    }
+    if (v.size() != 6 || v[0] < 0 || v[4] <= 0 || v[5] <= 0)
+      throw DatasetError(path + ":" + std::to_string(number) + ": expected frame,rank,x,y,w,h, got '" + line + "'");
+    boxes[static_cast<int>(v[0])].emplace_back(v[2], v[3], v[4], v[5]);
+  }
+  return boxes;
+}
+
+std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
+                                const TrainOptions& options) {
+  std::vector<int> labels;
+  for (const auto& r : frame.proposals) {
+    double best = 0;
+    int label = background;
+    for (size_t o = 0; o < frame.objects.size(); ++o) {
+      const double overlap = iou(r, frame.objects[o]);
+      if (overlap <= best) continue;
+      best = overlap;
+      const int c = indexOf(classes, frame.object_classes[o]);
+      label = c >= 0 ? c : background;
+    }
+    if (best >= options.proposal_positive_iou)
+      labels.push_back(label);
+    else
+      labels.push_back(best < options.proposal_background_iou ? background : -1);
+  }
+  return labels;
+}
+
+std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs,
+                                           const std::string& proposals_dir) {
   std::vector<SceneFrame> frames;
   for (const auto& dir : sequence_dirs) {
     const SequenceFolder seq = SequenceFolder::open(dir);
@@ -193,6 +242,15 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
     for (const auto& b : seq.boxes()) {
       by_frame[b.frame].objects.push_back(cv::Rect2d(b.x, b.y, b.w, b.h));
       by_frame[b.frame].object_classes.push_back(b.cls);
+    }
+    if (!proposals_dir.empty()) {
+      const std::string name = std::filesystem::path(dir).lexically_normal().filename().string();
+      const std::string path = (std::filesystem::path(proposals_dir) / (name + ".csv")).string();
+      if (std::filesystem::exists(path)) {
+        for (auto& [frame, boxes] : readProposalBoxes(path)) by_frame[frame].proposals = std::move(boxes);
+      } else {
+        spdlog::warn("{}: no proposal boxes ({}): trained on its ground-truth boxes only", dir, path);
+      }
     }
     for (size_t i = 0; i < seq.size(); ++i) {
       SceneFrame f = std::move(by_frame[static_cast<int>(i)]);
@@ -428,10 +486,11 @@ std::string TrainReport::toText() const {
 
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                            const std::vector<std::string>& scene_dirs,
-                           const TrainOptions& options, TrainReport* report) {
+                           const TrainOptions& options, TrainReport* report,
+                           const std::string& proposals_dir) {
   options.encoding.validate();
   const std::vector<LabeledCrop> crops = collectCrops(object_dirs, options.max_views_per_instance);
-  const std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs);
+  const std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs, proposals_dir);
   if (crops.empty()) throw DatasetError("no training crops");
   std::set<std::string> category_set, instance_set;
   for (const auto& c : crops) {
@@ -545,19 +604,21 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     }
     bar.finish();
   }
-  if (has_background && options.scene_positive_every > 0) {
+  if (has_background && (options.scene_positive_every > 0 || options.proposal_every > 0)) {
     // The scenes' objects, boxed as a proposal would box them: a category of the model is a
     // positive, any other object is background (a calculator is not a cap).
-    const int every = options.scene_positive_every;
+    auto every = [](int index, int n) { return n > 0 && index % n == 0; };
     ProgressBar bar("encode scene objects", static_cast<int64_t>(frames.size()));
-    int64_t positives = 0, others = 0, partials = 0;
+    int64_t positives = 0, others = 0, partials = 0, proposal_positives = 0, proposal_others = 0;
     for (size_t f = 0; f < frames.size(); ++f) {
       bar.update(static_cast<int64_t>(f + 1));
-      if (frames[f].index % every != 0 || frames[f].objects.empty()) continue;
+      const bool objects = every(frames[f].index, options.scene_positive_every) && !frames[f].objects.empty();
+      const bool proposals = every(frames[f].index, options.proposal_every) && !frames[f].proposals.empty();
+      if (!objects && !proposals) continue;
       const cv::Mat image = readImage(frames[f].path);
       std::vector<PyramidBox> snapped;
       std::vector<int> labels;
-      for (size_t o = 0; o < frames[f].objects.size(); ++o) {
+      for (size_t o = 0; objects && o < frames[f].objects.size(); ++o) {
         const int c = indexOf(classes, frames[f].object_classes[o]);
         const int label = c >= 0 ? c : bg;
         std::vector<cv::Rect2d> boxes{frames[f].objects[o]};
@@ -581,6 +642,18 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
           partials += n >= whole;
         }
       }
+      // The boxes the proposals stage drew here: views of objects as the pipeline frames them, and
+      // its boxes on parts, on several objects, on the table (background).
+      const std::vector<int> proposal_labels =
+          proposals ? labelProposals(frames[f], classes, bg, options) : std::vector<int>();
+      for (size_t n = 0; n < proposal_labels.size(); ++n) {
+        const auto& r = frames[f].proposals[n];
+        PyramidBox b;
+        if (proposal_labels[n] < 0 || !encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) continue;
+        snapped.push_back(b);
+        labels.push_back(proposal_labels[n]);
+        (proposal_labels[n] == bg ? proposal_others : proposal_positives) += 1;
+      }
       if (snapped.empty()) continue;
       encoder.encode(image, snapped, EncoderKind::kAuto, &buffer);
       for (int64_t i = 0; i < buffer.rows(); ++i) {
@@ -591,8 +664,8 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     }
     bar.finish();
     spdlog::info("scene objects: {} boxes of the model's categories, {} of other objects or parts (background: {} "
-                 "parts)",
-                 positives, others, partials);
+                 "parts); of them from the proposal boxes: {} of the model's categories, {} background",
+                 positives, others, partials, proposal_positives, proposal_others);
   }
   // Training and held-out parts.
   ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });

@@ -19,7 +19,12 @@
 //     `partial_negatives` boxes that cut or overhang it (IoU in [`partial_min_iou`,
 //     `partial_max_iou`) with it and below `partial_max_iou` with every object): background. A box
 //     on a part of a mug, or on a mug and half the table, is not a mug detection (it scores as a
-//     false positive), and without these the classifier never saw one labelled so.
+//     false positive), and without these the classifier never saw one labelled so. With proposal
+//     boxes (`--proposals`: what the proposals stage drew on a SLAM run of each scene), every
+//     `proposal_every`-th frame also gives every proposal box: a view of the object it overlaps by IoU >=
+//     `proposal_positive_iou`, background below `proposal_background_iou` with every object (its
+//     parts, an object with table, several objects, the table), nothing in between. These are the
+//     boxes the recognizer is given at run time, framed as the pipeline frames them.
 //  4. One-vs-all logistic regression (SGD, L2) over the categories + "background", then
 //     `mining_rounds` rounds of hard-negative mining: `mining_candidates_per_frame` new random
 //     background boxes per training frame are scored and those the current model takes for an
@@ -64,6 +69,9 @@ struct TrainOptions {
   int partial_negatives = 2;        ///< background boxes cutting or overhanging each scene object
   double partial_min_iou = 0.1;     ///< ... that overlap it at least this much
   double partial_max_iou = 0.4;     ///< ... and it (and every other object) less than this
+  int proposal_every = 4;                ///< every n-th scene frame gives its proposal boxes (0: none)
+  double proposal_positive_iou = 0.5;    ///< a proposal box this close to an object is an example of it
+  double proposal_background_iou = 0.4;  ///< a proposal box below this with every object is background
 
   template <class V>
   void visit(V& v) {
@@ -94,6 +102,11 @@ struct TrainOptions {
       "background boxes cutting or overhanging each object of a scene frame that gives positives");
     v("partial_min_iou", partial_min_iou, "a partial box overlaps its object at least this much");
     v("partial_max_iou", partial_max_iou, "a partial box overlaps every object less than this");
+    v("proposal_every", proposal_every, "every n-th scene frame gives its proposal boxes (0: none)");
+    v("proposal_positive_iou", proposal_positive_iou,
+      "a scene's proposal box with this IoU with an object is an example of that object");
+    v("proposal_background_iou", proposal_background_iou,
+      "a scene's proposal box with less IoU than this with every object is background");
   }
 };
 
@@ -111,6 +124,7 @@ struct SceneFrame {
   int index = 0;
   std::vector<cv::Rect2d> objects;
   std::vector<std::string> object_classes;  ///< category of each of `objects`
+  std::vector<cv::Rect2d> proposals;        ///< boxes the proposals stage drew in this frame (if known)
 };
 
 /// The crops of the object sets (categories merged by name across sets), at most
@@ -118,8 +132,21 @@ struct SceneFrame {
 std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
                                       int max_views_per_instance);
 /// The frames of sequence folders with boxes.csv. Throws DatasetError (also for a folder without
-/// boxes.csv: its background is unknown).
-std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs);
+/// boxes.csv: its background is unknown). With `proposals_dir`, each frame also gets the boxes of
+/// `<proposals_dir>/<sequence folder name>.csv` (`frame,rank,x,y,w,h`, written by
+/// `slamaware-eval --dump-proposals`): the boxes the proposals stage drew on a run of the
+/// sequence, so that the classifiers also learn from boxes as the pipeline will draw them. A
+/// sequence without its file is trained without proposals (and says so); a damaged file throws.
+std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& sequence_dirs,
+                                           const std::string& proposals_dir = "");
+/// Reads a proposal-box file (`frame,rank,x,y,w,h` per line after a header) into boxes per frame.
+/// Throws DatasetError naming the file and line for a malformed line.
+std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path);
+/// The examples a frame's proposal boxes give: the label of each box (index into `classes`; an
+/// object of a category the model lacks is `background`), or -1 for a box between the two IoU
+/// thresholds (neither a view of an object nor background).
+std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
+                                const TrainOptions& options);
 
 /// `count` boxes around `object` (scaled and shifted at random) that overlap it by IoU >= min_iou
 /// and lie in the image.
@@ -190,6 +217,7 @@ HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const Tra
 /// Trains a model (see the top of this file). Progress bars go to stderr.
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                            const std::vector<std::string>& scene_dirs,
-                           const TrainOptions& options, TrainReport* report);
+                           const TrainOptions& options, TrainReport* report,
+                           const std::string& proposals_dir = "");
 
 }  // namespace slamaware

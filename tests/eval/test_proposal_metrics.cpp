@@ -3,9 +3,13 @@
 // ground-truth boxes placed to fall in each cause.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "procs/proposals/proposal_engine.h"
+#include "procs/recognizer/trainer.h"
 #include "procs/proposals/synthetic_map.h"
 #include "tests/eval/eval_test_data.h"
+#include "tests/support/test_support.h"
 #include "tools/eval/proposal_metrics.h"
 
 using namespace slamaware;
@@ -130,4 +134,17 @@ TEST(ProposalMisses, ABoxTheRankingSuppressedIsCountedAsSuppressed) {
   rerunProposals(log_path, ch, o, &seq, 5, &m);
   EXPECT_EQ(m.suppressed, static_cast<int>(boxes.size()));
   EXPECT_EQ(m.covered, 0);
+}
+
+TEST(ProposalBoxes, WhatTheEvaluatorDumpsTheTrainerReadsBack) {
+  ProposalRecording run;
+  run.boxes[0] = {{10, 20, 30, 40}, {1.5, 2.25, 3, 4}};
+  run.boxes[7] = {};  // a frame without boxes
+  run.boxes[12] = {{600.5, 400, 39.5, 80}};
+  const std::string path = test::tempDir("proposal_boxes_round_trip") + "/sub/scene.csv";
+  writeProposalBoxes(run, path);
+  const auto read = readProposalBoxes(path);
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read.at(0), (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2.25, 3, 4)}));
+  EXPECT_EQ(read.at(12), (std::vector<cv::Rect2d>{cv::Rect2d(600.5, 400, 39.5, 80)}));
 }

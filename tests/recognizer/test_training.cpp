@@ -138,6 +138,46 @@ TEST(Training, PartialBoxesCutOrOverhangTheirObjectAndNoOtherObject) {
   EXPECT_TRUE(partialBoxes(objects, 2, 640, 480, 5, 0.1, 0.4, 42).empty()) << "an object index out of range";
 }
 
+TEST(Training, ProposalBoxesAreLabelledByTheirOverlapWithTheGroundTruth) {
+  SceneFrame frame;
+  frame.objects = {cv::Rect2d(100, 100, 100, 100), cv::Rect2d(300, 100, 60, 60)};
+  frame.object_classes = {"mug", "calculator"};  // the model has no calculator class
+  frame.proposals = {
+      cv::Rect2d(105, 100, 100, 100),  // on the mug (IoU 0.90)
+      cv::Rect2d(100, 100, 100, 60),   // the top of the mug (IoU 0.60)
+      cv::Rect2d(100, 100, 100, 45),   // a smaller part of it (IoU 0.45): neither
+      cv::Rect2d(100, 100, 50, 70),    // a corner of it (IoU 0.35): background
+      cv::Rect2d(300, 100, 60, 62),    // on the calculator: background
+      cv::Rect2d(500, 300, 80, 80),    // on the table: background
+  };
+  const std::vector<std::string> classes{"bowl", "mug", "background"};
+  TrainOptions o;  // positives from IoU 0.5, background below 0.4
+  EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, 1, -1, 2, 2, 2}));
+  o.proposal_background_iou = 0.5;  // no gap: every box is an example
+  EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, 1, 2, 2, 2, 2}));
+}
+
+TEST(Training, ProposalBoxFilesAreReadPerFrameAndAMalformedLineIsNamed) {
+  const std::string dir = test::tempDir("recognizer_proposal_boxes");
+  {
+    std::ofstream(dir + "/scene.csv") << "frame,rank,x,y,w,h\n0,0,10,20,30,40\n0,1,1.5,2,3,4\n7,0,5,5,50,60\n";
+  }
+  const auto boxes = readProposalBoxes(dir + "/scene.csv");
+  ASSERT_EQ(boxes.size(), 2u);
+  EXPECT_EQ(boxes.at(0), (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2, 3, 4)}));
+  EXPECT_EQ(boxes.at(7), (std::vector<cv::Rect2d>{cv::Rect2d(5, 5, 50, 60)}));
+  for (const char* bad : {"0,0,10,20,30\n", "0,0,10,20,x,40\n", "0,0,10,20,0,40\n", "0,0,10,20,nan,40\n"}) {
+    std::ofstream(dir + "/bad.csv") << "frame,rank,x,y,w,h\n" << bad;
+    try {
+      readProposalBoxes(dir + "/bad.csv");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.csv:2"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(readProposalBoxes(dir + "/missing.csv"), DatasetError);
+}
+
 TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
   const Trained& t = synthetic();
   auto model = std::make_shared<const RecognizerModel>(t.model);

@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sequences;
   std::string proposals_config, objectmap_config;
   int draw_frames = 0;
-  bool dump_boxes = false;
+  bool dump_boxes = false, dump_proposals = false;
   bool offline = false, verbose = false, from_logs = false;
   ProposalEvalOptions peo;
   PipelineRunOptions pipeline;
@@ -146,6 +146,11 @@ int main(int argc, char** argv) {
                  "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
   app.add_option("--baseline-frames", peo.baseline_frames,
                  "frames per sequence for the selective-search baseline (0: none)");
+  app.add_option("--proposals-stride", peo.stride,
+                 "proposals section: every n-th frame is scored (default 5; 1 for a sparse real sequence)")
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--dump-proposals", dump_proposals,
+               "write every frame's proposal boxes to <out-dir>/proposal_boxes/<seq>.csv (slamaware-train --proposals)");
   app.add_flag("--dump-boxes", dump_boxes,
                "write every labelled box with its single-view and multi-view scores to <out-dir>/boxes/<seq>.csv");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
@@ -233,6 +238,7 @@ int main(int argc, char** argv) {
             fs::create_directories(d);
             drawProposalFrames(pr, seq, d.string(), peo.stride, draw_frames, 20);
           }
+          if (dump_proposals) writeProposalBoxes(pr, (fs::path(out_dir) / "proposal_boxes" / (name + ".csv")).string());
           nlohmann::json p = proposalSection(sc, (fs::path(out_dir) / "plots" / (name + "_proposals.png")).string());
           p["misses"] = missesSection(misses);
           report["sequences"][name]["proposals"] = p;

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/segmentation.hpp>
@@ -332,6 +334,17 @@ nlohmann::json proposalSection(const ProposalScores& sc, const std::string& plot
     j["plot"] = plot_path;
   }
   return j;
+}
+
+void writeProposalBoxes(const ProposalRecording& run, const std::string& path) {
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  std::ofstream out(path);
+  out << "frame,rank,x,y,w,h\n";
+  for (const auto& [frame, boxes] : run.boxes)
+    for (size_t r = 0; r < boxes.size(); ++r)
+      out << frame << ',' << r << ',' << boxes[r].x << ',' << boxes[r].y << ',' << boxes[r].w << ',' << boxes[r].h
+          << '\n';
+  if (!out) throw std::runtime_error(path + ": cannot write the proposal boxes");
 }
 
 void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& seq, const std::string& dir,

@@ -93,6 +93,9 @@ ProposalScores scoreProposals(const ProposalRecording& run, const SequenceFolder
 nlohmann::json proposalSection(const ProposalScores& scores, const std::string& plot_path = "");
 void mergeScores(ProposalScores* into, const ProposalScores& more);
 
+/// Writes every frame's boxes, best first, as CSV `frame,rank,x,y,w,h` (the file slamaware-train
+/// --proposals reads), creating the folder. Throws std::runtime_error when it cannot write.
+void writeProposalBoxes(const ProposalRecording& run, const std::string& path);
 /// Writes <dir>/<frame>.png for evaluated frames (at most `max_frames`, spread evenly): the
 /// ground-truth boxes in green, our first `top_k` boxes in orange with their rank.
 void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& sequence, const std::string& dir,
