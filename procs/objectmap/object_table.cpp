@@ -29,14 +29,14 @@ struct UnionFind {
 /// Joins items whose voxels overlap (the grouping of candidates, and the merging of same-label
 /// groups): every pair of items that shares voxels and that `listed(i, j, shared)` admits is tried in
 /// ascending `rank(shared, na, nb)` (then i, j), and the groups of the two are joined when their voxel
-/// unions pass `joins(shared, na, nb)` (tested on unions, so a chain of small overlaps cannot grow a
+/// unions pass `joins(shared, a, b)` (tested on unions, so a chain of small overlaps cannot grow a
 /// group that swallows what lies in it). `voxels[i]`: item i's sorted voxels. Returns the union of
 /// each joined root (a root not in it has its item's own voxels).
 std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     const std::vector<const std::vector<VoxelKey>*>& voxels, UnionFind& uf,
     const std::function<bool(size_t, size_t, size_t)>& listed,
     const std::function<double(size_t, size_t, size_t)>& rank,
-    const std::function<bool(size_t, size_t, size_t)>& joins) {
+    const std::function<bool(size_t, const std::vector<VoxelKey>&, const std::vector<VoxelKey>&)>& joins) {
   std::unordered_map<VoxelKey, std::vector<size_t>> owners;
   for (size_t i = 0; i < voxels.size(); ++i)
     for (VoxelKey k : *voxels[i]) owners[k].push_back(i);
@@ -62,7 +62,7 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     std::vector<VoxelKey>& b = voxelsOf(rj);
     std::vector<VoxelKey> both;
     std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
-    if (!joins(both.size(), a.size(), b.size())) continue;
+    if (!joins(both.size(), a, b)) continue;
     std::vector<VoxelKey> merged;
     std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
     unions.erase(ri);
@@ -71,6 +71,32 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     unions[uf.find(ri)] = std::move(merged);
   }
   return unions;
+}
+
+/// Intersection over union of the axis-aligned boxes around two sets of voxels (0 if one is empty).
+double boxIou(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+  if (a.empty() || b.empty()) return 0;
+  auto bounds = [](const std::vector<VoxelKey>& voxels, int64_t* lo, int64_t* hi) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = 0xffff;
+      hi[k] = 0;
+    }
+    for (VoxelKey v : voxels)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min<int64_t>(lo[k], voxelKeyAxis(v, k));
+        hi[k] = std::max<int64_t>(hi[k], voxelKeyAxis(v, k) + 1);
+      }
+  };
+  int64_t alo[3], ahi[3], blo[3], bhi[3];
+  bounds(a, alo, ahi);
+  bounds(b, blo, bhi);
+  double va = 1, vb = 1, vi = 1;
+  for (int k = 0; k < 3; ++k) {
+    va *= static_cast<double>(ahi[k] - alo[k]);
+    vb *= static_cast<double>(bhi[k] - blo[k]);
+    vi *= static_cast<double>(std::max<int64_t>(0, std::min(ahi[k], bhi[k]) - std::max(alo[k], blo[k])));
+  }
+  return vi / (va + vb - vi);
 }
 
 }  // namespace
@@ -154,8 +180,8 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
   const auto unions = joinOverlapping(
       sets, uf, [&](size_t i, size_t j, size_t) { return label[i] == label[j]; },
       [](size_t n, size_t na, size_t nb) { return -static_cast<double>(n) / static_cast<double>(std::min(na, nb)); },
-      [&](size_t n, size_t na, size_t nb) {
-        return static_cast<double>(n) >= grouping.same_label_overlap * static_cast<double>(std::min(na, nb));
+      [&](size_t n, const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+        return static_cast<double>(n) >= grouping.same_label_overlap * static_cast<double>(std::min(a.size(), b.size()));
       });
   // A group without voxels yet (seen, but not from enough localised views) whose boxes put it
   // inside the bounds of a group of its class joins that group (the first, in order). Bounds are
@@ -221,17 +247,21 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   }
   // 2. Groups: pairs of candidates sharing voxels, most overlapping (IoU) first; two groups merge
   // when their voxel unions pass the test.
-  auto passes = [&](size_t inter, size_t na, size_t nb) {
-    const double small = static_cast<double>(std::min(na, nb));
-    const double large = static_cast<double>(std::max(na, nb));
-    return small > 0 && static_cast<double>(inter) >= grouping.merge_overlap * small &&
-           small >= grouping.merge_size_ratio * large;
+  auto passes = [&](size_t inter, const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+    const double small = static_cast<double>(std::min(a.size(), b.size()));
+    const double large = static_cast<double>(std::max(a.size(), b.size()));
+    if (!(small > 0)) return false;
+    const double share = static_cast<double>(inter) / small;
+    if (share >= grouping.merge_overlap && small >= grouping.merge_size_ratio * large) return true;
+    // The same stretch of space, its voxels only partly the same: one object whose voxels were voted
+    // from different views (a part, or a whole with a stretch of table, has a box of its own size).
+    return grouping.merge_box_iou > 0 && share >= grouping.merge_box_overlap && boxIou(a, b) >= grouping.merge_box_iou;
   };
   std::vector<const std::vector<VoxelKey>*> sets;
   for (const Candidate* c : cands) sets.push_back(&c->voxels);
   UnionFind uf(cands.size());
   joinOverlapping(
-      sets, uf, [&](size_t i, size_t j, size_t n) { return passes(n, sets[i]->size(), sets[j]->size()); },
+      sets, uf, [&](size_t i, size_t j, size_t n) { return passes(n, *sets[i], *sets[j]); },
       [](size_t n, size_t na, size_t nb) { return -static_cast<double>(n) / static_cast<double>(na + nb - n); },
       passes);
   std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index = lowest candidate id

@@ -72,12 +72,16 @@ struct VotingOptions {
 /// candidate seen in few views holds much of the background of its boxes. Two groups of
 /// candidates merge when their voxels overlap by merge_overlap of the smaller group AND the smaller
 /// is at least merge_size_ratio of the larger (a part is not merged into a whole it lies in by
-/// geometry alone). Then groups that are called the same object class (not background) merge when
+/// geometry alone), or when their bounding boxes overlap by merge_box_iou and they share
+/// merge_box_overlap of the smaller's voxels (one object voted from different views: the same stretch
+/// of space, one much sparser than the other; a part has a box of its own size). Then groups that are called the same object class (not background) merge when
 /// they share same_label_overlap of the smaller's voxels: a mug's handle and the mug it belongs to
 /// are one mug (without its label, the handle could as well be part of the table).
 struct GroupingOptions {
   double merge_overlap = 0.8;     ///< share of the smaller group's voxels the two share
   double merge_size_ratio = 0.8;  ///< smaller group / larger group, in voxels
+  double merge_box_iou = 0.7;      ///< or: their bounding boxes overlap by this IoU (<= 0: never)...
+  double merge_box_overlap = 0.5;  ///< ...and they share this share of the smaller group's voxels
   double same_label_overlap = 0.5;  ///< same class: share of the smaller's voxels (<= 0: no such merge)
 
   template <class V>
@@ -85,6 +89,9 @@ struct GroupingOptions {
     v("merge_overlap", merge_overlap, "share of the smaller group's voxels both must share");
     v("merge_size_ratio", merge_size_ratio,
       "the smaller group has at least this share of the larger's voxels");
+    v("merge_box_iou", merge_box_iou,
+      "or: two groups whose bounding boxes overlap by this IoU (<= 0: never) ...");
+    v("merge_box_overlap", merge_box_overlap, "... and that share this share of the smaller's voxels");
     v("same_label_overlap", same_label_overlap,
       "groups of the same object class merge when they share this share of the smaller's voxels (<= 0: never)");
   }

@@ -404,6 +404,56 @@ TEST(ObjectTable, APartIsNotMergedIntoTheWholeItLiesIn) {
   EXPECT_EQ(groups, (std::set<std::vector<int32_t>>{{1}, {2, 4}, {3}}));
 }
 
+// One object whose voxels two candidates voted from different views: as large in space, but one
+// much sparser (seen from far, or in fewer views), and only partly the same voxels. By voxel counts
+// alone it looks like a part of the other; their bounding boxes say it is the same stretch of space.
+// A corner of the object (a part, called something else) still stays apart. merge_box_iou 0 turns
+// this off.
+TEST(ObjectTable, TheSameObjectVotedSparselyFromOtherViewsIsMergedAPartIsNot) {
+  VotingOptions vo;
+  auto cube = [](int x0, int x1, int size, bool checkerboard) {
+    std::vector<VoxelKey> k;
+    for (int x = x0; x < x1; ++x)
+      for (int y = 0; y < size; ++y)
+        for (int z = 0; z < size; ++z)
+          if (!checkerboard || (x + y + z) % 2 == 0) k.push_back(packVoxelKey(40000 + x, 40000 + y, 40000 + z));
+    return k;
+  };
+  auto build = [&](ObjectTable& t) {
+    for (int v = 0; v < 3; ++v) {
+      t.addVotes(1, cube(0, 10, 10, false), vo);  // 1000 voxels
+      t.addVotes(2, cube(1, 11, 10, true), vo);   // 500 voxels, 450 of them shared: 90 % of it
+      t.addVotes(3, cube(0, 4, 4, false), vo);    // a 4 x 4 x 4 corner of the first
+    }
+    // Classes: can, box, background.
+    t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});
+    t.addView(2, View{200, 2, 10, logs({0.3, 0.6, 0.1})});
+    t.addView(3, View{300, 3, 10, logs({0.1, 0.2, 0.7})});
+  };
+  auto groups = [](const ObjectTable& t) {
+    std::set<std::vector<int32_t>> g;
+    for (const auto& [id, o] : t.objects()) g.insert(o.candidates);
+    return g;
+  };
+  GroupingOptions by_box;
+  by_box.merge_box_iou = 0.7;
+  by_box.merge_box_overlap = 0.5;
+  int32_t next = 1;
+  ObjectTable t(0.01);
+  build(t);
+  t.update([](VoxelKey) { return true; }, vo, by_box, 3, [&] { return next++; });
+  EXPECT_EQ(groups(t), (std::set<std::vector<int32_t>>{{1, 2}, {3}}));
+  for (const auto& [id, o] : t.objects())
+    if (o.candidates.size() == 2) EXPECT_EQ(o.label, 0) << "the union of the evidence";
+
+  GroupingOptions off = by_box;
+  off.merge_box_iou = 0;
+  ObjectTable u(0.01);
+  build(u);
+  u.update([](VoxelKey) { return true; }, vo, off, 3, [&] { return next++; });
+  EXPECT_EQ(groups(u), (std::set<std::vector<int32_t>>{{1}, {2}, {3}}));
+}
+
 // With the label it is: a mug's handle called mug lies in the mug called mug (one object, the
 // union of their evidence); a bowl-called part of the same mug, and the same geometry called
 // background, stay apart. A candidate called mug without voxels yet joins the mug when its boxes
