@@ -799,6 +799,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   nlohmann::json prov;
   prov["objects"] = object_dirs;
   prov["scenes"] = scene_dirs;
+  if (!proposals_dir.empty()) prov["proposals"] = proposals_dir;
   prov["report"] = nlohmann::json::parse(r.toJson());
   model.provenance = prov.dump();
   model.check("trained model");

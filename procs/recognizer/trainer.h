@@ -69,7 +69,7 @@ struct TrainOptions {
   int partial_negatives = 2;        ///< background boxes cutting or overhanging each scene object
   double partial_min_iou = 0.1;     ///< ... that overlap it at least this much
   double partial_max_iou = 0.4;     ///< ... and it (and every other object) less than this
-  int proposal_every = 4;                ///< every n-th scene frame gives its proposal boxes (0: none)
+  int proposal_every = 2;                ///< every n-th scene frame gives its proposal boxes (0: none)
   double proposal_positive_iou = 0.5;    ///< a proposal box this close to an object is an example of it
   double proposal_background_iou = 0.4;  ///< a proposal box below this with every object is background
 
