@@ -26,12 +26,41 @@ struct UnionFind {
   }
 };
 
+using VoxelTest = std::function<bool(const std::vector<VoxelKey>&, const std::vector<VoxelKey>&)>;
+
+/// Tries the pairs of items in the order given: the groups of the two are joined when their voxel
+/// unions pass `joins(a, b)` (tested on unions, so a chain of small overlaps cannot grow a group
+/// that swallows what lies in it). `voxels[i]`: item i's sorted voxels. Returns the union of each
+/// joined root (a root not in it has its item's own voxels).
+std::map<size_t, std::vector<VoxelKey>> joinInOrder(const std::vector<std::tuple<double, size_t, size_t>>& pairs,
+                                                    const std::vector<const std::vector<VoxelKey>*>& voxels,
+                                                    UnionFind& uf, const VoxelTest& joins) {
+  std::map<size_t, std::vector<VoxelKey>> unions;  // by root, sorted
+  auto voxelsOf = [&](size_t root) -> std::vector<VoxelKey>& {
+    auto it = unions.find(root);
+    if (it == unions.end()) it = unions.emplace(root, *voxels[root]).first;
+    return it->second;
+  };
+  for (const auto& [r, i, j] : pairs) {
+    const size_t ri = uf.find(i), rj = uf.find(j);
+    if (ri == rj) continue;
+    std::vector<VoxelKey>& a = voxelsOf(ri);
+    std::vector<VoxelKey>& b = voxelsOf(rj);
+    if (!joins(a, b)) continue;
+    std::vector<VoxelKey> merged;
+    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
+    unions.erase(ri);
+    unions.erase(rj);
+    uf.unite(ri, rj);
+    unions[uf.find(ri)] = std::move(merged);
+  }
+  return unions;
+}
+
 /// Joins items whose voxels overlap (the grouping of candidates, and the merging of same-label
 /// groups): every pair of items that shares voxels and that `listed(i, j, shared)` admits is tried in
 /// ascending `rank(shared, na, nb)` (then i, j), and the groups of the two are joined when their voxel
-/// unions pass `joins(shared, a, b)` (tested on unions, so a chain of small overlaps cannot grow a
-/// group that swallows what lies in it). `voxels[i]`: item i's sorted voxels. Returns the union of
-/// each joined root (a root not in it has its item's own voxels).
+/// unions pass `joins(shared, a, b)` (joinInOrder).
 std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     const std::vector<const std::vector<VoxelKey>*>& voxels, UnionFind& uf,
     const std::function<bool(size_t, size_t, size_t)>& listed,
@@ -49,54 +78,86 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     if (listed(pair.first, pair.second, n))
       pairs.emplace_back(rank(n, voxels[pair.first]->size(), voxels[pair.second]->size()), pair.first, pair.second);
   std::sort(pairs.begin(), pairs.end());
-  std::map<size_t, std::vector<VoxelKey>> unions;  // by root, sorted
-  auto voxelsOf = [&](size_t root) -> std::vector<VoxelKey>& {
-    auto it = unions.find(root);
-    if (it == unions.end()) it = unions.emplace(root, *voxels[root]).first;
-    return it->second;
-  };
-  for (const auto& [r, i, j] : pairs) {
-    const size_t ri = uf.find(i), rj = uf.find(j);
-    if (ri == rj) continue;
-    std::vector<VoxelKey>& a = voxelsOf(ri);
-    std::vector<VoxelKey>& b = voxelsOf(rj);
+  return joinInOrder(pairs, voxels, uf, [&](const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
     std::vector<VoxelKey> both;
     std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
-    if (!joins(both.size(), a, b)) continue;
-    std::vector<VoxelKey> merged;
-    std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged));
-    unions.erase(ri);
-    unions.erase(rj);
-    uf.unite(ri, rj);
-    unions[uf.find(ri)] = std::move(merged);
-  }
-  return unions;
+    return joins(both.size(), a, b);
+  });
 }
 
-/// Intersection over union of the axis-aligned boxes around two sets of voxels (0 if one is empty).
-double boxIou(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
-  if (a.empty() || b.empty()) return 0;
-  auto bounds = [](const std::vector<VoxelKey>& voxels, int64_t* lo, int64_t* hi) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = 0xffff;
-      hi[k] = 0;
-    }
+/// The keys' bounds of a set of voxels, per axis: lowest and highest + 1 (empty: lo > hi).
+struct KeyBounds {
+  int64_t lo[3] = {0x10000, 0x10000, 0x10000}, hi[3] = {0, 0, 0};
+  explicit KeyBounds(const std::vector<VoxelKey>& voxels) {
     for (VoxelKey v : voxels)
       for (int k = 0; k < 3; ++k) {
         lo[k] = std::min<int64_t>(lo[k], voxelKeyAxis(v, k));
         hi[k] = std::max<int64_t>(hi[k], voxelKeyAxis(v, k) + 1);
       }
-  };
-  int64_t alo[3], ahi[3], blo[3], bhi[3];
-  bounds(a, alo, ahi);
-  bounds(b, blo, bhi);
-  double va = 1, vb = 1, vi = 1;
-  for (int k = 0; k < 3; ++k) {
-    va *= static_cast<double>(ahi[k] - alo[k]);
-    vb *= static_cast<double>(bhi[k] - blo[k]);
-    vi *= static_cast<double>(std::max<int64_t>(0, std::min(ahi[k], bhi[k]) - std::max(alo[k], blo[k])));
   }
-  return vi / (va + vb - vi);
+  bool empty() const { return lo[0] >= hi[0]; }
+  /// Intersection over union of the two boxes (0 if one is empty).
+  double iou(const KeyBounds& o) const {
+    if (empty() || o.empty()) return 0;
+    double va = 1, vb = 1, vi = 1;
+    for (int k = 0; k < 3; ++k) {
+      va *= static_cast<double>(hi[k] - lo[k]);
+      vb *= static_cast<double>(o.hi[k] - o.lo[k]);
+      vi *= static_cast<double>(std::max<int64_t>(0, std::min(hi[k], o.hi[k]) - std::max(lo[k], o.lo[k])));
+    }
+    return vi / (va + vb - vi);
+  }
+  /// Whether the boxes, widened by `margin` voxels, do not touch.
+  bool apart(const KeyBounds& o, int margin) const {
+    for (int k = 0; k < 3; ++k)
+      if (lo[k] >= o.hi[k] + margin || o.lo[k] >= hi[k] + margin) return true;
+    return false;
+  }
+};
+
+/// Intersection over union of the axis-aligned boxes around two sets of voxels (0 if one is empty).
+double boxIou(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+  return KeyBounds(a).iou(KeyBounds(b));
+}
+
+/// Share of `small`'s voxels that have a voxel of `large` within `radius` voxels on every axis (both
+/// sorted; radius 0: the share they have in common). Semi-dense points are noisy at the scale of a
+/// voxel, so two groups of one object's candidates interleave more than they coincide.
+double nearShare(const std::vector<VoxelKey>& small, const std::vector<VoxelKey>& large, int radius) {
+  if (small.empty()) return 0;
+  radius = std::max(0, radius);
+  size_t near = 0;
+  for (VoxelKey v : small) {
+    bool found = false;
+    for (int dz = -radius; dz <= radius && !found; ++dz)
+      for (int dy = -radius; dy <= radius && !found; ++dy)
+        for (int dx = -radius; dx <= radius && !found; ++dx) {
+          const int64_t x = static_cast<int64_t>(voxelKeyAxis(v, 0)) + dx;
+          const int64_t y = static_cast<int64_t>(voxelKeyAxis(v, 1)) + dy;
+          const int64_t z = static_cast<int64_t>(voxelKeyAxis(v, 2)) + dz;
+          if (x < 0 || y < 0 || z < 0 || x > 0xffff || y > 0xffff || z > 0xffff) continue;
+          const VoxelKey k = packVoxelKey(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(z));
+          found = std::binary_search(large.begin(), large.end(), k);
+        }
+    near += found ? 1 : 0;
+  }
+  return static_cast<double>(near) / static_cast<double>(small.size());
+}
+
+/// The groups of `uf`'s roots, each the concatenation of its members' groups (root = lowest index:
+/// groups stay in order).
+std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vector<int32_t>>& groups, UnionFind& uf) {
+  std::map<size_t, std::vector<int32_t>> by_root;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    auto& m = by_root[uf.find(g)];
+    m.insert(m.end(), groups[g].begin(), groups[g].end());
+  }
+  std::vector<std::vector<int32_t>> out;
+  for (auto& [root, members] : by_root) {
+    std::sort(members.begin(), members.end());
+    out.push_back(std::move(members));
+  }
+  return out;
 }
 
 }  // namespace
@@ -167,10 +228,7 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
   std::vector<std::vector<VoxelKey>> own(groups.size());  // empty for background groups
   for (size_t g = 0; g < groups.size(); ++g) {
     label[g] = label_of(groups[g]);
-    if (label[g] < 0 || label[g] == background) continue;
-    std::set<VoxelKey> u;
-    for (int32_t cid : groups[g]) u.insert(candidates_.at(cid).voxels.begin(), candidates_.at(cid).voxels.end());
-    own[g].assign(u.begin(), u.end());
+    if (label[g] >= 0 && label[g] != background) own[g] = groupVoxels(groups[g]);
   }
   std::vector<const std::vector<VoxelKey>*> sets;
   for (const auto& v : own) sets.push_back(&v);
@@ -217,17 +275,80 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
         break;
       }
   }
-  std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index: groups stay in order
-  for (size_t g = 0; g < groups.size(); ++g) {
-    auto& m = by_root[uf.find(g)];
-    m.insert(m.end(), groups[g].begin(), groups[g].end());
+  return concatenateJoined(groups, uf);
+}
+
+std::vector<VoxelKey> ObjectTable::groupVoxels(const std::vector<int32_t>& group) const {
+  std::vector<VoxelKey> out;
+  for (int32_t cid : group) {
+    const std::vector<VoxelKey>& v = candidates_.at(cid).voxels;
+    out.insert(out.end(), v.begin(), v.end());
   }
-  std::vector<std::vector<int32_t>> out;
-  for (auto& [root, members] : by_root) {
-    std::sort(members.begin(), members.end());
-    out.push_back(std::move(members));
-  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+std::vector<std::vector<int32_t>> ObjectTable::mergeSameSpace(std::vector<std::vector<int32_t>> groups,
+                                                              const GroupingOptions& grouping) const {
+  std::vector<std::vector<VoxelKey>> own(groups.size());
+  std::vector<const std::vector<VoxelKey>*> sets;
+  std::vector<KeyBounds> bounds;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    own[g] = groupVoxels(groups[g]);
+    sets.push_back(&own[g]);
+    bounds.emplace_back(own[g]);
+  }
+  // Pairs whose boxes overlap enough, the largest box IoU first.
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  for (size_t i = 0; i < groups.size(); ++i)
+    for (size_t j = i + 1; j < groups.size(); ++j) {
+      const double iou = bounds[i].iou(bounds[j]);
+      if (iou > 0 && iou >= grouping.same_space_box_iou) pairs.emplace_back(-iou, i, j);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  UnionFind uf(groups.size());
+  joinInOrder(pairs, sets, uf, [&](const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+    const bool a_small = a.size() <= b.size();
+    return KeyBounds(a).iou(KeyBounds(b)) >= grouping.same_space_box_iou &&
+           nearShare(a_small ? a : b, a_small ? b : a, grouping.near_voxels) >= grouping.same_space_overlap;
+  });
+  return concatenateJoined(groups, uf);
+}
+
+std::vector<std::vector<int32_t>> ObjectTable::joinBackgroundParts(
+    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
+    const std::function<int(const std::vector<int32_t>&)>& label_of,
+    const std::function<std::vector<double>(const std::vector<int32_t>&)>& posterior_of, int background) const {
+  std::vector<int> label(groups.size());
+  std::vector<std::vector<VoxelKey>> own(groups.size());
+  std::vector<KeyBounds> bounds;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    label[g] = label_of(groups[g]);
+    own[g] = groupVoxels(groups[g]);
+    bounds.emplace_back(own[g]);
+  }
+  // Each part joins the group its voxels are nearest to (the highest share; ties: the first).
+  UnionFind uf(groups.size());
+  for (size_t g = 0; g < groups.size(); ++g) {
+    if (label[g] != background || own[g].empty()) continue;
+    const std::vector<double> p = posterior_of(groups[g]);
+    size_t best = groups.size();
+    double best_share = 0;
+    for (size_t h = 0; h < groups.size(); ++h) {
+      if (h == g || label[h] < 0 || label[h] == background || own[h].size() < own[g].size() ||
+          static_cast<size_t>(label[h]) >= p.size() || p[static_cast<size_t>(label[h])] < grouping.background_part_min_posterior ||
+          bounds[g].apart(bounds[h], grouping.near_voxels))
+        continue;
+      const double share = nearShare(own[g], own[h], grouping.near_voxels);
+      if (share >= grouping.background_part_overlap && share > best_share) {
+        best = h;
+        best_share = share;
+      }
+    }
+    if (best < groups.size()) uf.unite(g, best);
+  }
+  return concatenateJoined(groups, uf);
 }
 
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
@@ -291,9 +412,17 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     f.evidence = sumLogProbabilities(evidence, num_classes, fusion.objectness_weights, &f.weight);
     return f;
   };
+  if (grouping.same_space_overlap > 0) groups = mergeSameSpace(std::move(groups), grouping);
+  const auto label_of = [&](const std::vector<int32_t>& m) { return argmaxClass(fusionOf(m).evidence); };
   if (grouping.same_label_overlap > 0 && num_classes > 1)
-    groups = mergeSameLabel(
-        groups, grouping, [&](const auto& m) { return argmaxClass(fusionOf(m).evidence); },
+    groups = mergeSameLabel(std::move(groups), grouping, label_of, static_cast<int>(num_classes) - 1);
+  if (grouping.background_part_overlap > 0 && num_classes > 1)
+    groups = joinBackgroundParts(
+        std::move(groups), grouping, label_of,
+        [&](const std::vector<int32_t>& m) {
+          const Fused& f = fusionOf(m);
+          return posteriorFromLogEvidence(f.evidence, f.weight, fusion.views_exponent);
+        },
         static_cast<int>(num_classes) - 1);
 
   // 3. Stable ids: greedily give each previous object's id to the group sharing most of its

@@ -2,8 +2,10 @@
 // The objects of one map segment. A candidate is a 3D cluster of the proposals stage (its id is
 // stable across frames); it collects, view after view, the class evidence of its boxes and votes
 // for the occupied voxels its boxes cover (candidate_voxels.h). An object is a group of
-// candidates whose voxels overlap strongly and are of similar size (GroupingOptions), and then
-// groups that overlap and are called the same object class (a part and its whole): the
+// candidates whose voxels overlap strongly and are of similar size (GroupingOptions), groups
+// that fill the same space (their voxels near each other's), then groups that overlap and are
+// called the same object class (a part and its whole), and parts called background that lie in
+// an object whose class they half agree with: the
 // proposals stage over-segments at several scales and its clusters split, merge and change ids as
 // the map grows, so candidates are grouped again whenever their voxels change, and object ids are
 // kept stable across regroupings (an object keeps the id of the previous object it shares most
@@ -112,6 +114,22 @@ class ObjectTable {
                                                    const GroupingOptions& grouping,
                                                    const std::function<int(const std::vector<int32_t>&)>& label_of,
                                                    int background) const;
+
+  /// Merges groups whose voxel unions fill the same stretch of space: their bounding boxes overlap
+  /// by same_space_box_iou and same_space_overlap of the smaller's voxels lie within near_voxels of
+  /// the larger's (one object split into groups that no pair of candidates joins); order kept.
+  std::vector<std::vector<int32_t>> mergeSameSpace(std::vector<std::vector<int32_t>> groups,
+                                                   const GroupingOptions& grouping) const;
+  /// A group that `label_of` calls `background`, whose voxels lie within near_voxels of a larger
+  /// group's of an object class c (background_part_overlap of them; the group holding most) and whose
+  /// own posterior gives c at least background_part_min_posterior joins that group: a part of the
+  /// object that its own boxes frame badly; order kept.
+  std::vector<std::vector<int32_t>> joinBackgroundParts(
+      std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
+      const std::function<int(const std::vector<int32_t>&)>& label_of,
+      const std::function<std::vector<double>(const std::vector<int32_t>&)>& posterior_of, int background) const;
+  /// The sorted union of a group's candidates' voxels.
+  std::vector<VoxelKey> groupVoxels(const std::vector<int32_t>& group) const;
 
   double resolution_;
   std::map<int32_t, Candidate> candidates_;
