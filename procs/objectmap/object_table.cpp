@@ -222,16 +222,15 @@ void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_si
 }
 
 std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
-    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
+    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, const GroupVoxels& voxels_of,
     const std::function<int(const std::vector<int32_t>&)>& label_of, int background) const {
+  static const std::vector<VoxelKey> kNone;
   std::vector<int> label(groups.size());
-  std::vector<std::vector<VoxelKey>> own(groups.size());  // empty for background groups
+  std::vector<const std::vector<VoxelKey>*> sets(groups.size(), &kNone);  // none for background groups
   for (size_t g = 0; g < groups.size(); ++g) {
     label[g] = label_of(groups[g]);
-    if (label[g] >= 0 && label[g] != background) own[g] = groupVoxels(groups[g]);
+    if (label[g] >= 0 && label[g] != background) sets[g] = &voxels_of(groups[g]);
   }
-  std::vector<const std::vector<VoxelKey>*> sets;
-  for (const auto& v : own) sets.push_back(&v);
   UnionFind uf(groups.size());
   // Most overlapping (share of the smaller) first; joined groups keep their label (a sum of
   // evidence that two groups both call c is called c).
@@ -249,7 +248,7 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
   const Eigen::Vector3d half = Eigen::Vector3d::Constant(resolution_ / 2);
   for (size_t h = 0; h < groups.size(); ++h) {
     const auto joined = unions.find(uf.find(h));
-    const std::vector<VoxelKey>& v = joined != unions.end() ? joined->second : own[uf.find(h)];
+    const std::vector<VoxelKey>& v = joined != unions.end() ? joined->second : *sets[uf.find(h)];
     has_voxels[h] = !v.empty();
     lo[h] = Eigen::Vector3d::Constant(1e300);
     hi[h] = -lo[h];
@@ -290,14 +289,13 @@ std::vector<VoxelKey> ObjectTable::groupVoxels(const std::vector<int32_t>& group
 }
 
 std::vector<std::vector<int32_t>> ObjectTable::mergeSameSpace(std::vector<std::vector<int32_t>> groups,
-                                                              const GroupingOptions& grouping) const {
-  std::vector<std::vector<VoxelKey>> own(groups.size());
+                                                              const GroupingOptions& grouping,
+                                                              const GroupVoxels& voxels_of) const {
   std::vector<const std::vector<VoxelKey>*> sets;
   std::vector<KeyBounds> bounds;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    own[g] = groupVoxels(groups[g]);
-    sets.push_back(&own[g]);
-    bounds.emplace_back(own[g]);
+  for (const auto& group : groups) {
+    sets.push_back(&voxels_of(group));
+    bounds.emplace_back(*sets.back());
   }
   // Pairs whose boxes overlap enough, the largest box IoU first.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
@@ -317,30 +315,30 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameSpace(std::vector<std::v
 }
 
 std::vector<std::vector<int32_t>> ObjectTable::joinBackgroundParts(
-    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
+    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, const GroupVoxels& voxels_of,
     const std::function<int(const std::vector<int32_t>&)>& label_of,
     const std::function<std::vector<double>(const std::vector<int32_t>&)>& posterior_of, int background) const {
   std::vector<int> label(groups.size());
-  std::vector<std::vector<VoxelKey>> own(groups.size());
+  std::vector<const std::vector<VoxelKey>*> own;
   std::vector<KeyBounds> bounds;
   for (size_t g = 0; g < groups.size(); ++g) {
     label[g] = label_of(groups[g]);
-    own[g] = groupVoxels(groups[g]);
-    bounds.emplace_back(own[g]);
+    own.push_back(&voxels_of(groups[g]));
+    bounds.emplace_back(*own.back());
   }
   // Each part joins the group its voxels are nearest to (the highest share; ties: the first).
   UnionFind uf(groups.size());
   for (size_t g = 0; g < groups.size(); ++g) {
-    if (label[g] != background || own[g].empty()) continue;
-    const std::vector<double> p = posterior_of(groups[g]);
+    if (label[g] != background || own[g]->empty()) continue;
+    const std::vector<double> p = posterior_of(groups[g]);  // one per class, like the labels
     size_t best = groups.size();
     double best_share = 0;
     for (size_t h = 0; h < groups.size(); ++h) {
-      if (h == g || label[h] < 0 || label[h] == background || own[h].size() < own[g].size() ||
-          static_cast<size_t>(label[h]) >= p.size() || p[static_cast<size_t>(label[h])] < grouping.background_part_min_posterior ||
+      if (h == g || label[h] < 0 || label[h] == background || own[h]->size() < own[g]->size() ||
+          p[static_cast<size_t>(label[h])] < grouping.background_part_min_posterior ||
           bounds[g].apart(bounds[h], grouping.near_voxels))
         continue;
-      const double share = nearShare(own[g], own[h], grouping.near_voxels);
+      const double share = nearShare(*own[g], *own[h], grouping.near_voxels);
       if (share >= grouping.background_part_overlap && share > best_share) {
         best = h;
         best_share = share;
@@ -412,13 +410,20 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     f.evidence = sumLogProbabilities(evidence, num_classes, fusion.objectness_weights, &f.weight);
     return f;
   };
-  if (grouping.same_space_overlap > 0) groups = mergeSameSpace(std::move(groups), grouping);
+  // The voxels of a group, likewise once per group (the steps below, and the objects of step 4).
+  std::map<std::vector<int32_t>, std::vector<VoxelKey>> group_voxels;
+  const GroupVoxels voxels_of = [&](const std::vector<int32_t>& members) -> const std::vector<VoxelKey>& {
+    auto it = group_voxels.find(members);
+    if (it == group_voxels.end()) it = group_voxels.emplace(members, groupVoxels(members)).first;
+    return it->second;
+  };
+  if (grouping.same_space_overlap > 0) groups = mergeSameSpace(std::move(groups), grouping, voxels_of);
   const auto label_of = [&](const std::vector<int32_t>& m) { return argmaxClass(fusionOf(m).evidence); };
   if (grouping.same_label_overlap > 0 && num_classes > 1)
-    groups = mergeSameLabel(std::move(groups), grouping, label_of, static_cast<int>(num_classes) - 1);
+    groups = mergeSameLabel(std::move(groups), grouping, voxels_of, label_of, static_cast<int>(num_classes) - 1);
   if (grouping.background_part_overlap > 0 && num_classes > 1)
     groups = joinBackgroundParts(
-        std::move(groups), grouping, label_of,
+        std::move(groups), grouping, voxels_of, label_of,
         [&](const std::vector<int32_t>& m) {
           const Fused& f = fusionOf(m);
           return posteriorFromLogEvidence(f.evidence, f.weight, fusion.views_exponent);
@@ -457,13 +462,12 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     o.candidates = groups[g];
     const Fused& f = fusionOf(o.candidates);
     const std::map<ViewKey, const View*>& views = f.views;
-    std::set<VoxelKey> voxels;
+    const std::vector<VoxelKey>& voxels = voxels_of(o.candidates);
     Eigen::Vector3d box_sum = Eigen::Vector3d::Zero();
     int32_t box_n = 0;
     double box_size = 0;
     for (int32_t cid : o.candidates) {
       const Candidate& c = candidates_.at(cid);
-      voxels.insert(c.voxels.begin(), c.voxels.end());
       box_sum += c.box_position_sum;
       box_n += c.box_positions;
       box_size = std::max(box_size, c.box_size);

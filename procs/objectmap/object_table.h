@@ -70,6 +70,9 @@ struct Object {
 
 class ObjectTable {
  public:
+  /// The sorted union of a group's candidates' voxels (a group: its sorted candidate ids).
+  using GroupVoxels = std::function<const std::vector<VoxelKey>&(const std::vector<int32_t>&)>;
+
   explicit ObjectTable(double resolution) : resolution_(resolution) {}
 
   double resolution() const { return resolution_; }
@@ -111,7 +114,7 @@ class ObjectTable {
   /// Merges groups that `label_of` gives the same object class (not `background`) and that share
   /// same_label_overlap of the smaller's voxels (parts and wholes of one object); order kept.
   std::vector<std::vector<int32_t>> mergeSameLabel(std::vector<std::vector<int32_t>> groups,
-                                                   const GroupingOptions& grouping,
+                                                   const GroupingOptions& grouping, const GroupVoxels& voxels_of,
                                                    const std::function<int(const std::vector<int32_t>&)>& label_of,
                                                    int background) const;
 
@@ -119,16 +122,16 @@ class ObjectTable {
   /// by same_space_box_iou and same_space_overlap of the smaller's voxels lie within near_voxels of
   /// the larger's (one object split into groups that no pair of candidates joins); order kept.
   std::vector<std::vector<int32_t>> mergeSameSpace(std::vector<std::vector<int32_t>> groups,
-                                                   const GroupingOptions& grouping) const;
+                                                   const GroupingOptions& grouping, const GroupVoxels& voxels_of) const;
   /// A group that `label_of` calls `background`, whose voxels lie within near_voxels of a larger
   /// group's of an object class c (background_part_overlap of them; the group holding most) and whose
   /// own posterior gives c at least background_part_min_posterior joins that group: a part of the
   /// object that its own boxes frame badly; order kept.
   std::vector<std::vector<int32_t>> joinBackgroundParts(
-      std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping,
+      std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, const GroupVoxels& voxels_of,
       const std::function<int(const std::vector<int32_t>&)>& label_of,
       const std::function<std::vector<double>(const std::vector<int32_t>&)>& posterior_of, int background) const;
-  /// The sorted union of a group's candidates' voxels.
+  /// The sorted union of a group's candidates' voxels (update() keeps each group's once: GroupVoxels).
   std::vector<VoxelKey> groupVoxels(const std::vector<int32_t>& group) const;
 
   double resolution_;
