@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/bus/shutdown.h"
+#include "common/thread_priority.h"
 
 namespace slamaware {
 
@@ -26,6 +27,7 @@ SystemConfig loadSystem(const NodeArgs& args) {
   SystemConfig sys = loadSystemConfig(args.system);
   if (!args.lcm_url.empty()) sys.bus.url = args.lcm_url;
   if (args.lockstep) sys.bus.lockstep = true;
+  setBackgroundNice(sys.scheduling.background_nice);
   return sys;
 }
 

@@ -22,21 +22,30 @@ Channels Channels::resolved() const {
 }
 
 const std::vector<std::string>& systemSections() {
-  static const std::vector<std::string> sections = {"bus", "channels", "supervisor", "processes"};
+  static const std::vector<std::string> sections = {"bus", "scheduling", "channels", "supervisor", "processes"};
   return sections;
 }
 
 SystemConfig loadSystemConfig(const std::string& path, bool print) {
   SystemConfig sys;
-  OptionList bus = optionListOf(sys.bus), channels = optionListOf(sys.channels);
+  OptionList bus = optionListOf(sys.bus), scheduling = optionListOf(sys.scheduling),
+             channels = optionListOf(sys.channels);
   if (!path.empty()) {
     ConfigFile file(path);
     file.checkSections(systemSections());
     file.load("bus", bus);
+    file.load("scheduling", scheduling);
     file.load("channels", channels);
   }
   if (print) {
     logOptions("bus", path.empty() ? "defaults" : path, bus);
+    logOptions("scheduling", path.empty() ? "defaults" : path, scheduling);
+  }
+  for (const auto& [key, value] : {std::pair<const char*, int>{"recognizer_nice", sys.scheduling.recognizer_nice},
+                                   {"background_nice", sys.scheduling.background_nice}}) {
+    if (value < 0 || value > 19)
+      throw ConfigError((path.empty() ? std::string("defaults") : path) + ": key 'scheduling." + key +
+                        "': a nice increment is 0..19, got " + std::to_string(value));
   }
   sys.channels = sys.channels.resolved();
   return sys;

@@ -27,6 +27,20 @@ struct BusOptions {
   }
 };
 
+/// Who gets the CPU first (common/thread_priority.h): SLAM at the normal priority, the rest
+/// lower. Nice increments, 0..19.
+struct SchedulingOptions {
+  int recognizer_nice = 3;   ///< the recognizer: takes the newest frame with what SLAM leaves
+  int background_nice = 10;  ///< the proposals' clustering and the object map: they catch up
+  template <class V>
+  void visit(V& v) {
+    v("recognizer_nice", recognizer_nice,
+      "nice increment of the recognizer (it takes the newest frame with the CPU SLAM leaves); 0: none");
+    v("background_nice", background_nice,
+      "nice increment of the proposals' clustering and the object map (they catch up); 0: none");
+  }
+};
+
 struct Channels {
   std::string prefix;  ///< prepended to every channel (several robots on one bus)
   std::string camera = "CAMERA";
@@ -72,6 +86,7 @@ const std::vector<std::string>& systemSections();
 
 struct SystemConfig {
   BusOptions bus;
+  SchedulingOptions scheduling;
   Channels channels;  ///< already resolved (prefix applied)
 };
 

@@ -23,6 +23,7 @@
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
 #include "common/config.h"
+#include "common/thread_priority.h"
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
 #include "procs/objectmap/objectmap_options.h"
@@ -359,6 +360,8 @@ int main(int argc, char** argv) {
   }
   return runNode("objectmap", node, [&]() -> int {
     const SystemConfig sys = loadSystem(node);
+    // No frame waits for the object map: all of it (its saving thread too) is background work.
+    enterBackground("the object map");
     ObjectMapOptions options = loadConfig<ObjectMapOptions>(node.config, "objectmap");
     if (!map_dir.empty()) options.persistence.dir = map_dir;
     const std::string& load = options.persistence.load_at_start;

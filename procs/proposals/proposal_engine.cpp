@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "common/bus/image_msg.h"
+#include "common/thread_priority.h"
 
 namespace slamaware {
 
@@ -91,7 +92,10 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
   if (!job_.valid() && due) {
     if (std::optional<ClusterInput> input = map.takeClusterInput()) {
       reclustered_[pose.map_id] = {pose.utime, points};
-      job_ = std::async(std::launch::async, [in = std::move(*input)] { return clusterMap(in); });
+      job_ = std::async(std::launch::async, [in = std::move(*input)] {
+        enterBackground("the proposals' clustering");  // the frames' projection goes first
+        return clusterMap(in);
+      });
     }
   }
   return taken;

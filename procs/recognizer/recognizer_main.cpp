@@ -21,6 +21,7 @@
 #include "common/bus/status.h"
 #include "common/config.h"
 #include "common/image_codec.h"
+#include "common/thread_priority.h"
 #include "procs/recognizer/recognizer.h"
 #include "procs/recognizer/seq_joiner.h"
 #include "slamaware/detections_t.hpp"
@@ -224,6 +225,8 @@ int main(int argc, char** argv) {
 
   return runNode("recognizer", node, [&]() -> int {
     const SystemConfig sys = loadSystem(node);
+    // SLAM goes first (common/thread_priority.h); threads started later inherit this.
+    lowerThreadPriority(sys.scheduling.recognizer_nice, "the recognizer");
     RecognizerOptions options = loadConfig<RecognizerOptions>(node.config, "recognizer");
     if (!model.empty()) options.model = model;
     try {

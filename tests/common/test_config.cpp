@@ -153,6 +153,23 @@ TEST(Config, SystemConfigRejectsUnknownSection) {
   }
 }
 
+TEST(Config, SchedulingNiceOutOfRangeIsRefused) {
+  const std::string ok = writeYaml("system3.yaml", "scheduling:\n  recognizer_nice: 0\n  background_nice: 19\n");
+  const SystemConfig sys = loadSystemConfig(ok, false);
+  EXPECT_EQ(sys.scheduling.recognizer_nice, 0);
+  EXPECT_EQ(sys.scheduling.background_nice, 19);
+  for (const char* text : {"scheduling:\n  recognizer_nice: -5\n", "scheduling:\n  background_nice: 20\n"}) {
+    const std::string path = writeYaml("system4.yaml", text);
+    try {
+      loadSystemConfig(path, false);
+      FAIL() << "must be refused: " << text;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("_nice': a nice increment is 0..19"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("system4.yaml"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Config, ChannelPrefixAndStatusNames) {
   const std::string path = writeYaml("system2.yaml", "channels:\n  prefix: R1_\n  camera: CAM\n");
   const SystemConfig sys = loadSystemConfig(path, false);

@@ -56,6 +56,8 @@ class Child {
     if (wait4(pid_, &status_, WNOHANG, &usage) == pid_) {
       exited_ = true;
       max_rss_kb_ = usage.ru_maxrss;
+      cpu_s_ = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+               1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
     }
     return !exited_;
   }
@@ -82,12 +84,15 @@ class Child {
   }
   /// Peak resident memory in kB, once the process has exited.
   long maxRssKb() const { return max_rss_kb_; }
+  /// CPU time (user + system, every thread) in s, once the process has exited.
+  double cpuSeconds() const { return cpu_s_; }
 
  private:
   pid_t pid_ = -1;
   int status_ = 0;
   bool exited_ = false;
   long max_rss_kb_ = 0;
+  double cpu_s_ = 0;
 };
 
 SE3 poseOf(const double position[3], const double orientation[4]) {
@@ -185,7 +190,11 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   }
   logger.stop(std::chrono::milliseconds(3000));
   result.rss_mb_total = static_cast<double>(camera.maxRssKb()) / 1024.0;
-  for (const auto& p : procs) result.rss_mb_total += static_cast<double>(p->maxRssKb()) / 1024.0;
+  result.cpu_s["camera"] = camera.cpuSeconds();
+  for (size_t i = 0; i < procs.size(); ++i) {
+    result.rss_mb_total += static_cast<double>(procs[i]->maxRssKb()) / 1024.0;
+    result.cpu_s[stages[i].name] = procs[i]->cpuSeconds();
+  }
   if (camera_rc != 0) result.error += "camera exited with " + std::to_string(camera_rc) + "; ";
   result.ok = camera_rc == 0 && !crashed;
   return result;

@@ -3,6 +3,7 @@
 // lcm-logger, then every stage of the pipeline whose binary is built, then the camera, which
 // publishes frame n+1 only after the last stage answered frame n. The stages are a table (the
 // order of DESIGN.md §1) so that later stages join by being built.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,7 @@ struct PipelineRun {
   std::vector<std::string> stages;  ///< the stages that ran
   std::string lockstep_channel;
   double rss_mb_total = 0;  ///< sum of the peak resident memory of the camera and every stage
+  std::map<std::string, double> cpu_s;  ///< CPU time (all threads) of the camera and each stage
 };
 
 /// Runs the pipeline on `sequence_dir` (a sequence folder or an LCM log with CAMERA), recording the bus into `log_path` (process outputs go to

@@ -1,0 +1,26 @@
+#pragma once
+// Who gets the CPU first. On 2 cores the pipeline asks for more than there is while a scene is
+// being mapped, and Linux shares the cores out by the threads' nice values. SLAM must handle
+// every frame as it comes and its local mapping must keep up, or tracking thins out and is lost;
+// everything after it adapts: the recognizer takes the newest frame with what CPU is left, the
+// proposals' clustering and the object map catch up later. So SLAM runs at the normal priority
+// and the others lower theirs (an unprivileged process may lower its priority, never raise it).
+// Only timing depends on it: lockstep runs are byte-identical at any value.
+#include <string>
+
+namespace slamaware {
+
+/// Lowers the calling thread's priority by `increment` nice levels (0: unchanged). Threads it
+/// starts afterwards inherit the value. Returns false if the system refused (the first refusal in a
+/// process is logged, naming `what`).
+bool lowerThreadPriority(int increment, const std::string& what);
+
+/// The increment background threads of this process take, from system.yaml's
+/// `scheduling.background_nice`; set once at start, before the threads.
+void setBackgroundNice(int increment);
+
+/// Lowers the calling thread's priority by the process's background increment: for work deep in
+/// a library (a clustering job) that does not see the configuration.
+bool enterBackground(const std::string& what);
+
+}  // namespace slamaware
