@@ -43,36 +43,53 @@ std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
   const bool use_colour = o.colour_distance > 0 && colours.size() == n;
   const float c2 = o.colour_distance * o.colour_distance;
 
-  // Points sorted by cell (cell side = radius: neighbours are in the 27 cells around).
-  std::vector<Eigen::Vector3i> cell(n);
+  // Points sorted by cell (cell side = radius: neighbours are in the 27 cells around). Each
+  // occupied cell's neighbour cells are looked up once, not once per point and pass.
   std::vector<std::pair<int64_t, int>> order(n);
   for (size_t i = 0; i < n; ++i) {
-    cell[i] = (points[i] / r).array().floor().cast<int>();
-    order[i] = {cellKey(cell[i].x(), cell[i].y(), cell[i].z()), static_cast<int>(i)};
+    const Eigen::Vector3i c = (points[i] / r).array().floor().cast<int>();
+    order[i] = {cellKey(c.x(), c.y(), c.z()), static_cast<int>(i)};
   }
   std::sort(order.begin(), order.end());
-  std::unordered_map<int64_t, std::pair<int, int>> range;  // key -> [begin, end) in order
-  range.reserve(n);
-  for (size_t i = 0; i < n;) {
-    size_t j = i;
-    while (j < n && order[j].first == order[i].first) ++j;
-    range.emplace(order[i].first, std::make_pair(static_cast<int>(i), static_cast<int>(j)));
-    i = j;
+  std::vector<int> cell_of(n);                      // point -> its cell
+  std::vector<int> cell_begin;                      // cell -> first position in order (+ end)
+  std::vector<Eigen::Vector3f> sorted(n);           // points in cell order
+  std::unordered_map<int64_t, int> cell_index;      // key -> cell
+  cell_index.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (i == 0 || order[i].first != order[i - 1].first) {
+      cell_index.emplace(order[i].first, static_cast<int>(cell_begin.size()));
+      cell_begin.push_back(static_cast<int>(i));
+    }
+    cell_of[static_cast<size_t>(order[i].second)] = static_cast<int>(cell_begin.size()) - 1;
+    sorted[i] = points[static_cast<size_t>(order[i].second)];
   }
-  auto forNeighbours = [&](size_t i, auto&& visit) {
-    const Eigen::Vector3i& c = cell[i];
+  const size_t cells = cell_begin.size();
+  cell_begin.push_back(static_cast<int>(n));
+  std::vector<int> near_begin(cells + 1, 0), near;  // cell -> its occupied neighbour cells
+  near.reserve(cells * 9);
+  for (size_t c = 0; c < cells; ++c) {
+    const Eigen::Vector3f& p = sorted[static_cast<size_t>(cell_begin[c])];
+    const Eigen::Vector3i at = (p / r).array().floor().cast<int>();
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = range.find(cellKey(c.x() + dx, c.y() + dy, c.z() + dz));
-          if (it == range.end()) continue;
-          for (int k = it->second.first; k < it->second.second; ++k) {
-            const int j = order[static_cast<size_t>(k)].second;
-            if ((points[static_cast<size_t>(j)] - points[i]).squaredNorm() <= r2) {
-              if (!visit(j)) return;
-            }
-          }
+          const auto it = cell_index.find(cellKey(at.x() + dx, at.y() + dy, at.z() + dz));
+          if (it != cell_index.end()) near.push_back(it->second);
         }
+    near_begin[c + 1] = static_cast<int>(near.size());
+  }
+  auto forNeighbours = [&](size_t i, auto&& visit) {
+    const size_t c = static_cast<size_t>(cell_of[i]);
+    const Eigen::Vector3f& p = points[i];
+    for (int m = near_begin[c]; m < near_begin[c + 1]; ++m) {
+      const size_t nc = static_cast<size_t>(near[static_cast<size_t>(m)]);
+      for (int k = cell_begin[nc]; k < cell_begin[nc + 1]; ++k) {
+        if ((sorted[static_cast<size_t>(k)] - p).squaredNorm() <= r2) {
+          if (!visit(order[static_cast<size_t>(k)].second)) return;
+        }
+      }
+    }
   };
 
   // Core points.
