@@ -360,7 +360,7 @@ int main(int argc, char** argv) {
   }
   return runNode("objectmap", node, [&]() -> int {
     const SystemConfig sys = loadSystem(node);
-    // No frame waits for the object map: all of it (its saving thread too) is background work.
+    // No frame waits for the object map: all of it is background work.
     enterBackground("the object map");
     ObjectMapOptions options = loadConfig<ObjectMapOptions>(node.config, "objectmap");
     if (!map_dir.empty()) options.persistence.dir = map_dir;
