@@ -13,6 +13,7 @@ TEST(ShippedConfig, SystemYamlEqualsDefaults) {
   SystemConfig file = loadSystemConfig(test::sourcePath("config/system.yaml"), false);
   SystemConfig defaults = loadSystemConfig("", false);
   EXPECT_TRUE(optionsEqual(file.bus, defaults.bus));
+  EXPECT_TRUE(optionsEqual(file.scheduling, defaults.scheduling));
   EXPECT_TRUE(optionsEqual(file.channels, defaults.channels));
 }
 

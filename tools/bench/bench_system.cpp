@@ -88,21 +88,26 @@ int main(int argc, char** argv) {
   CLI::App app{"slamaware-bench-system: the whole pipeline, lockstep and in real time"};
   std::string out, source = "logs/sample.lcm", work;
   std::string bin_dir = fs::path(argv[0]).parent_path().string();
-  std::string config_dir = "config", stages;
+  std::string config_dir = "config", stages, system_path;
   app.add_option("--out", out, "JSON file to write")->required();
   app.add_option("--source", source, "recording (.lcm with CAMERA) or sequence folder");
   app.add_option("--bin-dir", bin_dir, "where the slamaware-* binaries are");
   app.add_option("--config-dir", config_dir, "the processes' <name>.yaml");
+  app.add_option("--system", system_path, "system.yaml of every process (default: <config-dir>/system.yaml)");
   app.add_option("--stages", stages, "comma-separated stages to run (default: every built stage)");
   app.add_option("--work-dir", work, "recordings of the runs (default: beside --out)");
   CLI11_PARSE(app, argc, argv);
   if (work.empty()) work = (fs::path(out).parent_path() / "system").string();
   fs::create_directories(work);
 
-  SystemConfig sys;  // the default bus (ttl=0), inside the bench's network namespace
+  if (system_path.empty() && fs::exists(fs::path(config_dir) / "system.yaml"))
+    system_path = (fs::path(config_dir) / "system.yaml").string();
+  // The bus (ttl=0) inside the bench's network namespace; the processes' scheduling.
+  const SystemConfig sys = loadSystemConfig(system_path, false);
   PipelineRunOptions options;
   options.bin_dir = bin_dir;
   options.config_dir = config_dir;
+  options.system_path = system_path;
   options.lcm_url = sys.bus.url;
   if (!stages.empty())
     for (const auto& s : CLI::detail::split(stages, ',')) options.only.push_back(s);

@@ -142,11 +142,15 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   Child logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path},
                log_path + ".logger.txt");
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lcm-logger has no ready signal
+  // Every process reads the caller's system.yaml (its channels and scheduling; the bus URL and
+  // lockstep mode are given on the command line).
+  const std::string& system_yaml = options.system_path;
   std::vector<std::unique_ptr<Child>> procs;
   for (const auto& s : stages) {
     std::vector<std::string> argv = {(fs::path(options.bin_dir) / ("slamaware-" + s.name)).string(),
                                      "--lcm-url", options.lcm_url, "--log-level", "warn"};
     if (!options.realtime) argv.push_back("--lockstep");
+    if (!system_yaml.empty()) argv.insert(argv.end(), {"--system", system_yaml});
     const fs::path config = fs::path(options.config_dir) / (s.name + ".yaml");
     if (fs::exists(config)) {
       argv.push_back("--config");
@@ -167,6 +171,7 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   std::vector<std::string> camera_argv = {(fs::path(options.bin_dir) / "slamaware-camera").string(),
                                           "--source", sequence_dir, "--wait-for", wait_for,
                                           "--lcm-url", options.lcm_url, "--log-level", "warn"};
+  if (!system_yaml.empty()) camera_argv.insert(camera_argv.end(), {"--system", system_yaml});
   if (options.realtime) {
     camera_argv.insert(camera_argv.end(), {"--speed", "1"});
   } else {

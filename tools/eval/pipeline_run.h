@@ -23,6 +23,7 @@ std::vector<PipelineStage> pipelineStages(const Channels& channels);
 struct PipelineRunOptions {
   std::string bin_dir;                ///< where slamaware-* binaries are
   std::string config_dir = "config";  ///< <name>.yaml passed as --config when it exists
+  std::string system_path;  ///< system.yaml passed to every process as --system ("" = built-in defaults)
   std::string lcm_url;
   std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
   std::string objectmap_dir;      ///< --map-dir of the objectmap stage: a fresh folder per sequence
