@@ -16,7 +16,7 @@ namespace slamaware {
 bool lowerThreadPriority(int increment, const std::string& what);
 
 /// The increment background threads of this process take, from system.yaml's
-/// `scheduling.background_nice`; set once at start, before the threads.
+/// `scheduling.background_nice` (loadSystem sets it); set once at start, before the threads.
 void setBackgroundNice(int increment);
 
 /// Lowers the calling thread's priority by the process's background increment: for work deep in

@@ -361,7 +361,7 @@ int main(int argc, char** argv) {
   return runNode("objectmap", node, [&]() -> int {
     const SystemConfig sys = loadSystem(node);
     // No frame waits for the object map: all of it is background work.
-    enterBackground("the object map");
+    lowerThreadPriority(sys.scheduling.background_nice, "the object map");
     ObjectMapOptions options = loadConfig<ObjectMapOptions>(node.config, "objectmap");
     if (!map_dir.empty()) options.persistence.dir = map_dir;
     const std::string& load = options.persistence.load_at_start;

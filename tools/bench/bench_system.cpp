@@ -109,8 +109,7 @@ int main(int argc, char** argv) {
   options.config_dir = config_dir;
   options.system_path = system_path;
   options.lcm_url = sys.bus.url;
-  if (!stages.empty())
-    for (const auto& s : CLI::detail::split(stages, ',')) options.only.push_back(s);
+  options.only = stageList(stages);
   nlohmann::json j;
   j["system_source"] = source;
 

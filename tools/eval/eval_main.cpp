@@ -162,8 +162,7 @@ int main(int argc, char** argv) {
     const SystemConfig system = loadSystemConfig(system_path, false);
     if (pipeline.lcm_url.empty()) pipeline.lcm_url = system.bus.url;
     pipeline.system_path = system_path;
-    for (const auto& s : CLI::detail::split(stages, ','))
-      if (!s.empty()) pipeline.only.push_back(s);
+    pipeline.only = stageList(stages);
     fs::create_directories(fs::path(out_dir) / "plots");
     fs::create_directories(fs::path(out_dir) / "logs");
     SlamOptions slam_options;

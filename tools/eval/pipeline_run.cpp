@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <sstream>
 #include <thread>
 
 #include "common/bus/log_reader.h"
@@ -106,6 +107,14 @@ std::vector<PipelineStage> pipelineStages(const Channels& ch) {
           {"proposals", ch.proposals},
           {"recognizer", ch.detections},
           {"objectmap", ch.object_map}};
+}
+
+std::vector<std::string> stageList(const std::string& comma_separated) {
+  std::vector<std::string> names;
+  std::istringstream in(comma_separated);
+  for (std::string name; std::getline(in, name, ',');)
+    if (!name.empty()) names.push_back(name);
+  return names;
 }
 
 PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,

@@ -20,6 +20,9 @@ struct PipelineStage {
 /// Every stage of the pipeline after the camera, in order, with its per-frame output channel.
 std::vector<PipelineStage> pipelineStages(const Channels& channels);
 
+/// The stage names of a comma-separated list ("slam,proposals"; "" = none: every built stage).
+std::vector<std::string> stageList(const std::string& comma_separated);
+
 struct PipelineRunOptions {
   std::string bin_dir;                ///< where slamaware-* binaries are
   std::string config_dir = "config";  ///< <name>.yaml passed as --config when it exists
