@@ -18,13 +18,16 @@ int main(int argc, char** argv) {
       "slamaware-train: trains the recognizer model from object sets (--objects) and scene "
       "sequences with boxes.csv (--scenes: their objects of the model's categories, the rest as "
       "background)"};
-  std::vector<std::string> objects, scenes;
+  std::vector<std::string> objects, scenes, background_objects;
   std::string out, config, report_path, proposals_dir, log_level = "info";
   int64_t seed = -1;
   app.add_option("--objects", objects, "object set folders (category/category_N/..._crop.png)")
       ->required();
   app.add_option("--scenes,--negatives", scenes,
                  "sequence folders with boxes.csv: their objects (jittered boxes) and background boxes");
+  app.add_option("--background-objects", background_objects,
+                 "object set folders of other categories: their crops are background (categories of --objects "
+                 "in them are left out)");
   app.add_option("--proposals", proposals_dir,
                  "folder of <scene>.csv proposal boxes (slamaware-eval --dump-proposals on the scenes): "
                  "also trained on, labelled by their overlap with the ground truth")
@@ -41,7 +44,7 @@ int main(int argc, char** argv) {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
     if (seed >= 0) options.seed = static_cast<int>(seed);
     TrainReport report;
-    const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir);
+    const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
     saveModel(model, out);
     std::cout << report.toText();
     std::cout << "model written to " << out << "\n";

@@ -41,6 +41,12 @@ int indexOf(const std::vector<std::string>& v, const std::string& s) {
   return it == v.end() ? -1 : static_cast<int>(it - v.begin());
 }
 
+// The class index of a crop's category; `other` (background) for a category the model lacks.
+int labelOf(const std::vector<std::string>& classes, const std::string& category, int other) {
+  const int i = indexOf(classes, category);
+  return i >= 0 ? i : other;
+}
+
 // The box covering a whole image, on its pooling grid.
 PyramidBox wholeImage(const FrameEncoder& encoder, const cv::Mat& image) {
   PyramidBox b;
@@ -404,12 +410,13 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
 
 ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
                        const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror,
-                       const std::function<void(int64_t, int64_t)>& progress) {
+                       const std::function<void(int64_t, int64_t)>& progress, int other_label) {
   ExampleSet set(encoder.params().vladDims());
   ReusableMatrix buffer;
   for (size_t i = 0; i < crops.size(); ++i) {
     cv::Mat image = readImage(crops[i].path);
-    const int label = indexOf(classes, crops[i].category), group = indexOf(instances, crops[i].instance);
+    const int label = labelOf(classes, crops[i].category, other_label);
+    const int group = indexOf(instances, crops[i].instance);
     encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
     set.add(buffer.row(0), label, group);
     if (mirror) {
@@ -487,28 +494,42 @@ std::string TrainReport::toText() const {
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                            const std::vector<std::string>& scene_dirs,
                            const TrainOptions& options, TrainReport* report,
-                           const std::string& proposals_dir) {
+                           const std::string& proposals_dir,
+                           const std::vector<std::string>& background_object_dirs) {
   options.encoding.validate();
-  const std::vector<LabeledCrop> crops = collectCrops(object_dirs, options.max_views_per_instance);
+  std::vector<LabeledCrop> crops = collectCrops(object_dirs, options.max_views_per_instance);
   const std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs, proposals_dir);
   if (crops.empty()) throw DatasetError("no training crops");
   std::set<std::string> category_set, instance_set;
-  for (const auto& c : crops) {
-    category_set.insert(c.category);
-    instance_set.insert(c.instance);
+  for (const auto& c : crops) category_set.insert(c.category);
+  // Objects of other categories: background, as the scenes' other objects are. Their instances
+  // are named after their set (two sets may both hold a "kleenex_1").
+  int64_t background_crops = 0;
+  std::set<std::string> background_categories;
+  for (const auto& dir : background_object_dirs) {
+    const std::string set_name = std::filesystem::path(dir).lexically_normal().filename().string();
+    for (auto& c : collectCrops({dir}, options.background_views_per_instance)) {
+      if (category_set.count(c.category)) continue;
+      background_categories.insert(c.category);
+      c.instance = set_name + "/" + c.instance;
+      crops.push_back(std::move(c));
+      ++background_crops;
+    }
   }
-  if (category_set.size() < 2 && frames.empty())
-    throw DatasetError("need at least two categories, or background from --negatives");
+  for (const auto& c : crops) instance_set.insert(c.instance);
+  if (category_set.size() < 2 && frames.empty() && background_crops == 0)
+    throw DatasetError("need at least two categories, or background from --negatives or --background-objects");
   std::vector<std::string> classes(category_set.begin(), category_set.end());
-  const bool has_background = !frames.empty();
+  const bool has_background = !frames.empty() || background_crops > 0;
   if (has_background) classes.push_back("background");
   const int bg = has_background ? static_cast<int>(classes.size()) - 1 : -1;
   const std::vector<std::string> instances(instance_set.begin(), instance_set.end());
   const Split split = makeSplit(crops, frames, options);
   spdlog::info(
-      "{} crops of {} instances in {} categories, {} scene frames; held out: {} instances, {} "
-      "frames{}",
-      crops.size(), instances.size(), category_set.size(), frames.size(),
+      "{} crops of {} instances in {} categories ({} of them of {} other categories: background), {} scene "
+      "frames; held out: {} instances, {} frames{}",
+      crops.size(), instances.size(), category_set.size(), background_crops, background_categories.size(),
+      frames.size(),
       split.held_out_instances.size(),
       std::count(split.frame_val.begin(), split.frame_val.end(), true),
       split.held_out_sequence.empty() ? "" : " (scene " + split.held_out_sequence + ")");
@@ -534,7 +555,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   {
     ProgressBar bar("encode crops", static_cast<int64_t>(crops.size()));
     all = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
-                      [&](int64_t done, int64_t) { bar.update(done); });
+                      [&](int64_t done, int64_t) { bar.update(done); }, bg);
     bar.finish();
   }
   // Held-out crops stay held out; their mirror images are augmentation, not validation data, and
@@ -555,7 +576,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     is_val = v;
   }
   ReusableMatrix buffer;
-  if (has_background && options.context_copies > 0) {
+  if (!frames.empty() && options.context_copies > 0) {
     // Crops in context: pasted into scene frames of the same split (any frame if that split has
     // none), at the crop's own size, anywhere it fits.
     std::vector<size_t> frames_of[2];
@@ -583,8 +604,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
         PyramidBox b;
         if (!encoder.snap(x, y, crop.cols, crop.rows, scene.cols, scene.rows, &b)) continue;
         encoder.encode(scene, {b}, EncoderKind::kDirect, &buffer);
-        all.add(buffer.row(0), indexOf(classes, crops[i].category),
-                indexOf(instances, crops[i].instance));
+        all.add(buffer.row(0), labelOf(classes, crops[i].category, bg), indexOf(instances, crops[i].instance));
         is_val.push_back(split.crop_val[i]);
       }
       bar.update(static_cast<int64_t>(i + 1));
@@ -681,7 +701,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   LinearClassifier clf = trainStage(train, "train classifiers");
 
   std::vector<int64_t> mined;
-  if (has_background) {
+  if (has_background && !frames.empty()) {
     const int C = static_cast<int>(classes.size());
     for (int round = 1; round <= options.mining_rounds; ++round) {
       ExampleSet hard(model.params.vladDims());
@@ -799,6 +819,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   nlohmann::json prov;
   prov["objects"] = object_dirs;
   prov["scenes"] = scene_dirs;
+  if (!background_object_dirs.empty()) prov["background_objects"] = background_object_dirs;
   if (!proposals_dir.empty()) prov["proposals"] = proposals_dir;
   prov["report"] = nlohmann::json::parse(r.toJson());
   model.provenance = prov.dump();

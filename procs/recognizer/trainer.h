@@ -51,6 +51,7 @@ struct TrainOptions {
   int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
   int kmeans_iterations = 100;
   int max_views_per_instance = 72;  ///< 0 = every view (72: every 3rd of a 216-view turntable)
+  int background_views_per_instance = 16;  ///< views per instance of a background object set
   int context_copies = 1;          ///< crops also encoded pasted into scene frames
   bool mirror_crops = true;        ///< crops also encoded mirrored left-right
   SgdOptions sgd;
@@ -80,6 +81,8 @@ struct TrainOptions {
     v("vocabulary_descriptors", vocabulary_descriptors, "features sampled for PCA and k-means");
     v("kmeans_iterations", kmeans_iterations, "maximum k-means iterations");
     v("max_views_per_instance", max_views_per_instance, "views used per object instance (0 = all)");
+    v("background_views_per_instance", background_views_per_instance,
+      "views used per instance of the --background-objects sets (0 = all)");
     v("context_copies", context_copies, "copies of each crop pasted into random scene frames");
     v("mirror_crops", mirror_crops, "training crops also encoded mirrored left-right");
     v.section("sgd", sgd);
@@ -167,11 +170,11 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
                  const std::function<void(int64_t, int64_t)>& progress = {});
 
 /// Encodes each crop as one box covering it into an ExampleSet (label = index of its category in
-/// `classes`, group = index of its instance in `instances`); with `mirror`, each crop is followed
-/// by its left-right mirror image.
+/// `classes`, `other_label` for a category not in it; group = index of its instance in
+/// `instances`); with `mirror`, each crop is followed by its left-right mirror image.
 ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
                        const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror = false,
-                       const std::function<void(int64_t, int64_t)>& progress = {});
+                       const std::function<void(int64_t, int64_t)>& progress = {}, int other_label = -1);
 
 struct ValidationSummary {
   bool available = false;
@@ -214,10 +217,15 @@ HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOpti
 HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
                                         const FoldProgress& progress = {});
 
-/// Trains a model (see the top of this file). Progress bars go to stderr.
+/// Trains a model (see the top of this file). Progress bars go to stderr. The crops of
+/// `background_object_dirs` (object sets of other categories: the things a robot sees besides the
+/// model's objects) are background examples like the scenes' other objects, at most
+/// `background_views_per_instance` views per instance; their categories that the model has are
+/// left out.
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                            const std::vector<std::string>& scene_dirs,
                            const TrainOptions& options, TrainReport* report,
-                           const std::string& proposals_dir = "");
+                           const std::string& proposals_dir = "",
+                           const std::vector<std::string>& background_object_dirs = {});
 
 }  // namespace slamaware

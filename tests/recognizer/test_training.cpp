@@ -268,6 +268,46 @@ TEST(ModelFile, WritesAtomicallyOverAnOldModel) {
     EXPECT_EQ(entry.path().filename(), "m.model");  // no temp left
 }
 
+// Object sets of other categories (--background-objects) are background: a model of discs alone
+// learns that bars are not discs; the other set's own discs are left out.
+TEST(Training, ObjectsOfOtherCategoriesAreBackground) {
+  const std::string dir = test::tempDir("recognizer_background_objects");
+  const std::string objects = test::makeSyntheticObjectSet(dir + "/objects", 3, 10);
+  fs::remove_all(objects + "/bar");
+  const std::string others = test::makeSyntheticObjectSet(dir + "/others", 3, 10);
+  TrainOptions o = testOptions();
+  o.validation = false;
+  o.background_views_per_instance = 6;
+  TrainReport report;
+  const RecognizerModel model = trainModel({objects}, {}, o, &report, "", {others});
+  ASSERT_EQ(model.classifier.classes, (std::vector<std::string>{"disc", "background"}));
+  EXPECT_EQ(report.train_crops, 3 * 10 * 2);      // the discs of --objects, mirrored
+  EXPECT_EQ(report.train_negatives, 3 * 6 * 2);   // the bars: 6 views per instance, mirrored
+  EXPECT_NE(model.provenance.find("background_objects"), std::string::npos);
+
+  // Instances neither set holds.
+  const std::string unseen = test::makeSyntheticObjectSet(dir + "/unseen", 5, 10);
+  std::vector<LabeledCrop> crops;
+  for (const auto& c : collectCrops({unseen}, 10))
+    if (c.instance.back() == '4' || c.instance.back() == '5') crops.push_back(c);
+  ASSERT_EQ(crops.size(), 40u);
+  FrameEncoder enc(model.params, model.pca, model.vocabulary);
+  const ExampleSet test_set = encodeCrops(crops, model.classifier.classes, {}, enc, false, {}, 1);
+  int right = 0, bars = 0;
+  MatrixRM x(1, test_set.dims()), s;
+  for (int64_t i = 0; i < test_set.size(); ++i) {
+    test_set.get(i, x.data());
+    model.classifier.scores(x, &s);
+    right += (s(0, 0) > s(0, 1) ? 0 : 1) == test_set.label(i);
+    bars += test_set.label(i) == 1;
+  }
+  EXPECT_EQ(bars, 20);
+  EXPECT_GE(right, 36) << "of 40 crops of discs and bars";
+
+  // One category and nothing else: no background to tell it from.
+  EXPECT_THROW(trainModel({objects}, {}, o, nullptr), DatasetError);
+}
+
 // Real data: train on two apples and two balls, classify two other instances.
 TEST(Training, SeparatesApplesFromBallsOnUnseenUwInstances) {
   const std::string uw = test::sharedData("objects/uw_rgbd_apple_ball");
