@@ -5,6 +5,9 @@
 // Protocol: leave-one-instance-out (one fold per instance) for sets of up to --loio-max-instances
 // instances, else one fold holding out one instance of each category.
 // Without --objects it evaluates every object set in <shared>/objects and build/data/objects.
+// --extra-training [SET=]DIR adds another set's crops (of the evaluated set's categories) to the
+// training data of every fold of SET (of every other set without "SET="); make eval adds the
+// rendered config/objects/apple_ball.yaml to uw_rgbd_apple_ball's folds.
 // Positional arguments (the sequence folders scripts/eval passes to every eval tool): the
 // ground-truth boxes of their every 5th frame are classified with --model (the shipped model by
 // default), which measures the recognizer apart from the proposals:
@@ -13,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -130,6 +134,21 @@ std::string setName(const std::string& dir) {
   return p.filename().string();
 }
 
+// The extra training sets of the evaluated set `name` from the --extra-training arguments:
+// "SET=DIR" (for that set only) or "DIR" (for every set but DIR itself).
+std::vector<std::string> extraTrainingFor(const std::string& name, const std::vector<std::string>& args) {
+  std::vector<std::string> dirs;
+  for (const auto& a : args) {
+    const size_t eq = a.find('=');
+    if (eq == std::string::npos) {
+      if (setName(a) != name) dirs.push_back(a);
+    } else if (a.substr(0, eq) == name) {
+      dirs.push_back(a.substr(eq + 1));
+    }
+  }
+  return dirs;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -146,6 +165,13 @@ int main(int argc, char** argv) {
   app.add_option("--protocol", protocol, "auto, loio (leave-one-instance-out) or holdout (one instance per category)")
       ->check(CLI::IsMember({"auto", "loio", "holdout"}));
   app.add_option("--loio-max-instances", loio_max, "auto: leave-one-instance-out up to this many instances");
+  std::vector<std::string> extra, held_out;
+  app.add_option("--hold-out", held_out,
+                 "leave-one-instance-out: only these instances' folds (e.g. ball_1; default: every instance)");
+  app.add_option("--extra-training", extra,
+                 "[SET=]DIR: an object set (e.g. rendered by slamaware-synth objects) whose crops of the "
+                 "categories of the evaluated set SET (default: of every set but itself) are added to the "
+                 "training data of every fold; never tested");
   app.add_option("--max-views", max_views, "views per instance (overrides train.max_views_per_instance)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   app.add_option("sequences", sequences,
@@ -161,6 +187,13 @@ int main(int argc, char** argv) {
     if (max_views >= 0) options.max_views_per_instance = max_views;
     if (objects.empty() && !skip_sets) objects = defaultObjectSets(shared);
     if (objects.empty() && !skip_sets) throw std::runtime_error("no object sets found (give --objects DIR)");
+    for (const auto& a : extra) {
+      const size_t eq = a.find('=');
+      if (eq == std::string::npos) continue;
+      const std::string set = a.substr(0, eq);
+      if (std::none_of(objects.begin(), objects.end(), [&](const std::string& d) { return setName(d) == set; }))
+        throw std::runtime_error("--extra-training " + a + ": no evaluated object set is named " + set);
+    }
     nlohmann::json j = nlohmann::json::object();
     j["objects"] = nlohmann::json::object();
     for (const auto& dir : objects) {
@@ -181,16 +214,22 @@ int main(int argc, char** argv) {
         return n;
       }();
       const bool loio = protocol == "loio" || (protocol == "auto" && static_cast<int>(instances) <= loio_max);
-      const HeldOutResult r =
-          loio ? leaveOneInstanceOut(dir, options, progress) : oneInstancePerCategoryOut(dir, options, progress);
-      if (bar) bar->finish();
       const std::string name = setName(dir);
+      const std::vector<std::string> extra_dirs = extraTrainingFor(name, extra);
+      const HeldOutResult r =
+          loio ? leaveOneInstanceOut(dir, options, progress, extra_dirs, held_out)
+               : oneInstancePerCategoryOut(dir, options, progress, extra_dirs);
+      if (bar) bar->finish();
       nlohmann::json entry;
       entry["accuracy"] = r.accuracy();
       entry["confusion"] = r.confusion;
       entry["classes"] = r.classes;
       entry["protocol"] = r.protocol;
       entry["crops"] = r.crops;
+      if (!extra_dirs.empty()) {
+        entry["extra_training"] = extra_dirs;
+        entry["extra_training_crops"] = r.extra_crops;
+      }
       entry["instance_accuracy"] = r.instance_accuracy;
       j["objects"][name] = entry;
       std::cout << name << " (" << r.protocol << "): category accuracy " << r.accuracy() << "% (" << r.correct << "/"

@@ -190,6 +190,15 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
   return crops;
 }
 
+std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir, int max_views_per_instance) {
+  std::filesystem::path dir = std::filesystem::path(object_dir).lexically_normal();
+  if (dir.filename().empty()) dir = dir.parent_path();  // "set/"
+  const std::string set_name = dir.filename().string();
+  std::vector<LabeledCrop> crops = collectCrops({object_dir}, max_views_per_instance);
+  for (auto& c : crops) c.instance = set_name + "/" + c.instance;
+  return crops;
+}
+
 std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw DatasetError(path + ": cannot read the proposal boxes");
@@ -507,11 +516,9 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   int64_t background_crops = 0;
   std::set<std::string> background_categories;
   for (const auto& dir : background_object_dirs) {
-    const std::string set_name = std::filesystem::path(dir).lexically_normal().filename().string();
-    for (auto& c : collectCrops({dir}, options.background_views_per_instance)) {
+    for (auto& c : collectNamedCrops(dir, options.background_views_per_instance)) {
       if (category_set.count(c.category)) continue;
       background_categories.insert(c.category);
-      c.instance = set_name + "/" + c.instance;
       crops.push_back(std::move(c));
       ++background_crops;
     }
@@ -829,14 +836,19 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
 
 namespace {
 
-HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::vector<std::set<std::string>>& folds,
-                            const TrainOptions& options, const FoldProgress& progress, HeldOutResult result) {
+// `extra`: crops added to the training data of every fold (never tested).
+HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::vector<LabeledCrop>& extra,
+                            const std::vector<std::set<std::string>>& folds, const TrainOptions& options,
+                            const FoldProgress& progress, HeldOutResult result) {
   const size_t C = result.classes.size();
   result.confusion.assign(C, std::vector<int64_t>(C, 0));
+  std::vector<std::string> instances = result.instances;
+  for (const auto& c : extra)
+    if (indexOf(instances, c.instance) < 0) instances.push_back(c.instance);
   const SgdOptions& sgd = options.sgd;
   for (size_t fold = 0; fold < folds.size(); ++fold) {
     const std::set<std::string>& held = folds[fold];
-    std::vector<LabeledCrop> train_crops, test_crops;
+    std::vector<LabeledCrop> train_crops = extra, test_crops;
     for (const auto& c : crops) (held.count(c.instance) ? test_crops : train_crops).push_back(c);
     std::string names;
     for (const auto& h : held) names += (names.empty() ? "" : ", ") + h;
@@ -848,11 +860,11 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
       if (progress) progress(stage + " vocabulary", d, t);
     });
     FrameEncoder encoder(options.encoding, pca, vocabulary);
-    const ExampleSet train = encodeCrops(train_crops, result.classes, result.instances, encoder,
+    const ExampleSet train = encodeCrops(train_crops, result.classes, instances, encoder,
                                          options.mirror_crops, [&](int64_t d, int64_t t) {
                                            if (progress) progress(stage + " encode", d, t);
                                          });
-    const ExampleSet test = encodeCrops(test_crops, result.classes, result.instances, encoder);
+    const ExampleSet test = encodeCrops(test_crops, result.classes, instances, encoder);
     const LinearClassifier clf = trainOneVsAll(train, result.classes, sgd, [&](int e) {
       if (progress) progress(stage + " train", e, sgd.epochs);
     });
@@ -865,7 +877,7 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
       s.row(0).maxCoeff(&best);
       const int label = test.label(i);
       ++result.confusion[static_cast<size_t>(label)][static_cast<size_t>(best)];
-      auto& pi = per_instance[result.instances[static_cast<size_t>(test.group(i))]];
+      auto& pi = per_instance[instances[static_cast<size_t>(test.group(i))]];
       pi.first += best == label;
       ++pi.second;
       result.correct += best == label;
@@ -877,6 +889,23 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
     }
   }
   return result;
+}
+
+// The crops of the extra training sets whose category the evaluated set has; `result.extra_crops`
+// counts them.
+std::vector<LabeledCrop> extraTrainingCrops(const std::vector<std::string>& extra_dirs, HeldOutResult& result,
+                                            const TrainOptions& options) {
+  std::vector<LabeledCrop> extra;
+  for (const auto& dir : extra_dirs)
+    for (auto& c : collectNamedCrops(dir, options.max_views_per_instance))
+      if (indexOf(result.classes, c.category) >= 0) extra.push_back(std::move(c));
+  if (!extra_dirs.empty() && extra.empty()) {
+    std::string dirs;
+    for (const auto& d : extra_dirs) dirs += (dirs.empty() ? "" : ", ") + d;
+    throw DatasetError(dirs + ": no crops of the evaluated categories to add to the training");
+  }
+  result.extra_crops = static_cast<int64_t>(extra.size());
+  return extra;
 }
 
 HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& object_dir, const char* protocol) {
@@ -896,23 +925,29 @@ HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& 
 }  // namespace
 
 HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
-                                  const FoldProgress& progress) {
+                                  const FoldProgress& progress, const std::vector<std::string>& extra_dirs,
+                                  const std::vector<std::string>& held_out) {
   const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
   HeldOutResult r = prepare(crops, object_dir, "leave-one-instance-out");
+  for (const auto& inst : held_out)
+    if (indexOf(r.instances, inst) < 0) throw DatasetError(object_dir + ": no instance " + inst + " to hold out");
   std::vector<std::set<std::string>> folds;
-  for (const auto& inst : r.instances) folds.push_back({inst});
-  return evaluateFolds(crops, folds, options, progress, r);
+  for (const auto& inst : held_out.empty() ? r.instances : held_out) folds.push_back({inst});
+  const std::vector<LabeledCrop> extra = extraTrainingCrops(extra_dirs, r, options);
+  return evaluateFolds(crops, extra, folds, options, progress, r);
 }
 
 HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
-                                        const FoldProgress& progress) {
+                                        const FoldProgress& progress, const std::vector<std::string>& extra_dirs) {
   const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
   HeldOutResult r = prepare(crops, object_dir, "one held-out instance per category");
   TrainOptions o = options;
   o.validation = true;
   const Split split = makeSplit(crops, {}, o);
   if (split.held_out_instances.empty()) throw DatasetError(object_dir + ": no category has two instances");
-  return evaluateFolds(crops, {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
+  const std::vector<LabeledCrop> extra = extraTrainingCrops(extra_dirs, r, options);
+  return evaluateFolds(crops, extra,
+                       {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
                        options, progress, r);
 }
 

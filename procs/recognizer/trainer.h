@@ -134,6 +134,9 @@ struct SceneFrame {
 /// max_views_per_instance per instance (evenly spaced). Throws DatasetError.
 std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
                                       int max_views_per_instance);
+/// The crops of one object set with their instances named after the set ("<set>/<instance>": two
+/// sets may both hold a "ball_1").
+std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir, int max_views_per_instance);
 /// The frames of sequence folders with boxes.csv. Throws DatasetError (also for a folder without
 /// boxes.csv: its background is unknown). With `proposals_dir`, each frame also gets the boxes of
 /// `<proposals_dir>/<sequence folder name>.csv` (`frame,rank,x,y,w,h`, written by
@@ -207,15 +210,21 @@ struct HeldOutResult {
   std::vector<std::vector<int64_t>> confusion;      ///< [true category][predicted category]
   std::map<std::string, double> instance_accuracy;  ///< % per held-out instance
   int64_t crops = 0, correct = 0;
+  int64_t extra_crops = 0;  ///< crops of the extra training sets added to every fold
   double accuracy() const { return crops ? 100.0 * correct / crops : 0; }
 };
 using FoldProgress = std::function<void(const std::string& stage, int64_t done, int64_t total)>;
-/// Every instance in turn (as many folds as instances).
+/// Every instance in turn (as many folds as instances), or only the `held_out` ones. The crops of
+/// `extra_dirs` (other object sets, e.g. rendered ones) whose category the set has are added to the
+/// training data of every fold; they are never tested.
 HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
-                                  const FoldProgress& progress = {});
+                                  const FoldProgress& progress = {},
+                                  const std::vector<std::string>& extra_dirs = {},
+                                  const std::vector<std::string>& held_out = {});
 /// One fold: one instance of each category with two or more (chosen with options.seed).
 HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
-                                        const FoldProgress& progress = {});
+                                        const FoldProgress& progress = {},
+                                        const std::vector<std::string>& extra_dirs = {});
 
 /// Trains a model (see the top of this file). Progress bars go to stderr. The crops of
 /// `background_object_dirs` (object sets of other categories: the things a robot sees besides the

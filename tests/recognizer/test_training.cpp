@@ -10,6 +10,8 @@
 #include "common/image_codec.h"
 #include "procs/recognizer/recognizer.h"
 #include "procs/recognizer/trainer.h"
+#include "procs/synth/synth_options.h"
+#include "procs/synth/writers.h"
 #include "tests/recognizer/synthetic_data.h"
 #include "tests/support/test_support.h"
 
@@ -308,6 +310,29 @@ TEST(Training, ObjectsOfOtherCategoriesAreBackground) {
   EXPECT_THROW(trainModel({objects}, {}, o, nullptr), DatasetError);
 }
 
+// Held-out evaluation with extra training sets (slamaware-eval-objects --extra-training): their
+// crops join the training data of every fold, under their own instance names, and are never tested.
+TEST(Training, ExtraTrainingSetsJoinEveryFoldAndAreNeverTested) {
+  const std::string dir = test::tempDir("recognizer_extra_training");
+  const std::string set = test::makeSyntheticObjectSet(dir + "/set", 2, 8);
+  const std::string extra = test::makeSyntheticObjectSet(dir + "/extra", 3, 8);
+  TrainOptions o = testOptions();
+  o.vocabulary_descriptors = 10000;
+  const HeldOutResult plain = leaveOneInstanceOut(set, o);
+  const HeldOutResult with = leaveOneInstanceOut(set, o, {}, {extra});
+  EXPECT_EQ(plain.extra_crops, 0);
+  EXPECT_EQ(with.extra_crops, 3 * 2 * 8);  // 3 instances of bar and disc, 8 views each
+  EXPECT_EQ(with.crops, 2 * 2 * 8);        // only the evaluated set's crops are tested...
+  EXPECT_EQ(with.instances, plain.instances);
+  ASSERT_EQ(with.instance_accuracy.size(), 4u);  // ...one fold per instance of it
+  for (const auto& [instance, accuracy] : with.instance_accuracy)
+    EXPECT_EQ(instance.find('/'), std::string::npos) << instance;
+  // A fold of the plain set learns each category from one instance; three more help.
+  EXPECT_GE(with.accuracy(), plain.accuracy());
+  EXPECT_GE(with.accuracy(), 90.0);
+  EXPECT_EQ(collectNamedCrops(extra, 1).front().instance, "extra/bar_1");
+}
+
 // Real data: train on two apples and two balls, classify two other instances.
 TEST(Training, SeparatesApplesFromBallsOnUnseenUwInstances) {
   const std::string uw = test::sharedData("objects/uw_rgbd_apple_ball");
@@ -343,4 +368,25 @@ TEST(Training, SeparatesApplesFromBallsOnUnseenUwInstances) {
     right += (s(0, 0) > s(0, 1) ? 0 : 1) == test_set.label(i);
   }
   EXPECT_GE(right, 54) << "of 60 crops of apple_5 and ball_3";
+}
+
+// Real data, the fold of make eval's leave-one-instance-out that fails without rendered objects:
+// the UW set's ball_1 (a brown American football) when "ball" is learnt from its two white balls
+// alone is called apple in most views. config/objects/apple_ball.yaml's rendered apples and balls
+// (make eval's --extra-training for this set) must bring it over the 61 % the set's 95 % needs.
+TEST(Training, RenderedApplesAndBallsTeachTheUwBallCategory) {
+  const std::string uw = test::sharedData("objects/uw_rgbd_apple_ball");
+  SKIP_WITHOUT_SHARED_DATA(uw);
+  const std::string dir = test::tempDir("recognizer_uw_rendered");
+  const std::string rendered = dir + "/apple_ball";
+  synth::writeObjectSet(synth::loadObjectSetOptions(test::sourcePath("config/objects/apple_ball.yaml")), rendered, -1, false);
+  const TrainOptions o;  // as make eval trains each fold
+  const HeldOutResult plain = leaveOneInstanceOut(uw, o, {}, {}, {"ball_1"});
+  const HeldOutResult with = leaveOneInstanceOut(uw, o, {}, {rendered}, {"ball_1"});
+  ASSERT_EQ(with.instance_accuracy.count("ball_1"), 1u);
+  EXPECT_EQ(with.crops, 72);
+  EXPECT_EQ(with.extra_crops, 2 * 30 * 72);
+  EXPECT_GE(with.instance_accuracy.at("ball_1"), 61.0) << "without the rendered ones: " << plain.accuracy() << " %";
+  EXPECT_GE(with.instance_accuracy.at("ball_1"), plain.instance_accuracy.at("ball_1") + 20.0);
+  EXPECT_THROW(leaveOneInstanceOut(uw, o, {}, {}, {"ball_9"}), DatasetError);
 }
