@@ -134,17 +134,23 @@ std::string setName(const std::string& dir) {
   return p.filename().string();
 }
 
-// The extra training sets of the evaluated set `name` from the --extra-training arguments:
-// "SET=DIR" (for that set only) or "DIR" (for every set but DIR itself).
+// An --extra-training argument: "SET=DIR" (for the set named SET only) or "DIR" (set empty: for
+// every set but DIR itself).
+struct ExtraTraining {
+  std::string set, dir;
+  explicit ExtraTraining(const std::string& arg) {
+    const size_t eq = arg.find('=');
+    if (eq != std::string::npos) set = arg.substr(0, eq);
+    dir = eq == std::string::npos ? arg : arg.substr(eq + 1);
+  }
+};
+
+// The extra training sets of the evaluated set `name`.
 std::vector<std::string> extraTrainingFor(const std::string& name, const std::vector<std::string>& args) {
   std::vector<std::string> dirs;
   for (const auto& a : args) {
-    const size_t eq = a.find('=');
-    if (eq == std::string::npos) {
-      if (setName(a) != name) dirs.push_back(a);
-    } else if (a.substr(0, eq) == name) {
-      dirs.push_back(a.substr(eq + 1));
-    }
+    const ExtraTraining e(a);
+    if (e.set.empty() ? setName(e.dir) != name : e.set == name) dirs.push_back(e.dir);
   }
   return dirs;
 }
@@ -188,11 +194,10 @@ int main(int argc, char** argv) {
     if (objects.empty() && !skip_sets) objects = defaultObjectSets(shared);
     if (objects.empty() && !skip_sets) throw std::runtime_error("no object sets found (give --objects DIR)");
     for (const auto& a : extra) {
-      const size_t eq = a.find('=');
-      if (eq == std::string::npos) continue;
-      const std::string set = a.substr(0, eq);
-      if (std::none_of(objects.begin(), objects.end(), [&](const std::string& d) { return setName(d) == set; }))
-        throw std::runtime_error("--extra-training " + a + ": no evaluated object set is named " + set);
+      const ExtraTraining e(a);
+      if (!e.set.empty() &&
+          std::none_of(objects.begin(), objects.end(), [&](const std::string& d) { return setName(d) == e.set; }))
+        throw std::runtime_error("--extra-training " + a + ": no evaluated object set is named " + e.set);
     }
     nlohmann::json j = nlohmann::json::object();
     j["objects"] = nlohmann::json::object();
