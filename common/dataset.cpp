@@ -326,4 +326,10 @@ bool isSyntheticSequence(const SequenceFolder& sequence) {
   return sequence.size() > 0 && !sequence.depthPath(0).empty();
 }
 
+std::string folderName(const std::string& dir) {
+  std::filesystem::path p = std::filesystem::path(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p.filename().string();
+}
+
 }  // namespace slamaware

@@ -79,6 +79,9 @@ class SequenceFolder {
 /// True for sequences of the synthetic suite (the generator's source, or depth ground truth).
 bool isSyntheticSequence(const SequenceFolder& sequence);
 
+/// The name of a sequence folder or object set: its last path component ("a/set/" -> "set").
+std::string folderName(const std::string& dir);
+
 /// Reads sequence.yaml; throws DatasetError naming the file and the key at fault.
 SequenceInfo readSequenceInfo(const std::string& path);
 void writeSequenceInfo(const std::string& path, const SequenceInfo& info);

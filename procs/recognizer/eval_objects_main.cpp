@@ -128,12 +128,6 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
   return t;
 }
 
-std::string setName(const std::string& dir) {
-  fs::path p = fs::path(dir).lexically_normal();
-  if (p.filename().empty()) p = p.parent_path();
-  return p.filename().string();
-}
-
 // An --extra-training argument: "SET=DIR" (for the set named SET only) or "DIR" (set empty: for
 // every set but DIR itself).
 struct ExtraTraining {
@@ -150,7 +144,7 @@ std::vector<std::string> extraTrainingFor(const std::string& name, const std::ve
   std::vector<std::string> dirs;
   for (const auto& a : args) {
     const ExtraTraining e(a);
-    if (e.set.empty() ? setName(e.dir) != name : e.set == name) dirs.push_back(e.dir);
+    if (e.set.empty() ? folderName(e.dir) != name : e.set == name) dirs.push_back(e.dir);
   }
   return dirs;
 }
@@ -196,7 +190,7 @@ int main(int argc, char** argv) {
     for (const auto& a : extra) {
       const ExtraTraining e(a);
       if (!e.set.empty() &&
-          std::none_of(objects.begin(), objects.end(), [&](const std::string& d) { return setName(d) == e.set; }))
+          std::none_of(objects.begin(), objects.end(), [&](const std::string& d) { return folderName(d) == e.set; }))
         throw std::runtime_error("--extra-training " + a + ": no evaluated object set is named " + e.set);
     }
     nlohmann::json j = nlohmann::json::object();
@@ -219,7 +213,7 @@ int main(int argc, char** argv) {
         return n;
       }();
       const bool loio = protocol == "loio" || (protocol == "auto" && static_cast<int>(instances) <= loio_max);
-      const std::string name = setName(dir);
+      const std::string name = folderName(dir);
       const std::vector<std::string> extra_dirs = extraTrainingFor(name, extra);
       const HeldOutResult r =
           loio ? leaveOneInstanceOut(dir, options, progress, extra_dirs, held_out)
@@ -254,7 +248,7 @@ int main(int argc, char** argv) {
         const SequenceFolder seq = SequenceFolder::open(dir);
         if (!seq.hasBoxes()) continue;
         const BoxTally t = classifySceneBoxes(recognizer, seq, 5);
-        const std::string name = setName(dir);
+        const std::string name = folderName(dir);
         j["sequences"][name]["gt_boxes"] = t.json();
         std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
                   << " ground-truth boxes right (jittered: " << t.json()["jittered_accuracy"].get<double>()

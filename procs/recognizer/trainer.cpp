@@ -191,9 +191,7 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
 }
 
 std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir, int max_views_per_instance) {
-  std::filesystem::path dir = std::filesystem::path(object_dir).lexically_normal();
-  if (dir.filename().empty()) dir = dir.parent_path();  // "set/"
-  const std::string set_name = dir.filename().string();
+  const std::string set_name = folderName(object_dir);
   std::vector<LabeledCrop> crops = collectCrops({object_dir}, max_views_per_instance);
   for (auto& c : crops) c.instance = set_name + "/" + c.instance;
   return crops;
@@ -259,8 +257,7 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
       by_frame[b.frame].object_classes.push_back(b.cls);
     }
     if (!proposals_dir.empty()) {
-      const std::string name = std::filesystem::path(dir).lexically_normal().filename().string();
-      const std::string path = (std::filesystem::path(proposals_dir) / (name + ".csv")).string();
+      const std::string path = (std::filesystem::path(proposals_dir) / (folderName(dir) + ".csv")).string();
       if (std::filesystem::exists(path)) {
         for (auto& [frame, boxes] : readProposalBoxes(path)) by_frame[frame].proposals = std::move(boxes);
       } else {
@@ -708,7 +705,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   LinearClassifier clf = trainStage(train, "train classifiers");
 
   std::vector<int64_t> mined;
-  if (has_background && !frames.empty()) {
+  if (!frames.empty()) {  // mining searches scene frames
     const int C = static_cast<int>(classes.size());
     for (int round = 1; round <= options.mining_rounds; ++round) {
       ExampleSet hard(model.params.vladDims());

@@ -379,7 +379,8 @@ TEST(Training, RenderedApplesAndBallsTeachTheUwBallCategory) {
   SKIP_WITHOUT_SHARED_DATA(uw);
   const std::string dir = test::tempDir("recognizer_uw_rendered");
   const std::string rendered = dir + "/apple_ball";
-  synth::writeObjectSet(synth::loadObjectSetOptions(test::sourcePath("config/objects/apple_ball.yaml")), rendered, -1, false);
+  const auto set_options = synth::loadObjectSetOptions(test::sourcePath("config/objects/apple_ball.yaml"));
+  synth::writeObjectSet(set_options, rendered, -1, false);
   const TrainOptions o;  // as make eval trains each fold
   const HeldOutResult plain = leaveOneInstanceOut(uw, o, {}, {}, {"ball_1"});
   const HeldOutResult with = leaveOneInstanceOut(uw, o, {}, {rendered}, {"ball_1"});
