@@ -3,11 +3,10 @@
 // each time. Every other run, the kill comes as soon as a save's temporary file shows up (a
 // random moment rarely falls inside a save, which takes a few ms of every 200): while an .ot file
 // is written, or while the JSON (the commit) is. One run in four is killed at a random moment
-// after it has committed a save of its own (however loaded the machine, so that many runs are
-// seen to save). After every kill a fresh load of the folder must
-// succeed with no file refused, be at least as new as the newest generation committed before the
-// kill, and hold every object of the previous load with at least the views it had: no object seen
-// before the last save is lost.
+// after it has committed a save of its own, so that many runs save however loaded the machine is.
+// After every kill a fresh load of the folder must succeed with no file refused, be at least as
+// new as the newest generation committed before the kill, and hold every object of the previous
+// load with at least the views it had: no object seen before the last save is lost.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -91,11 +90,10 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
   const auto start = Clock::now();
   for (int round = 0; round < 100; ++round) {
     SCOPED_TRACE("round " + std::to_string(round));
-    test::ChildProcess node(
-        {test::binPath("slamaware-objectmap"), "--system", dir + "/system.yaml", "--config",
-         dir + "/objectmap.yaml", "--map-dir",
-         map_dir, "--lcm-url", test::testUrl(), "--log-level", "warn"},
-        dir + "/node.log");
+    test::ChildProcess node({test::binPath("slamaware-objectmap"), "--system", dir + "/system.yaml",
+                             "--config", dir + "/objectmap.yaml", "--map-dir", map_dir, "--lcm-url",
+                             test::testUrl(), "--log-level", "warn"},
+                            dir + "/node.log");
     status.reset();
     ASSERT_TRUE(test::waitUntil(
         [&] {
@@ -117,8 +115,9 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
     // saving run lives until its first save is on disk (at most 10 s), then as long again as a
     // plain run.
     const double kill_after = kill_after_s(rng);
-    auto kill_at = Clock::now() + std::chrono::duration<double>(
-                                      saving ? 10.0 : hunt ? 0.4 + kill_after : kill_after);
+    auto kill_at = Clock::now() + std::chrono::duration<double>(saving ? 10.0
+                                                                : hunt ? 0.4 + kill_after
+                                                                       : kill_after);
     int64_t committed = committed_before_run;
     bool writing = false, saved = false;
     while (Clock::now() < kill_at && !writing) {
