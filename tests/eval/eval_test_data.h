@@ -12,19 +12,6 @@
 
 namespace slamaware::test {
 
-template <class Msg>
-inline void writeEvent(lcm::LogFile& log, const std::string& channel, const Msg& m, int64_t n) {
-  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent ev;
-  ev.eventnum = n;
-  ev.timestamp = 1000 + n;
-  ev.channel = channel;
-  ev.datalen = static_cast<int32_t>(buf.size());
-  ev.data = buf.data();
-  log.writeEvent(&ev);
-}
-
 // A sequence folder with `frames` placeholder frames (never read), the classes and the boxes.
 inline std::string makeSequence(const std::string& name, int frames, const std::vector<std::string>& classes,
                                 const std::vector<GroundTruthBox>& boxes) {

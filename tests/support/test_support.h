@@ -4,7 +4,9 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,20 @@ std::string sharedData(const std::string& relative);
 std::string tempDir(const std::string& name);
 /// The bus URL tests use (inside their own network namespace).
 std::string testUrl();
+
+/// Appends message `m` on `channel` to a log as its event number `n` (timestamp 1000 + n).
+template <class Msg>
+void writeEvent(lcm::LogFile& log, const std::string& channel, const Msg& m, int64_t n) {
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  lcm::LogEvent ev;
+  ev.eventnum = n;
+  ev.timestamp = 1000 + n;
+  ev.channel = channel;
+  ev.datalen = static_cast<int32_t>(buf.size());
+  ev.data = buf.data();
+  log.writeEvent(&ev);
+}
 
 /// Skips the current test with a clear message when the shared data is absent.
 #define SKIP_WITHOUT_SHARED_DATA(path)                                                         \
