@@ -238,8 +238,8 @@ bool drawTopDown(const Session& s, const std::string& path) {
     for (const auto& o : s.last_objects->objects) {
       // The labelled objects only: background candidates (most of them) would hide the map.
       if (o.map_id != s.map_id || o.label == "background" || o.label.empty()) continue;
-      // An object with evidence but no voxels yet has no place (NaN centroid): not drawn.
-      bool placed = o.num_voxels > 0;
+      // An object with evidence but no position yet (NaN centroid, object_t.lcm): not drawn.
+      bool placed = true;
       for (int k = 0; k < 3; ++k) placed = placed && std::isfinite(o.centroid[k]) && std::isfinite(o.extent[k]);
       if (!placed) continue;
       const Eigen::Vector3d c(o.centroid[0], o.centroid[1], o.centroid[2]);
