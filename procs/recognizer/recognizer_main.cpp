@@ -7,6 +7,7 @@
 // counted (frames_dropped). Bad input (a proposal for a frame never seen, boxes outside the image
 // or of zero size, a corrupt JPEG, an unreadable model, classes the config names but the model
 // lacks) is counted in RECOGNIZER_STATUS and never stops the process.
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -36,12 +37,6 @@ namespace {
 double nowS() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
 
 using Joiner = SeqJoiner<std::shared_ptr<const image_t>, proposals_t>;
-
-std::string joinNames(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
-}
 
 class RecognizerNode {
  public:
@@ -76,10 +71,10 @@ class RecognizerNode {
       recognizer_ = std::make_unique<Recognizer>(model, options_);
       const auto missing = recognizer_->missingClasses();
       status_.setCounter("classes_missing", static_cast<int64_t>(missing.size()));
-      spdlog::info("model {}: classes {}", options_.model, joinNames(recognizer_->classes()));
+      spdlog::info("model {}: classes {}", options_.model, fmt::join(recognizer_->classes(), ", "));
       if (!missing.empty()) {
-        const std::string msg =
-            "model " + options_.model + " lacks classes named in the config: " + joinNames(missing);
+        const std::string msg = "model " + options_.model + " lacks classes named in the config: " +
+                                fmt::format("{}", fmt::join(missing, ", "));
         spdlog::warn("{}", msg);
         status_.setMessage(msg);
         status_.setState(StatusReporter::State::kDegraded);

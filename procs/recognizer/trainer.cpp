@@ -1,5 +1,6 @@
 #include "procs/recognizer/trainer.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -847,10 +848,9 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
     const std::set<std::string>& held = folds[fold];
     std::vector<LabeledCrop> train_crops = extra, test_crops;
     for (const auto& c : crops) (held.count(c.instance) ? test_crops : train_crops).push_back(c);
-    std::string names;
-    for (const auto& h : held) names += (names.empty() ? "" : ", ") + h;
-    const std::string stage = "fold " + std::to_string(fold + 1) + "/" + std::to_string(folds.size()) + " (" +
-                              (held.size() > 3 ? std::to_string(held.size()) + " instances" : names) + ")";
+    const std::string stage =
+        "fold " + std::to_string(fold + 1) + "/" + std::to_string(folds.size()) + " (" +
+        (held.size() > 3 ? std::to_string(held.size()) + " instances" : fmt::format("{}", fmt::join(held, ", "))) + ")";
     Pca pca;
     Vocabulary vocabulary;
     fitEncoding(train_crops, {}, options, &pca, &vocabulary, [&](int64_t d, int64_t t) {
@@ -896,11 +896,9 @@ std::vector<LabeledCrop> extraTrainingCrops(const std::vector<std::string>& extr
   for (const auto& dir : extra_dirs)
     for (auto& c : collectNamedCrops(dir, options.max_views_per_instance))
       if (indexOf(result.classes, c.category) >= 0) extra.push_back(std::move(c));
-  if (!extra_dirs.empty() && extra.empty()) {
-    std::string dirs;
-    for (const auto& d : extra_dirs) dirs += (dirs.empty() ? "" : ", ") + d;
-    throw DatasetError(dirs + ": no crops of the evaluated categories to add to the training");
-  }
+  if (!extra_dirs.empty() && extra.empty())
+    throw DatasetError(fmt::format("{}: no crops of the evaluated categories to add to the training",
+                                   fmt::join(extra_dirs, ", ")));
   result.extra_crops = static_cast<int64_t>(extra.size());
   return extra;
 }
