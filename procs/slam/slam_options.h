@@ -176,6 +176,11 @@ struct DepthFilterOptions {
   double min_inlier_ratio = 0.25;      ///< a / (a + b) below this: the seed is dropped
   double min_baseline_ratio = 0.004;   ///< baseline / depth below this: the frame is not used
   int max_queue = 3;                   ///< real time: frames waiting beyond this are skipped
+  /// A keyframe made while fewer seeds of its map have converged than this takes its map points
+  /// (triangulated features) as its first points (0: never): a young map's objects have points
+  /// before its first seeds converge, which at low frame rates takes several frames.
+  int young_map_points = 2000;
+  double sparse_depth_std = 0.01;  ///< depth std of those points, as a share of their distance
 
   template <class V>
   void visit(V& v) {
@@ -197,6 +202,9 @@ struct DepthFilterOptions {
     v("min_baseline_ratio", min_baseline_ratio,
       "frames with baseline / depth below this are not used");
     v("max_queue", max_queue, "real time: frames waiting beyond this are skipped");
+    v("young_map_points", young_map_points,
+      "keyframes of a map with fewer converged seeds take its map points (0: never)");
+    v("sparse_depth_std", sparse_depth_std, "depth std of those points, share of their distance");
   }
 };
 

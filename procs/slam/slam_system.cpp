@@ -124,6 +124,16 @@ void SlamSystem::postDepthWork(const TrackResult& r, const Frame& frame) {
       k.bgr = kf->bgr;
       k.T_world_camera = kf->T_world_camera();
       if (!kf->depthRange(&k.min_depth, &k.mean_depth)) continue;
+      if (options_.depth.young_map_points > 0) {
+        for (size_t i = 0; i < kf->points.size(); ++i) {
+          const auto& p = kf->points[i];
+          if (!p || p->bad) continue;
+          const Eigen::Vector2d& px = kf->features->px[i];
+          k.sparse.push_back({Eigen::Vector2i(static_cast<int>(std::lround(px.x())),
+                                              static_cast<int>(std::lround(px.y()))),
+                              (kf->T_camera_world * p->p_world).cast<float>()});
+        }
+      }
       input->new_keyframes.push_back(k);
     }
   }
@@ -332,10 +342,19 @@ void SlamSystem::collect(int64_t utime, int32_t seq,
     std::lock_guard<std::mutex> lock(finished_mutex_);
     finished.swap(depth_finished_);
   }
+  // A keyframe that dropped its map points (DepthFilter) lost points published before: its map
+  // goes out whole instead (a full cloud replaces all that consumers hold of the map).
+  std::set<int> maps_to_resend;
   for (int64_t id : finished) {
     live_published_.erase(id);
     CloudOutput c = keyframeCloud(id, utime, seq);
-    if (!c.points.empty()) out->clouds.push_back(std::move(c));
+    if (depth_->keyframe(id).features_dropped)
+      maps_to_resend.insert(c.map_id);
+    else if (!c.points.empty())
+      out->clouds.push_back(std::move(c));
+  }
+  for (int map_id : maps_to_resend) {
+    if (std::shared_ptr<Map> m = mapById(map_id)) out->clouds.push_back(fullCloud(m, utime, seq));
   }
 
   std::shared_ptr<Map> map = tracker_->activeMap();
@@ -355,12 +374,21 @@ void SlamSystem::publishLiveClouds(int map_id, int64_t utime, int32_t seq, SlamO
   const double growth = options_.output.live_cloud_growth;
   if (growth <= 0) return;
   const auto min_points = static_cast<size_t>(std::max(1, options_.output.live_cloud_min_points));
-  for (const auto& [id, points] : depth_->liveKeyframeSizes(map_id)) {
-    if (points < min_points) continue;
-    size_t& published = live_published_[id];
-    if (published > 0 && static_cast<double>(points) < (1.0 + growth) * static_cast<double>(published)) continue;
-    published = points;
-    out->clouds.push_back(keyframeCloud(id, utime, seq));
+  for (const auto& kf : depth_->liveKeyframes(map_id)) {
+    // Published once its converged points number min_points, and again whenever they have grown
+    // by `growth`; a young map's keyframe also at once, with its map points (however few).
+    auto& [published, any] = live_published_[kf.id];
+    const size_t converged = kf.points - kf.from_features;
+    bool due = false;
+    if (converged >= min_points)
+      due = published == 0 ||
+            static_cast<double>(converged) >= (1.0 + growth) * static_cast<double>(published);
+    else
+      due = !any && kf.from_features > 0;
+    if (!due) continue;
+    any = true;
+    if (converged >= min_points) published = converged;
+    out->clouds.push_back(keyframeCloud(kf.id, utime, seq));
   }
 }
 

@@ -164,7 +164,9 @@ class SlamSystem {
   int first_map_id_ = -1;
   int last_full_map_id_ = -1;
   int64_t last_full_utime_ = 0;
-  std::map<int64_t, size_t> live_published_;  ///< unfinished keyframe -> points last published
+  /// Unfinished keyframe -> its converged points when last published (0: not yet), and whether
+  /// it was published at all (a young map's keyframe is, with its map points alone).
+  std::map<int64_t, std::pair<size_t, bool>> live_published_;
 
   mutable std::mutex finished_mutex_;
   std::vector<int64_t>

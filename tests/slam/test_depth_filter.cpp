@@ -212,3 +212,73 @@ TEST(DepthFilter, SeedsWithoutUsableFramesStillEndAfterMaxKeyframesPlusMinFrames
   EXPECT_EQ(frameThatFinishesTheFirstKeyframe(filter, texture, cam, 0.05), 7);
   EXPECT_EQ(filter.keyframe(7).points.size(), 0u);
 }
+
+// A young map's keyframe takes its map points (triangulated features) as its first points, at
+// once: at low frame rates its seeds need several frames to converge, and the map would show
+// nothing until then. Once the map's seeds have converged to young_map_points, new keyframes
+// start empty again and finished ones keep their converged seeds alone; another map is young
+// again; features behind the camera or outside the image are refused.
+TEST(DepthFilter, AYoungMapsKeyframesStartFromTheirMapPoints) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 5);
+  DepthFilterOptions options;
+  options.young_map_points = 1000;
+  DepthFilter filter(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+
+  // Map points on the plane seen by keyframe 7 (at the origin), plus two bad ones.
+  DepthFrameInput first = slidingFrame(texture, cam, 0, 0.05, true);
+  DepthKeyframeInput& kf = first.new_keyframes.front();
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector2i px(20 + 15 * i, 30 + 10 * i);
+    const Eigen::Vector3f p(float((px.x() - cam.cx) / cam.fx * kPlaneZ),
+                            float((px.y() - cam.cy) / cam.fy * kPlaneZ), float(kPlaneZ));
+    kf.sparse.push_back({px, p});
+  }
+  kf.sparse.push_back({Eigen::Vector2i(100, 100), Eigen::Vector3f(0, 0, -1)});  // behind
+  kf.sparse.push_back({Eigen::Vector2i(cam.width, 5), Eigen::Vector3f(0, 0, 2)});  // outside
+  filter.process(first);
+  const SemiDenseKeyframe seeded = filter.keyframe(7);
+  ASSERT_EQ(seeded.points.size(), 40u);
+  EXPECT_EQ(seeded.from_features, 40u);
+  const uint8_t grey = kf.grey.at<uint8_t>(30, 20);
+  EXPECT_EQ(seeded.points[0].rgb[0], grey);
+  EXPECT_NEAR(seeded.points[0].p_camera.z(), kPlaneZ, 1e-6);
+  EXPECT_NEAR(seeded.points[0].depth_std, options.sparse_depth_std * seeded.points[0].p_camera.norm(),
+              1e-6);
+  const auto live = filter.liveKeyframes(1);
+  ASSERT_EQ(live.size(), 1u);
+  EXPECT_EQ(live[0].from_features, 40u);
+
+  // The seeds converge (thousands of points on the plane): the map is no longer young.
+  for (int k = 1; k <= 8; ++k) filter.process(slidingFrame(texture, cam, k, 0.05, false));
+  const size_t with_features = filter.keyframe(7).points.size();
+  ASSERT_GE(with_features, 1040u);
+  EXPECT_EQ(filter.keyframe(7).from_features, 40u);
+  DepthFrameInput later = slidingFrame(texture, cam, 9, 0.05, true);
+  later.new_keyframes.front().sparse = kf.sparse;
+  filter.process(later);
+  EXPECT_EQ(filter.keyframe(16).points.size(), 0u);
+  EXPECT_EQ(filter.keyframe(16).from_features, 0u);
+
+  // A new map is young.
+  DepthFrameInput other = slidingFrame(texture, cam, 10, 0.05, true);
+  other.map_id = 2;
+  other.new_keyframes.front().map_id = 2;
+  other.new_keyframes.front().sparse = kf.sparse;
+  const size_t before = filter.keyframe(7).points.size();
+  filter.process(other);
+  EXPECT_EQ(filter.keyframe(17).points.size(), 40u);
+  // Map 1's keyframes are finished by the new map: keyframe 7 keeps only its converged seeds
+  // (its map points were stand-ins), keyframe 16 (no converged seed, no map points) nothing.
+  EXPECT_TRUE(filter.keyframe(7).finished);
+  EXPECT_EQ(filter.keyframe(7).from_features, 0u);
+  EXPECT_EQ(filter.keyframe(7).points.size(), before - 40);
+
+  // Off.
+  options.young_map_points = 0;
+  DepthFilter off(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  DepthFrameInput again = slidingFrame(texture, cam, 0, 0.05, true);
+  again.new_keyframes.front().sparse = kf.sparse;
+  off.process(again);
+  EXPECT_EQ(off.keyframe(7).points.size(), 0u);
+}

@@ -124,6 +124,7 @@ TEST(SlamSystem, KeyframesArePublishedWhileTheirSeedsConverge) {
   SlamOptions off, live;
   off.output.live_cloud_growth = 0;
   live.output.live_cloud_growth = 0.5;
+  off.depth.young_map_points = live.depth.young_map_points = 0;  // converged points alone
   const SlamRun a = runSlam(false, off), b = runSlam(false, live);
   auto firstIncremental = [](const SlamRun& r) {
     for (const auto& c : r.cloud_info)
@@ -158,4 +159,42 @@ TEST(SlamSystem, KeyframesArePublishedWhileTheirSeedsConverge) {
     ++compared;
   }
   EXPECT_GT(compared, 0);
+}
+
+// A young map's keyframes start with their map points (triangulated features): the map that
+// initialisation makes is published with the frame that makes it, several frames before its
+// first seeds converge, and each such keyframe is published again as its seeds converge.
+TEST(SlamSystem, AYoungMapIsPublishedWithItsMapPointsAtOnce) {
+  SlamOptions seeds_only, young;
+  seeds_only.depth.young_map_points = 0;
+  young.depth.young_map_points = 5000;
+  const SlamRun a = runSlam(false, seeds_only), b = runSlam(false, young);
+  int init = -1;
+  for (size_t i = 0; i < b.poses.size() && init < 0; ++i)
+    if (b.poses[i].state == PoseState::kTracking) init = static_cast<int>(i);
+  ASSERT_GE(init, 0);
+  auto firstIncremental = [](const SlamRun& r) {
+    for (const auto& c : r.cloud_info)
+      if (!c.full) return c.frame;
+    return -1;
+  };
+  EXPECT_EQ(firstIncremental(b), init);
+  ASSERT_GE(firstIncremental(a), 0);
+  EXPECT_LE(init + 3, firstIncremental(a));
+  // The first keyframe: its map points first, later with its converged seeds added.
+  std::vector<size_t> sizes;
+  for (const auto& c : b.cloud_info)
+    if (!c.full && c.keyframe_id == b.cloud_info.front().keyframe_id) sizes.push_back(c.points);
+  ASSERT_GE(sizes.size(), 2u);
+  EXPECT_GT(sizes.front(), 50u);
+  EXPECT_GT(sizes.back(), sizes.front() + 200);
+  // Once the seeds have converged, finished keyframes drop those stand-ins, which consumers hold:
+  // the map goes out whole (a full cloud), long before its period (5 s; the video lasts 2 s).
+  auto fullClouds = [](const SlamRun& r) {
+    int n = 0;
+    for (const auto& c : r.cloud_info) n += c.full;
+    return n;
+  };
+  EXPECT_EQ(fullClouds(a), 0);
+  EXPECT_GE(fullClouds(b), 1);
 }

@@ -129,6 +129,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       used = true;
       if (converged.empty()) continue;
       std::lock_guard<std::mutex> lock(store_mutex_);
+      converged_per_map_[input.map_id] += static_cast<int64_t>(converged.size());
       host.store->points.insert(host.store->points.end(), converged.begin(), converged.end());
       stats_.points += static_cast<int64_t>(converged.size());
     }
@@ -139,7 +140,17 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
   auto finish = [&](std::map<int64_t, Host>::iterator it) {
     {
       std::lock_guard<std::mutex> lock(store_mutex_);
-      it->second.store->finished = true;
+      SemiDenseKeyframe& kf = *it->second.store;
+      kf.finished = true;
+      // Once the map's seeds have converged, a keyframe's map points were only stand-ins: they
+      // are snapshots from before bundle adjustment, and copies of one map point in several
+      // keyframes would pass for surfaces that many keyframes agree on.
+      if (kf.from_features > 0 && converged_per_map_[kf.map_id] >= options_.young_map_points) {
+        kf.points.erase(kf.points.begin(), kf.points.begin() + static_cast<long>(kf.from_features));
+        stats_.points -= static_cast<int64_t>(kf.from_features);
+        kf.from_features = 0;
+        kf.features_dropped = true;
+      }
     }
     finished.push_back(it->first);
     return hosts_.erase(it);
@@ -178,6 +189,25 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       s.seq = kf.seq;
       s.T_world_camera = kf.T_world_camera;
       host.store = &s;
+      // A young map (no seed of it converged yet to speak of) starts from the keyframe's
+      // triangulated features, so that its objects are there before the seeds converge.
+      if (options_.enabled && converged_per_map_[kf.map_id] < options_.young_map_points) {
+        for (const auto& [px, p_camera] : kf.sparse) {
+          if (!(p_camera.z() > 0) || px.x() < 0 || px.y() < 0 || px.x() >= kf.bgr.cols ||
+              px.y() >= kf.bgr.rows)
+            continue;
+          SemiDensePoint p;
+          p.p_camera = p_camera;
+          p.depth_std = static_cast<float>(options_.sparse_depth_std * p_camera.norm());
+          const uint8_t* bgr = kf.bgr.ptr<uint8_t>(px.y()) + 3 * px.x();
+          p.rgb[0] = bgr[2];
+          p.rgb[1] = bgr[1];
+          p.rgb[2] = bgr[0];
+          s.points.push_back(p);
+        }
+        s.from_features = s.points.size();
+        stats_.points += static_cast<int64_t>(s.points.size());
+      }
     }
     const float mean_depth = static_cast<float>(kf.mean_depth),
                 min_depth = static_cast<float>(kf.min_depth);
@@ -224,11 +254,11 @@ std::vector<SemiDenseKeyframe> DepthFilter::mapKeyframes(int map_id) const {
   return out;
 }
 
-std::vector<std::pair<int64_t, size_t>> DepthFilter::liveKeyframeSizes(int map_id) const {
+std::vector<DepthFilter::LiveKeyframe> DepthFilter::liveKeyframes(int map_id) const {
   std::lock_guard<std::mutex> lock(store_mutex_);
-  std::vector<std::pair<int64_t, size_t>> out;
+  std::vector<LiveKeyframe> out;
   for (const auto& [id, kf] : store_)
-    if (kf.map_id == map_id && !kf.finished) out.emplace_back(id, kf.points.size());
+    if (kf.map_id == map_id && !kf.finished) out.push_back({id, kf.points.size(), kf.from_features});
   return out;
 }
 

@@ -33,6 +33,9 @@ struct DepthKeyframeInput {
   cv::Mat grey, bgr;  ///< 8-bit, undistorted
   SE3 T_world_camera = SE3::Identity();
   double min_depth = 0.5, mean_depth = 1.0;  ///< map units, from the keyframe's map points
+  /// The keyframe's map points (sparse features): undistorted pixel and position in its camera
+  /// frame. A keyframe of a young map takes them as its first points (young_map_points).
+  std::vector<std::pair<Eigen::Vector2i, Eigen::Vector3f>> sparse;
 };
 
 /// One frame's worth of work.
@@ -63,7 +66,9 @@ struct SemiDenseKeyframe {
   int32_t seq = -1;
   SE3 T_world_camera = SE3::Identity();  ///< last known pose of the keyframe
   std::vector<SemiDensePoint> points;
-  bool finished = false;  ///< no seeds left: the points are final
+  size_t from_features = 0;  ///< the first points are its map points (a young map's keyframe)
+  bool features_dropped = false;  ///< ...which it dropped when it finished (DepthFilter::process)
+  bool finished = false;          ///< no seeds left: the points are final
 };
 
 struct DepthFilterStats {
@@ -89,9 +94,14 @@ class DepthFilter {
   SemiDenseKeyframe keyframe(int64_t id) const;
   /// Copies of all stored keyframes of a map, by id. Thread-safe.
   std::vector<SemiDenseKeyframe> mapKeyframes(int map_id) const;
-  /// (id, points so far) of a map's keyframes whose seeds are still converging, by id.
-  /// Thread-safe.
-  std::vector<std::pair<int64_t, size_t>> liveKeyframeSizes(int map_id) const;
+  /// A keyframe whose seeds are still converging.
+  struct LiveKeyframe {
+    int64_t id = -1;
+    size_t points = 0;         ///< points so far
+    size_t from_features = 0;  ///< of which its map points (SemiDenseKeyframe::from_features)
+  };
+  /// A map's keyframes whose seeds are still converging, by id. Thread-safe.
+  std::vector<LiveKeyframe> liveKeyframes(int map_id) const;
   DepthFilterStats stats() const;
 
  private:
@@ -116,6 +126,7 @@ class DepthFilter {
   double px_error_angle_;
   std::map<int64_t, Host> hosts_;  ///< keyframes with live seeds (worker only)
   int64_t frames_ = 0, measurements_ = 0, failures_ = 0;  ///< worker only; copied into stats_
+  std::map<int, int64_t> converged_per_map_;  ///< converged seeds per SLAM map (worker only)
   mutable std::mutex store_mutex_;
   std::map<int64_t, SemiDenseKeyframe> store_;  ///< every keyframe's points (guarded)
   DepthFilterStats stats_;                      ///< guarded by store_mutex_
