@@ -40,6 +40,22 @@ struct Cell {
   float nearestOther(int32_t c) const { return c == c1 ? d2 : d1; }
 };
 
+// The range of v (sorted here) without the outer trim_pct % on each side, grown again over the
+// trimmed values while each lies within gap times the mean spacing of the values inside.
+void trimmedRange(std::vector<float>& v, double trim_pct, double gap, float* lo, float* hi) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  size_t i0 = std::min(n - 1, static_cast<size_t>(std::lround(trim_pct / 100.0 * static_cast<double>(n - 1))));
+  size_t i1 = std::min(n - 1, static_cast<size_t>(std::lround((100.0 - trim_pct) / 100.0 * static_cast<double>(n - 1))));
+  if (gap > 0 && i1 > i0) {
+    const double step = gap * static_cast<double>(v[i1] - v[i0]) / static_cast<double>(i1 - i0);
+    while (i0 > 0 && v[i0] - v[i0 - 1] <= step) --i0;
+    while (i1 + 1 < n && v[i1 + 1] - v[i1] <= step) ++i1;
+  }
+  *lo = v[i0];
+  *hi = v[i1];
+}
+
 }  // namespace
 
 std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates, const CameraModel& camera,
@@ -99,13 +115,10 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
       us[i] = p.pixels[i].x();
       vs[i] = p.pixels[i].y();
     }
-    const auto at = [&](std::vector<float>& v, double pct) {
-      const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::lround(pct / 100.0 * static_cast<double>(v.size() - 1))));
-      std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
-      return v[k];
-    };
     const double trim = std::clamp(o.box_trim_pct, 0.0, 49.0);
-    const float x0 = at(us, trim), x1 = at(us, 100 - trim), y0 = at(vs, trim), y1 = at(vs, 100 - trim);
+    float x0, x1, y0, y1;
+    trimmedRange(us, trim, o.box_trim_gap, &x0, &x1);
+    trimmedRange(vs, trim, o.box_trim_gap, &y0, &y1);
     ProposalBox b;
     b.candidate_id = c.id;
     b.x = std::floor(x0);

@@ -86,6 +86,10 @@ struct ProposalOptions {
   double occluded_fraction = 0.6; ///< candidates with more of their points hidden are culled
   double min_visible_fraction = 0.5; ///< of a candidate's points in front of the camera and in the image
   double box_trim_pct = 3;       ///< %, a box spans its projected points without this share on each side
+  /// ...and then grows over the trimmed points while each is within this many times the mean
+  /// spacing of the points inside of the last (<= 0: off): an object's own points run on densely
+  /// to its outline, a smear thins out.
+  double box_trim_gap = 6;
   int min_box_px = 20;           ///< boxes smaller than this along either side are dropped
   double nms_iou = 0.5;          ///< boxes overlapping a kept box more than this are suppressed
   int max_boxes = 100;           ///< boxes per frame at most
@@ -141,6 +145,7 @@ struct ProposalOptions {
     v("occluded_fraction", occluded_fraction, "share of hidden points that culls a candidate");
     v("min_visible_fraction", min_visible_fraction, "share of points that must be in the image");
     v("box_trim_pct", box_trim_pct, "%, a box spans its projected points without this share on each side");
+    v("box_trim_gap", box_trim_gap, "...then grows over trimmed points this close (x mean spacing) to the last (<= 0: off)");
     v("min_box_px", min_box_px, "px, smallest box side");
     v("nms_iou", nms_iou, "IoU above which boxes are suppressed");
     v("max_boxes", max_boxes, "boxes per frame at most");

@@ -256,6 +256,37 @@ TEST(ProposalProjection, SmallBoxesAreDroppedAndOverlapsSuppressed) {
   EXPECT_NEAR(boxes[0].w, 100, 3);
 }
 
+// A box spans its points without the outer box_trim_pct % on each side (a thin smear off an
+// object does not widen it); box_trim_gap grows it back over the trimmed points that run on
+// densely to the object's outline, and not over the smear.
+TEST(ProposalProjection, TrimmedBoxesGrowBackToTheOutlineButNotOverASmear) {
+  ProposalOptions o = metricOptions();
+  Candidate c;
+  c.id = 1;
+  // A 0.2 m square at 1 m (100 px with f = 500, centred on the principal point)...
+  for (float u = -0.1f; u <= 0.1001f; u += 0.005f)
+    for (float v = -0.1f; v <= 0.1001f; v += 0.005f) c.points.emplace_back(u, v, 1.0f);
+  // ...with a smear running 0.3 m off its right side.
+  for (int i = 1; i <= 30; ++i) c.points.emplace_back(0.1f + 0.01f * static_cast<float>(i), 0.0f, 1.0f);
+  const CameraModel cam = vga();
+  const double left = cam.cx() - 50, right = cam.cx() + 50;
+  auto box = [&](double trim, double gap) {
+    o.box_trim_pct = trim;
+    o.box_trim_gap = gap;
+    const auto boxes = projectCandidates({c}, cam, SE3::Identity(), o);
+    EXPECT_EQ(boxes.size(), 1u);
+    return boxes.empty() ? ProposalBox() : boxes[0];
+  };
+  const ProposalBox all = box(0, 0), trimmed = box(3, 0), grown = box(3, 10);
+  EXPECT_GT(all.x + all.w, right + 100);  // the smear
+  EXPECT_GT(trimmed.x, left + 1);         // the square's own left edge trimmed away
+  EXPECT_LT(trimmed.x + trimmed.w, right + 2);  // the smear too
+  EXPECT_NEAR(grown.x, left, 1.5);  // its edges back, the smear still out
+  EXPECT_NEAR(grown.x + grown.w, right, 1.5);
+  EXPECT_NEAR(grown.y, cam.cy() - 50, 1.5);
+  EXPECT_NEAR(grown.y + grown.h, cam.cy() + 50, 1.5);
+}
+
 // Two touching objects, found alike at more scales than the larger of them alone, and boxed
 // almost as that one: the pair would suppress it. A cluster of two parts ranks after single
 // objects, so the larger object keeps its box and the pair is suppressed.
