@@ -89,7 +89,7 @@ struct ProposalOptions {
   /// ...and then grows over the trimmed points while each is within this many times the mean
   /// spacing of the points inside of the last (<= 0: off): an object's own points run on densely
   /// to its outline, a smear thins out.
-  double box_trim_gap = 6;
+  double box_trim_gap = 0;
   int min_box_px = 20;           ///< boxes smaller than this along either side are dropped
   double nms_iou = 0.5;          ///< boxes overlapping a kept box more than this are suppressed
   int max_boxes = 100;           ///< boxes per frame at most
