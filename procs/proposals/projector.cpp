@@ -40,14 +40,22 @@ struct Cell {
   float nearestOther(int32_t c) const { return c == c1 ? d2 : d1; }
 };
 
-// The range of v (sorted here) without the outer trim_pct % on each side, grown again over the
-// trimmed values while each lies within gap times the mean spacing of the values inside.
+// The range of v (reordered here) without the outer trim_pct % on each side, grown again over the
+// trimmed values while each lies within gap times the mean spacing of the values inside (gap > 0;
+// this needs v sorted, the plain trim only its two order statistics: every frame, every box).
 void trimmedRange(std::vector<float>& v, double trim_pct, double gap, float* lo, float* hi) {
-  std::sort(v.begin(), v.end());
   const size_t n = v.size();
   size_t i0 = std::min(n - 1, static_cast<size_t>(std::lround(trim_pct / 100.0 * static_cast<double>(n - 1))));
   size_t i1 = std::min(n - 1, static_cast<size_t>(std::lround((100.0 - trim_pct) / 100.0 * static_cast<double>(n - 1))));
-  if (gap > 0 && i1 > i0) {
+  if (gap <= 0) {
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(i0), v.end());
+    *lo = v[i0];
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(i1), v.end());
+    *hi = v[i1];
+    return;
+  }
+  std::sort(v.begin(), v.end());
+  if (i1 > i0) {
     const double step = gap * static_cast<double>(v[i1] - v[i0]) / static_cast<double>(i1 - i0);
     while (i0 > 0 && v[i0] - v[i0 - 1] <= step) --i0;
     while (i1 + 1 < n && v[i1 + 1] - v[i1] <= step) ++i1;

@@ -279,16 +279,20 @@ void SlamSystem::appendPoints(const SemiDenseKeyframe& s, const SE3& T_world_cam
 }
 
 CloudOutput SlamSystem::keyframeCloud(int64_t keyframe_id, int64_t utime, int32_t seq) const {
+  return keyframeCloud(depth_->keyframe(keyframe_id), utime, seq);
+}
+
+CloudOutput SlamSystem::keyframeCloud(const SemiDenseKeyframe& s, int64_t utime,
+                                      int32_t seq) const {
   CloudOutput c;
   c.utime = utime;
   c.seq = seq;
-  c.keyframe_id = keyframe_id;
-  const SemiDenseKeyframe s = depth_->keyframe(keyframe_id);
+  c.keyframe_id = s.id;
   c.map_id = s.map_id;
   SE3 T_world_camera = s.T_world_camera;
   if (std::shared_ptr<Map> map = mapById(s.map_id)) {
     std::shared_lock<std::shared_mutex> lock(map->mutex);
-    auto live = map->keyframes.find(keyframe_id);
+    auto live = map->keyframes.find(s.id);
     if (live != map->keyframes.end()) T_world_camera = live->second->T_world_camera();
   }
   appendPoints(s, T_world_camera, &c);
@@ -347,11 +351,11 @@ void SlamSystem::collect(int64_t utime, int32_t seq,
   std::set<int> maps_to_resend;
   for (int64_t id : finished) {
     live_published_.erase(id);
-    CloudOutput c = keyframeCloud(id, utime, seq);
-    if (depth_->keyframe(id).features_dropped)
-      maps_to_resend.insert(c.map_id);
-    else if (!c.points.empty())
-      out->clouds.push_back(std::move(c));
+    const SemiDenseKeyframe s = depth_->keyframe(id);
+    if (s.features_dropped)
+      maps_to_resend.insert(s.map_id);
+    else if (!s.points.empty())
+      out->clouds.push_back(keyframeCloud(s, utime, seq));
   }
   for (int map_id : maps_to_resend) {
     if (std::shared_ptr<Map> m = mapById(map_id)) out->clouds.push_back(fullCloud(m, utime, seq));

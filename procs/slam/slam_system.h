@@ -138,6 +138,8 @@ class SlamSystem {
   KeyframeOutput describeKeyframe(const KeyFrame& kf) const;
   CloudOutput fullCloud(const std::shared_ptr<Map>& map, int64_t utime, int32_t seq) const;
   CloudOutput keyframeCloud(int64_t keyframe_id, int64_t utime, int32_t seq) const;
+  /// The same, of a keyframe's points already copied from the depth filter.
+  CloudOutput keyframeCloud(const SemiDenseKeyframe& s, int64_t utime, int32_t seq) const;
   /// Incremental clouds of the map's unfinished keyframes that grew enough (OutputOptions).
   void publishLiveClouds(int map_id, int64_t utime, int32_t seq, SlamOutput* out);
   void postDepthWork(const TrackResult& r, const Frame& frame);
