@@ -41,7 +41,8 @@ struct ProposalOptions {
   double plane_min_fraction = 0.05; ///< planes are searched while they hold this share of the points
   int max_planes = 5;            ///< planes searched at most (table, floor, walls)
   double structure_cell = 0.03;  ///< map units, grid cell of a plane's connected patches
-  int structure_min_points = 3;  ///< points a cell of a plane must hold to be part of a patch
+  int structure_min_points = 1;  ///< points a cell of a plane must hold to be part of a patch (a plain table of
+                                 ///< a young map has about one per cell)
   double structure_extent = 0.6; ///< map units, a plane patch larger than this is structure (removed)
   double support_max_tilt_deg = 40; ///< deg, a support's normal is this close to the views' up
   double support_radius = 0.8;   ///< map units, the support's region: its cells this close to where the views look
