@@ -490,10 +490,13 @@ Clustering clusterMap(const ClusterInputRef& in) {
   out.stats.input_points = static_cast<int64_t>(all.size());
   out.stats.views = static_cast<int>(in.views.size());
   ProposalOptions o = in.options;
+  // A young map is sparse: its objects hold few points, yet they are to be proposed from the start.
+  out.stats.young = out.stats.input_points < o.young_map_points;
+  if (out.stats.young) o.min_points = std::min(o.min_points, o.young_min_points);
   bool has_support = false;
-  if (all.size() >= static_cast<size_t>(std::max(3, in.options.min_points))) {
-    out.stats.scene_scale = in.options.relative_lengths ? sceneScale(in, all) : 1.0;
-    o = scaledLengths(in.options, out.stats.scene_scale);
+  if (all.size() >= static_cast<size_t>(std::max(3, o.min_points))) {
+    out.stats.scene_scale = o.relative_lengths ? sceneScale(in, all) : 1.0;
+    o = scaledLengths(o, out.stats.scene_scale);
     const ViewPriors priors = viewPriors(in.views);
     out.stats.look_at = priors.has_look_at;
     const size_t before = all.size();

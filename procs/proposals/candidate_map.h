@@ -37,6 +37,7 @@ struct ClusterStats {
   int64_t band_taken = 0;    ///< of them, taken back by candidates (summed over candidates)
   int planes = 0;
   bool support = false;  ///< a support plane was found and the map restricted to what stands on it
+  bool young = false;    ///< the map had fewer than young_map_points points: young_min_points applied
   int clusters = 0;
   int views = 0;         ///< camera poses the priors came from
   bool look_at = false;  ///< the views' optical axes meet

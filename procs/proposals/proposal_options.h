@@ -73,6 +73,9 @@ struct ProposalOptions {
                                  ///< on position and colour at the coarser scales, whose clusters are added
                                  ///< (<= 0: position only)
   int min_points = 60;           ///< smallest cluster, in map points (on the voxel grid) at every scale
+  int young_map_points = 2000;   ///< a map of fewer points (SLAM's first keyframes: its triangulated features
+                                 ///< and the first converged seeds) is young ... (0: never)
+  int young_min_points = 15;     ///< ... and its smallest cluster is this (its objects hold few points yet)
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
   double same_cluster_overlap = 0.9; ///< clusters of two scales sharing this share of points are one
@@ -135,6 +138,8 @@ struct ProposalOptions {
     v("min_neighbours", min_neighbours, "points within the radius that make a core point");
     v("colour_distance", colour_distance, "RGB distance for core points to join in a second, colour-aware clustering (<= 0: position only)");
     v("min_points", min_points, "smallest cluster");
+    v("young_map_points", young_map_points, "a map of fewer points is young (0: never)");
+    v("young_min_points", young_min_points, "smallest cluster of a young map");
     v("max_extent", max_extent, "map units, largest object along any axis");
     v("min_extent", min_extent, "map units, smallest object along its largest axis");
     v("same_cluster_overlap", same_cluster_overlap, "share of points for clusters of two scales to be one");

@@ -174,6 +174,36 @@ TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
   EXPECT_GE(short_, 1);
 }
 
+// A young map is sparse (SLAM's first keyframes: its triangulated features, a few converged
+// seeds): two objects of about 50 points each, fewer than min_points. While the map holds fewer
+// than young_map_points points, each is a candidate of its own; a map past that size is not young
+// and keeps min_points.
+TEST(ProposalClustering, AYoungMapsSparseObjectsAreCandidates) {
+  const auto a = cylinder(-0.1f, 0, 0.04f, 0.12f, 0.025f), b = cylinder(0.12f, 0, 0.04f, 0.1f, 0.025f);
+  ASSERT_LT(a.size(), 60u);
+  ASSERT_GT(a.size(), 30u);
+  const auto points = join(table(0.8f, 0.02f), join(a, b));
+  for (const int young_map_points : {0, static_cast<int>(points.size()) + 1}) {
+    ProposalOptions o = metricOptions();
+    ASSERT_EQ(o.min_points, 60);
+    o.young_map_points = young_map_points;
+    o.young_min_points = 15;
+    CandidateMap map(o);
+    map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
+    ASSERT_TRUE(reclusterFromAbove(map));
+    const bool young = young_map_points > 0;
+    EXPECT_EQ(map.stats().young, young);
+    EXPECT_TRUE(map.stats().support);
+    std::set<int> sides;
+    for (const auto& c : map.candidates()) {
+      const std::set<int> s = sidesOf(c, 0.01f);
+      EXPECT_EQ(s.size(), 1u) << "a candidate spans both objects";
+      sides.insert(s.begin(), s.end());
+    }
+    EXPECT_EQ(sides.size(), young ? 2u : 0u) << "young_map_points " << young_map_points;
+  }
+}
+
 // A cap: a dark crown and its brim, which lies flat in the support's band (as low as the table's
 // depth noise) and is removed with it. The brim is the crown's colour, which the table hardly
 // has: it is taken back by the crown's candidates. The table, and a flat towel of another colour

@@ -198,9 +198,9 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       }
       if (reclustered) {
         const ClusterStats& s = engine.map().stats();
-        spdlog::debug("frame {}: map {} points ({} cropped, {} single-view, voxel {:.4f}), {} planes with {} points, "
+        spdlog::debug("frame {}: map {} points{} ({} cropped, {} single-view, voxel {:.4f}), {} planes with {} points, "
                       "support {}, scale {:.3f}, {} clustered -> {} candidates ({} of {} band points taken), {:.0f} ms",
-                      m.seq, s.input_points, s.cropped, s.single_view, s.voxel, s.planes, s.plane_points, s.support,
+                      m.seq, s.input_points, s.young ? " (young)" : "", s.cropped, s.single_view, s.voxel, s.planes, s.plane_points, s.support,
                       s.scene_scale, s.clustered_points, s.clusters, s.band_taken, s.band_points, s.ms);
       }
     }
