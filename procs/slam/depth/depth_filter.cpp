@@ -8,7 +8,15 @@ namespace slamaware {
 
 namespace {
 constexpr int kSeedBorder = 8;  // px: host samples along the epipolar line need room
+
+// The colour of pixel px of an 8-bit BGR image, as RGB.
+void rgbAt(const cv::Mat& bgr, const Eigen::Vector2i& px, uint8_t rgb[3]) {
+  const uint8_t* c = bgr.ptr<uint8_t>(px.y()) + 3 * px.x();
+  rgb[0] = c[2];
+  rgb[1] = c[1];
+  rgb[2] = c[0];
 }
+}  // namespace
 
 DepthFilter::DepthFilter(const DepthFilterOptions& options, int width, int height, double fx,
                          double fy, double cx, double cy)
@@ -199,10 +207,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
           SemiDensePoint p;
           p.p_camera = p_camera;
           p.depth_std = static_cast<float>(options_.sparse_depth_std * p_camera.norm());
-          const uint8_t* bgr = kf.bgr.ptr<uint8_t>(px.y()) + 3 * px.x();
-          p.rgb[0] = bgr[2];
-          p.rgb[1] = bgr[1];
-          p.rgb[2] = bgr[0];
+          rgbAt(kf.bgr, px, p.rgb);
           s.points.push_back(p);
         }
         s.from_features = s.points.size();
@@ -216,12 +221,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
           Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f)
               .normalized();
       DepthSeed seed = makeSeed(float(px.x()), float(px.y()), f, mean_depth, min_depth);
-      if (!kf.bgr.empty()) {
-        const uint8_t* bgr = kf.bgr.ptr<uint8_t>(px.y()) + 3 * px.x();
-        seed.rgb[0] = bgr[2];
-        seed.rgb[1] = bgr[1];
-        seed.rgb[2] = bgr[0];
-      }
+      if (!kf.bgr.empty()) rgbAt(kf.bgr, px, seed.rgb);
       host.seeds.push_back(seed);
     }
     if (options_.enabled) hosts_[kf.id] = std::move(host);
