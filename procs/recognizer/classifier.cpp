@@ -97,46 +97,69 @@ void halfToFloats(const uint16_t* in, int64_t n, float* out) {
 #endif
 }
 
+uint16_t* ExampleSet::row(int64_t i) {
+  return blocks_[static_cast<size_t>(i / kRowsPerBlock)].data() + (i % kRowsPerBlock) * dims_;
+}
+
+const uint16_t* ExampleSet::row(int64_t i) const {
+  return blocks_[static_cast<size_t>(i / kRowsPerBlock)].data() + (i % kRowsPerBlock) * dims_;
+}
+
+uint16_t* ExampleSet::newRow() {
+  const int64_t i = size();
+  if (i / kRowsPerBlock >= static_cast<int64_t>(blocks_.size()))
+    blocks_.emplace_back(static_cast<size_t>(kRowsPerBlock * dims_));
+  return row(i);
+}
+
+void ExampleSet::truncate(int64_t n) {
+  blocks_.resize(static_cast<size_t>((n + kRowsPerBlock - 1) / kRowsPerBlock));
+  labels_.resize(static_cast<size_t>(n));
+  groups_.resize(static_cast<size_t>(n));
+}
+
+size_t ExampleSet::allocatedBytes() const {
+  size_t n = 0;
+  for (const auto& b : blocks_) n += b.capacity() * sizeof(uint16_t);
+  return n;
+}
+
 void ExampleSet::add(const float* x, int label, int group) {
-  const size_t at = data_.size();
-  data_.resize(at + static_cast<size_t>(dims_));
-  floatsToHalf(x, dims_, data_.data() + at);
+  floatsToHalf(x, dims_, newRow());
   labels_.push_back(label);
   groups_.push_back(group);
 }
 
 void ExampleSet::append(const ExampleSet& other) {
   if (other.dims_ != dims_) throw std::invalid_argument("ExampleSet::append: dimensions differ");
-  data_.insert(data_.end(), other.data_.begin(), other.data_.end());
-  labels_.insert(labels_.end(), other.labels_.begin(), other.labels_.end());
-  groups_.insert(groups_.end(), other.groups_.begin(), other.groups_.end());
+  for (int64_t i = 0; i < other.size(); ++i) {
+    std::copy_n(other.row(i), dims_, newRow());
+    labels_.push_back(other.labels_[static_cast<size_t>(i)]);
+    groups_.push_back(other.groups_[static_cast<size_t>(i)]);
+  }
 }
 
-void ExampleSet::get(int64_t i, float* out) const {
-  halfToFloats(data_.data() + static_cast<size_t>(i * dims_), dims_, out);
-}
+void ExampleSet::get(int64_t i, float* out) const { halfToFloats(row(i), dims_, out); }
 
 void ExampleSet::filter(const std::function<bool(int64_t)>& keep) {
   int64_t w = 0;
   for (int64_t i = 0; i < size(); ++i) {
     if (!keep(i)) continue;
     if (w != i) {
-      std::copy_n(data_.begin() + i * dims_, dims_, data_.begin() + w * dims_);
+      std::copy_n(row(i), dims_, row(w));
       labels_[static_cast<size_t>(w)] = labels_[static_cast<size_t>(i)];
       groups_[static_cast<size_t>(w)] = groups_[static_cast<size_t>(i)];
     }
     ++w;
   }
-  data_.resize(static_cast<size_t>(w * dims_));
-  labels_.resize(static_cast<size_t>(w));
-  groups_.resize(static_cast<size_t>(w));
+  truncate(w);
 }
 
 ExampleSet ExampleSet::select(const std::function<bool(int64_t)>& keep) const {
   ExampleSet out(dims_);
   for (int64_t i = 0; i < size(); ++i) {
     if (!keep(i)) continue;
-    out.data_.insert(out.data_.end(), data_.begin() + i * dims_, data_.begin() + (i + 1) * dims_);
+    std::copy_n(row(i), dims_, out.newRow());
     out.labels_.push_back(labels_[static_cast<size_t>(i)]);
     out.groups_.push_back(groups_[static_cast<size_t>(i)]);
   }

@@ -19,9 +19,13 @@
 namespace slamaware {
 
 /// Encoded examples (rows of vladDims floats) stored in half precision (IEEE binary16), with a
-/// class label and a group (e.g. the object instance) each.
+/// class label and a group (e.g. the object instance) each. The rows are held in blocks of
+/// kRowsPerBlock, each allocated once at its full size: a growing set never copies itself into a
+/// buffer twice its size (a 100k-D row is 210 kB; a trainer's tens of thousands of rows fill most of
+/// the memory, and one doubling of a single buffer was what ran out of it).
 class ExampleSet {
  public:
+  static constexpr int64_t kRowsPerBlock = 128;
   explicit ExampleSet(int64_t dims = 0) : dims_(dims) {}
   int64_t dims() const { return dims_; }
   int64_t size() const { return static_cast<int64_t>(labels_.size()); }
@@ -37,11 +41,21 @@ class ExampleSet {
   void filter(const std::function<bool(int64_t)>& keep);
   /// A copy of the examples for which keep(i) is true.
   ExampleSet select(const std::function<bool(int64_t)>& keep) const;
-  size_t bytes() const { return data_.size() * sizeof(uint16_t); }
+  /// Bytes of the rows held.
+  size_t bytes() const { return static_cast<size_t>(size() * dims_) * sizeof(uint16_t); }
+  /// Bytes allocated for rows: at most one block more than bytes().
+  size_t allocatedBytes() const;
 
  private:
+  uint16_t* row(int64_t i);
+  const uint16_t* row(int64_t i) const;
+  /// Room for one more row at the end (a new block when the last is full).
+  uint16_t* newRow();
+  /// Keeps the first n rows and releases the blocks past them.
+  void truncate(int64_t n);
+
   int64_t dims_;
-  std::vector<uint16_t> data_;
+  std::vector<std::vector<uint16_t>> blocks_;
   std::vector<int> labels_, groups_;
 };
 

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <iostream>
+#include <new>
 
 #include "common/config.h"
 #include "procs/recognizer/model.h"
@@ -40,8 +41,10 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
+  int64_t example_kb = 0;
   try {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
+    example_kb = options.encoding.vladDims() * static_cast<int64_t>(sizeof(uint16_t)) / 1000;
     if (seed >= 0) options.seed = static_cast<int>(seed);
     TrainReport report;
     const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
@@ -53,6 +56,13 @@ int main(int argc, char** argv) {
       f << report.toJson() << "\n";
       if (!f) throw std::runtime_error(report_path + ": cannot write the report");
     }
+  } catch (const std::bad_alloc&) {
+    // Every encoded example is held in memory (half precision, 2 bytes per VLAD dimension).
+    spdlog::error("out of memory: the training examples ({} kB each) did not fit; train on fewer: lower "
+                  "train.max_views_per_instance, train.negatives_per_frame or train.context_copies, or raise "
+                  "train.proposal_every (--config)",
+                  example_kb);
+    return 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

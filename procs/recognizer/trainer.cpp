@@ -692,6 +692,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                  "parts); of them from the proposal boxes: {} of the model's categories, {} background",
                  positives, others, partials, proposal_positives, proposal_others);
   }
+  spdlog::info("{} examples encoded, {:.1f} GB in memory", all.size(), static_cast<double>(all.allocatedBytes()) / 1e9);
   // Training and held-out parts.
   ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });
   ExampleSet train = std::move(all);
