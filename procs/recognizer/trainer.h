@@ -50,7 +50,7 @@ struct TrainOptions {
   int seed = 7;                         ///< every random choice of the trainer
   int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
   int kmeans_iterations = 100;
-  int max_views_per_instance = 36;  ///< 0 = every view (36: every 6th of a 216-view turntable)
+  int max_views_per_instance = 72;  ///< 0 = every view (72: every 3rd of a 216-view turntable)
   int background_views_per_instance = 16;  ///< views per instance of a background object set
   int context_copies = 1;          ///< crops also encoded pasted into scene frames
   bool mirror_crops = true;        ///< crops also encoded mirrored left-right
