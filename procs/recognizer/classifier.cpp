@@ -6,6 +6,7 @@
 #include <limits>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #ifdef __F16C__
 #include <immintrin.h>
@@ -97,18 +98,18 @@ void halfToFloats(const uint16_t* in, int64_t n, float* out) {
 #endif
 }
 
-uint16_t* ExampleSet::row(int64_t i) {
-  return blocks_[static_cast<size_t>(i / kRowsPerBlock)].data() + (i % kRowsPerBlock) * dims_;
-}
-
 const uint16_t* ExampleSet::row(int64_t i) const {
   return blocks_[static_cast<size_t>(i / kRowsPerBlock)].data() + (i % kRowsPerBlock) * dims_;
 }
 
-uint16_t* ExampleSet::newRow() {
+uint16_t* ExampleSet::row(int64_t i) { return const_cast<uint16_t*>(std::as_const(*this).row(i)); }
+
+uint16_t* ExampleSet::newRow(int label, int group) {
   const int64_t i = size();
   if (i / kRowsPerBlock >= static_cast<int64_t>(blocks_.size()))
     blocks_.emplace_back(static_cast<size_t>(kRowsPerBlock * dims_));
+  labels_.push_back(label);
+  groups_.push_back(group);
   return row(i);
 }
 
@@ -125,18 +126,13 @@ size_t ExampleSet::allocatedBytes() const {
 }
 
 void ExampleSet::add(const float* x, int label, int group) {
-  floatsToHalf(x, dims_, newRow());
-  labels_.push_back(label);
-  groups_.push_back(group);
+  floatsToHalf(x, dims_, newRow(label, group));
 }
 
 void ExampleSet::append(const ExampleSet& other) {
   if (other.dims_ != dims_) throw std::invalid_argument("ExampleSet::append: dimensions differ");
-  for (int64_t i = 0; i < other.size(); ++i) {
-    std::copy_n(other.row(i), dims_, newRow());
-    labels_.push_back(other.labels_[static_cast<size_t>(i)]);
-    groups_.push_back(other.groups_[static_cast<size_t>(i)]);
-  }
+  const int64_t n = other.size();  // (other may be this set)
+  for (int64_t i = 0; i < n; ++i) std::copy_n(other.row(i), dims_, newRow(other.label(i), other.group(i)));
 }
 
 void ExampleSet::get(int64_t i, float* out) const { halfToFloats(row(i), dims_, out); }
@@ -159,9 +155,7 @@ ExampleSet ExampleSet::select(const std::function<bool(int64_t)>& keep) const {
   ExampleSet out(dims_);
   for (int64_t i = 0; i < size(); ++i) {
     if (!keep(i)) continue;
-    std::copy_n(row(i), dims_, out.newRow());
-    out.labels_.push_back(labels_[static_cast<size_t>(i)]);
-    out.groups_.push_back(groups_[static_cast<size_t>(i)]);
+    std::copy_n(row(i), dims_, out.newRow(label(i), group(i)));
   }
   return out;
 }

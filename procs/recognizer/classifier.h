@@ -42,15 +42,17 @@ class ExampleSet {
   /// A copy of the examples for which keep(i) is true.
   ExampleSet select(const std::function<bool(int64_t)>& keep) const;
   /// Bytes of the rows held.
-  size_t bytes() const { return static_cast<size_t>(size() * dims_) * sizeof(uint16_t); }
+  size_t bytes() const { return static_cast<size_t>(size()) * rowBytes(dims_); }
+  /// Bytes of one row of `dims` values.
+  static size_t rowBytes(int64_t dims) { return static_cast<size_t>(dims) * sizeof(uint16_t); }
   /// Bytes allocated for rows: at most one block more than bytes().
   size_t allocatedBytes() const;
 
  private:
   uint16_t* row(int64_t i);
   const uint16_t* row(int64_t i) const;
-  /// Room for one more row at the end (a new block when the last is full).
-  uint16_t* newRow();
+  /// Room for one more row at the end, with its label and group (a new block when the last is full).
+  uint16_t* newRow(int label, int group);
   /// Keeps the first n rows and releases the blocks past them.
   void truncate(int64_t n);
 

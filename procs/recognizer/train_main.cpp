@@ -9,6 +9,7 @@
 #include <new>
 
 #include "common/config.h"
+#include "procs/recognizer/classifier.h"
 #include "procs/recognizer/model.h"
 #include "procs/recognizer/trainer.h"
 
@@ -41,10 +42,10 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
-  int64_t example_kb = 0;
+  size_t example_kb = 0;
   try {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
-    example_kb = options.encoding.vladDims() * static_cast<int64_t>(sizeof(uint16_t)) / 1000;
+    example_kb = ExampleSet::rowBytes(options.encoding.vladDims()) / 1000;
     if (seed >= 0) options.seed = static_cast<int>(seed);
     TrainReport report;
     const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
       if (!f) throw std::runtime_error(report_path + ": cannot write the report");
     }
   } catch (const std::bad_alloc&) {
-    // Every encoded example is held in memory (half precision, 2 bytes per VLAD dimension).
+    // Every encoded example is held in memory (ExampleSet).
     spdlog::error("out of memory: the training examples ({} kB each) did not fit; train on fewer: lower "
                   "train.max_views_per_instance, train.negatives_per_frame or train.context_copies, or raise "
                   "train.proposal_every (--config)",
