@@ -92,7 +92,7 @@ struct GroupingOptions {
   double same_space_overlap = 0.8;  ///< groups: share of the smaller's voxels near the larger's (<= 0: never) ...
   double same_space_box_iou = 0.5;  ///< ... and their bounding boxes overlap by this IoU
   double background_part_overlap = 0.9;  ///< a background group this much near an object's joins it (<= 0: never) ...
-  double background_part_min_posterior = 0.4;  ///< ... when its own posterior of the object's class is this high
+  double background_part_min_posterior = 0.3;  ///< ... when its own posterior of the object's class is this high
 
   template <class V>
   void visit(V& v) {

@@ -296,10 +296,11 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
     EXPECT_NEAR(b.fused.log_p[1], mug - norm, 1e-5);
     EXPECT_NEAR(b.fused.log_p[2], bg - norm, 1e-5);
     // Labelled by the fused evidence, scored with the objectness of the box's view and of its
-    // candidate's three views (0.9, 0.9, 0.95).
+    // candidate's three views (0.9, 0.9, 0.95), which are also all of its object's.
     EXPECT_EQ(b.multi.label, 1);
     ASSERT_EQ(b.multi.log_p.size(), 3u);
-    const double objectness = std::sqrt((f == 10 ? 0.95 : 0.9) * (0.9 + 0.9 + 0.95) / 3);
+    const double views = (0.9 + 0.9 + 0.95) / 3;
+    const double objectness = std::cbrt((f == 10 ? 0.95 : 0.9) * views * views);
     EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(objectness), 1e-5);
     EXPECT_NEAR(b.single.log_p[1], std::log(f == 10 ? 0.9 : 0.4), 1e-6);
   }
@@ -363,66 +364,87 @@ TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
   EXPECT_DOUBLE_EQ(averagePrecision(mug.ranked, mug.truth), 1.0);
 }
 
-// A box's p(object | box) is the geometric mean of its own view's and of its candidate's mean over
-// every box of the candidate: a part that one view takes for a whole object is held back by the
-// candidate's other views.
-TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesViews) {
-  auto box = [](int32_t candidate, double p_background) {
+// A box's p(object | box) is the geometric mean of its own view's, its candidate's mean over every
+// box of the candidate, and its object's mean over every box of the object: a part that one view
+// takes for a whole object is held back by the candidate's other views, and a distractor whose views
+// mostly call it background by the object's views, however well one box frames it.
+TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesAndItsObjectsViews) {
+  auto box = [](int32_t candidate, int32_t object, double p_background) {
     RecognitionRecording::Box b;
     b.map_id = 1;
     b.candidate = candidate;
+    b.object = object;
     b.single.log_p = {std::log((1 - p_background) / 2), std::log((1 - p_background) / 2), std::log(p_background)};
     b.fused.log_p = {std::log(0.1), std::log(0.9), -100};
     return b;
   };
   std::map<int32_t, std::vector<RecognitionRecording::Box>> frames;
-  frames[0] = {box(3, 0.2), box(5, 0.2)};
-  frames[1] = {box(3, 0.9)};
-  frames[2] = {box(3, 0.9), box(5, 0.4)};
+  frames[0] = {box(3, 7, 0.2), box(5, 7, 0.2), box(9, 8, 0.1)};
+  frames[1] = {box(3, 7, 0.9), box(9, 8, 0.95)};
+  frames[2] = {box(3, 7, 0.9), box(5, 7, 0.4), box(9, 8, 0.95), box(11, -1, 0.5)};
+  frames[3] = {box(9, 8, 0.95)};
   scoreMultiView(&frames);
-  // Candidate 3: views 0.8, 0.1, 0.1 -> mean 1/3; candidate 5: 0.8, 0.6 -> 0.7.
-  EXPECT_NEAR(frames[0][0].log_objectness, 0.5 * std::log(0.8) + 0.5 * std::log(1.0 / 3), 1e-9);
-  EXPECT_NEAR(frames[0][1].log_objectness, 0.5 * std::log(0.8) + 0.5 * std::log(0.7), 1e-9);
-  EXPECT_NEAR(frames[2][1].log_objectness, 0.5 * std::log(0.6) + 0.5 * std::log(0.7), 1e-9);
-  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::sqrt(0.8 * 0.7), 1e-9);
+  // Candidate 3: views 0.8, 0.1, 0.1 -> mean 1/3; candidate 5: 0.8, 0.6 -> 0.7; their object 7:
+  // 2.4 / 5 = 0.48. Candidate 9, alone in object 8: 0.9, 0.05, 0.05, 0.05 -> 0.2625. Candidate 11
+  // has no object: its own mean stands in.
+  const auto mean3 = [](double a, double b, double c) { return (std::log(a) + std::log(b) + std::log(c)) / 3; };
+  EXPECT_NEAR(frames[0][0].log_objectness, mean3(0.8, 1.0 / 3, 0.48), 1e-9);
+  EXPECT_NEAR(frames[0][1].log_objectness, mean3(0.8, 0.7, 0.48), 1e-9);
+  EXPECT_NEAR(frames[2][1].log_objectness, mean3(0.6, 0.7, 0.48), 1e-9);
+  EXPECT_NEAR(frames[0][2].log_objectness, mean3(0.9, 0.2625, 0.2625), 1e-9);
+  EXPECT_NEAR(frames[2][3].log_objectness, std::log(0.5), 1e-9);
+  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::cbrt(0.8 * 0.7 * 0.48), 1e-9);
   EXPECT_LT(frames[0][0].multi.log_p[1], frames[0][1].multi.log_p[1])
       << "the same view, but the candidate's other views say it is not a whole object";
+  EXPECT_LT(frames[0][2].multi.log_p[1], frames[0][1].multi.log_p[1])
+      << "a surer view and the same fused class, but the object's other views call it background";
 }
 
-// One object, one detection per frame: of two boxes of the same object in a frame, the one its own
-// view finds more object-like keeps its scores; the other ranks below every detection (its label
-// stays the object's), and a box of another object (or of none) is untouched.
-TEST(MultiViewLabels, DuplicatesOfAnObjectInAFrameAreDemoted) {
-  auto box = [](int32_t object, double log_bg, std::vector<double> multi) {
+// One object, one detection per frame: of the boxes of one object in a frame, the one its own view
+// finds most object-like keeps its scores; the others are demoted by a Gaussian of their overlap
+// with it (Soft-NMS): a box framing the object as the kept one does ranks below the detections, a
+// box on another part of the object that hardly overlaps the kept one keeps most of its score. Their
+// label stays the object's, and a box of another object (or of none) is untouched.
+TEST(MultiViewLabels, DuplicatesOfAnObjectInAFrameAreDemotedByTheirOverlap) {
+  auto box = [](int32_t object, double log_bg, std::vector<double> multi, Box2 where) {
     RecognitionRecording::Box b;
     b.object = object;
     b.single.log_p = {-3.0, -3.0, log_bg};
     b.multi.log_p = std::move(multi);
     b.multi.label = 1;
+    b.multi.box = where;
     return b;
   };
   const std::vector<double> mug{std::log(0.02), std::log(0.9), std::log(0.08)};
-  std::vector<RecognitionRecording::Box> boxes{box(4, std::log(0.6), mug), box(4, std::log(0.1), mug),
-                                               box(7, std::log(0.9), mug), box(-1, std::log(0.9), mug)};
+  const Box2 whole{100, 100, 50, 50}, shifted{105, 100, 50, 50}, beside{150, 100, 20, 50};
+  std::vector<RecognitionRecording::Box> boxes{box(4, std::log(0.6), mug, shifted), box(4, std::log(0.1), mug, whole),
+                                               box(4, std::log(0.7), mug, beside), box(7, std::log(0.9), mug, whole),
+                                               box(-1, std::log(0.9), mug, whole)};
   EXPECT_EQ(demoteDuplicateBoxes(&boxes), 1);
-  EXPECT_EQ(boxes[1].multi.log_p, mug) << "the more object-like box of object 4 keeps its scores";
-  EXPECT_EQ(boxes[2].multi.log_p, mug);
+  EXPECT_EQ(boxes[1].multi.log_p, mug) << "the most object-like box of object 4 keeps its scores";
   EXPECT_EQ(boxes[3].multi.log_p, mug);
-  EXPECT_NEAR(boxes[0].multi.log_p[1], std::log(0.9) - 100, 1e-9);
-  EXPECT_NEAR(boxes[0].multi.log_p[0], std::log(0.02) - 100, 1e-9);
-  EXPECT_NEAR(boxes[0].multi.log_p[2], 0.0, 1e-9);
+  EXPECT_EQ(boxes[4].multi.log_p, mug);
+  const double overlap = 45.0 * 50 / (2 * 2500 - 45.0 * 50);  // shifted against whole: IoU 9/11
+  const double demoted = -overlap * overlap / kDuplicateSigma;
+  EXPECT_NEAR(boxes[0].multi.log_p[1], std::log(0.9) + demoted, 1e-9);
+  EXPECT_NEAR(boxes[0].multi.log_p[0], std::log(0.02) + demoted, 1e-9);
+  EXPECT_NEAR(std::exp(boxes[0].multi.log_p[2]), 1 - (0.92 * std::exp(demoted)), 1e-9);
+  EXPECT_EQ(boxes[2].multi.log_p, mug) << "no overlap with the kept box: another part, its score stays";
   EXPECT_EQ(boxes[0].multi.label, 1) << "a duplicate keeps its object's label";
 
-  // Scored: the kept box matches the mug; the duplicate is a false positive ranked last.
+  // Scored: the kept box matches the mug; the shifted duplicate is a false positive ranked after
+  // every other box.
   RecognitionScores s = emptyScores({"cap", "coffee_mug"});
   std::vector<LabelledBox> frame;
-  for (auto& b : boxes) b.multi.box = {100, 100, 50, 50}, frame.push_back(b.multi);
-  frame[0].box = {100, 100, 30, 30};
+  for (auto& b : boxes) frame.push_back(b.multi);
   scoreFrame(kModel, frame, {truth(0, 100, 100, 50, 50, "coffee_mug")}, 0.5, &s);
   const ClassTally& t = s.classes.at("coffee_mug");
-  ASSERT_EQ(t.ranked.size(), 4u);
-  EXPECT_FALSE(t.ranked.back().true_positive);
-  EXPECT_LT(t.ranked.back().score, -90.0);
+  ASSERT_EQ(t.ranked.size(), 5u);
+  EXPECT_EQ(std::count_if(t.ranked.begin(), t.ranked.end(), [](const ScoredDetection& d) { return d.true_positive; }), 1);
+  std::vector<ScoredDetection> ranked = t.ranked;
+  std::sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& y) { return x.score < y.score; });
+  EXPECT_FALSE(ranked.front().true_positive);
+  EXPECT_LT(ranked.front().score, ranked[1].score - 5) << "the shifted duplicate ranks last, far below";
 }
 
 // Two candidates of one object (the proposals stage over-segments; here two clusters of the same

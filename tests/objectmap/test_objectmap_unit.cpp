@@ -529,7 +529,7 @@ TEST(ObjectTable, ABackgroundPartOfAnObjectJoinsItATouchingStretchDoesNot) {
     // Classes: box, can, background.
     t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});
     t.addView(1, View{200, 2, 50, logs({0.7, 0.2, 0.1})});
-    t.addView(2, View{300, 3, 10, logs({0.45, 0.05, 0.5})});  // p(box) 0.45 >= 0.4
+    t.addView(2, View{300, 3, 10, logs({0.35, 0.05, 0.6})});  // p(box) 0.35 >= 0.3
     t.addView(3, View{400, 4, 10, logs({0.1, 0.1, 0.8})});
     t.addView(4, View{500, 5, 10, logs({0.2, 0.1, 0.7})});    // p(box) 0.2
   };

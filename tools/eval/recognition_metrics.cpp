@@ -392,19 +392,29 @@ std::vector<double> multiViewScores(const std::vector<double>& fused, double log
 }
 
 void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames) {
-  // Each box's own view, and its candidate's over all its views: mean p(object | box).
-  std::map<std::pair<int32_t, int32_t>, std::pair<double, int>> views;  // (map, candidate) -> sum, boxes
+  // Mean p(object | box) over the boxes of each candidate and of each object.
+  using Key = std::pair<int32_t, int32_t>;  // (map, candidate) or (map, object)
+  struct Mean {
+    double sum = 0;
+    int n = 0;
+    double log() const { return std::log(std::max(1e-300, sum / n)); }
+  };
+  std::map<Key, Mean> candidates, objects;
+  const auto objectKey = [](const RecognitionRecording::Box& b) {
+    return b.object >= 0 ? Key{b.map_id, b.object} : Key{b.map_id, -1 - b.candidate};
+  };
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
       b.log_objectness = logObjectness(b.single.log_p);
-      auto& v = views[{b.map_id, b.candidate}];
-      v.first += std::exp(b.log_objectness);
-      ++v.second;
+      for (Mean* m : {&candidates[{b.map_id, b.candidate}], &objects[objectKey(b)]}) {
+        m->sum += std::exp(b.log_objectness);
+        ++m->n;
+      }
     }
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
-      const auto& v = views.at({b.map_id, b.candidate});
-      b.log_objectness = 0.5 * b.log_objectness + 0.5 * std::log(std::max(1e-300, v.first / v.second));
+      b.log_objectness = (b.log_objectness + candidates.at({b.map_id, b.candidate}).log() +
+                          objects.at(objectKey(b)).log()) / 3;
       b.multi.log_p = multiViewScores(b.fused.log_p, b.log_objectness);
     }
 }
@@ -426,7 +436,9 @@ int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
   for (size_t i = 0; i < boxes->size(); ++i) {
     RecognitionRecording::Box& b = (*boxes)[i];
     if (b.object < 0 || best.at(b.object) == i || b.multi.log_p.empty()) continue;
-    scaleObjectClasses(&b.multi.log_p, kMinLogProb);
+    const double overlap = iou(b.multi.box, (*boxes)[best.at(b.object)].multi.box);
+    if (!(overlap > 0)) continue;  // another part of the object, beside the kept box
+    scaleObjectClasses(&b.multi.log_p, std::max(kMinLogProb, -overlap * overlap / kDuplicateSigma));
     ++duplicates;
   }
   return duplicates;
