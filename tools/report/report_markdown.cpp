@@ -78,7 +78,9 @@ void recognitionTables(const nlohmann::json& report, std::ostringstream& md) {
   md << "## Recognition: single view and multi-view\n\n"
         "Every 5th frame, each proposal box is a detection of every class, scored by p(class | box) from "
         "that frame alone (single view), or labelled by every view of its object in the object map at the "
-        "end of the sequence and scored p(class | object) x p(object | box), one box per object and frame (multi-view); true positive at IoU >= 0.5 with an unmatched ground-truth box of the "
+        "end of the sequence and scored p(class | object) x p(object | box), the object's other boxes in "
+        "the frame demoted by their overlap with the kept one (multi-view); true positive at IoU >= 0.5 "
+        "with an unmatched ground-truth box of the "
         "class; AP = VOC all-point area under the precision-recall curve; precision and recall at the "
         "label the system gives (argmax, background included). Distractor objects (classes outside the "
         "model) are not ground truth. Details: tools/eval/README.md.\n\n";
