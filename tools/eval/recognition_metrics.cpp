@@ -397,24 +397,22 @@ void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* f
   struct Mean {
     double sum = 0;
     int n = 0;
+    void add(double x) { sum += x, ++n; }
     double log() const { return std::log(std::max(1e-300, sum / n)); }
   };
-  std::map<Key, Mean> candidates, objects;
-  const auto objectKey = [](const RecognitionRecording::Box& b) {
-    return b.object >= 0 ? Key{b.map_id, b.object} : Key{b.map_id, -1 - b.candidate};
+  std::map<Key, Mean> candidates, objects;  // a box without an object: its candidate stands in
+  const auto objectMean = [&](const RecognitionRecording::Box& b) -> Mean& {
+    return b.object >= 0 ? objects[{b.map_id, b.object}] : candidates[{b.map_id, b.candidate}];
   };
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
       b.log_objectness = logObjectness(b.single.log_p);
-      for (Mean* m : {&candidates[{b.map_id, b.candidate}], &objects[objectKey(b)]}) {
-        m->sum += std::exp(b.log_objectness);
-        ++m->n;
-      }
+      candidates[{b.map_id, b.candidate}].add(std::exp(b.log_objectness));
+      if (b.object >= 0) objects[{b.map_id, b.object}].add(std::exp(b.log_objectness));
     }
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
-      b.log_objectness = (b.log_objectness + candidates.at({b.map_id, b.candidate}).log() +
-                          objects.at(objectKey(b)).log()) / 3;
+      b.log_objectness = (b.log_objectness + candidates.at({b.map_id, b.candidate}).log() + objectMean(b).log()) / 3;
       b.multi.log_p = multiViewScores(b.fused.log_p, b.log_objectness);
     }
 }
@@ -436,7 +434,7 @@ int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
   for (size_t i = 0; i < boxes->size(); ++i) {
     RecognitionRecording::Box& b = (*boxes)[i];
     if (b.object < 0 || best.at(b.object) == i || b.multi.log_p.empty()) continue;
-    const double overlap = iou(b.multi.box, (*boxes)[best.at(b.object)].multi.box);
+    const double overlap = iou(b.multi.box, (*boxes)[best.at(b.object)].multi.box);  // with the kept box
     if (!(overlap > 0)) continue;  // another part of the object, beside the kept box
     scaleObjectClasses(&b.multi.log_p, std::max(kMinLogProb, -overlap * overlap / kDuplicateSigma));
     ++duplicates;

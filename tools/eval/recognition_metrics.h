@@ -193,6 +193,9 @@ std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, doub
 /// 309 boxes called background, fused bowl 0.71).
 void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames);
 
+/// The width of demoteDuplicateBoxes()'s Gaussian, in squared IoU.
+constexpr double kDuplicateSigma = 0.1;
+
 /// An object is one detection per frame. Of the boxes of one frame (`boxes`) whose candidates
 /// belong to the same object of the map, the one its own view finds most object-like (lowest
 /// p(background | box); ties: the earlier box) keeps its multi-view scores; the others are
@@ -203,7 +206,6 @@ void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* f
 /// the object better than the kept sliver) keeps most of its score. Their label, the object's,
 /// stays. Boxes without an object (-1), and boxes that do not overlap the kept one, are left
 /// alone. Returns the number of duplicates demoted.
-constexpr double kDuplicateSigma = 0.1;
 int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes);
 
 /// Reads DETECTIONS of a recorded log and replays it through MultiViewLabeller (`options`: the
