@@ -181,6 +181,9 @@ struct DepthFilterOptions {
   /// before its first seeds converge, which at low frame rates takes several frames.
   int young_map_points = 2000;
   double sparse_depth_std = 0.01;  ///< depth std of those points, as a share of their distance
+  /// Those keyframes' seeds converge at this ratio instead of convergence_ratio (<= 0: the same):
+  /// a young map's first seeds would otherwise converge ten frames later at 30 fps.
+  double young_convergence_ratio = 30.0;
 
   template <class V>
   void visit(V& v) {
@@ -205,6 +208,8 @@ struct DepthFilterOptions {
     v("young_map_points", young_map_points,
       "keyframes of a map with fewer converged seeds take its map points (0: never)");
     v("sparse_depth_std", sparse_depth_std, "depth std of those points, share of their distance");
+    v("young_convergence_ratio", young_convergence_ratio,
+      "their seeds converge when sigma < inverse-depth range / this (<= 0: convergence_ratio)");
   }
 };
 

@@ -190,6 +190,7 @@ TEST(DepthFilter, SeedsAreSearchedInMinFramesEvenWhenEveryFrameIsAKeyframe) {
   DepthFilterOptions options;
   options.max_keyframes = 3;
   options.min_frames = 3;  // as max_keyframes: the keyframe count alone decides
+  options.young_convergence_ratio = 0;  // converged seeds only
   DepthFilter by_keyframes(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
   EXPECT_EQ(frameThatFinishesTheFirstKeyframe(by_keyframes, texture, cam, 0.05), 3);
   options.min_frames = 6;
@@ -265,14 +266,16 @@ TEST(DepthFilter, AYoungMapsKeyframesStartFromTheirMapPoints) {
   other.map_id = 2;
   other.new_keyframes.front().map_id = 2;
   other.new_keyframes.front().sparse = kf.sparse;
-  const size_t before = filter.keyframe(7).points.size();
+  const size_t before = filter.keyframe(7).points.size(), provisional = filter.keyframe(7).provisional;
   filter.process(other);
   EXPECT_EQ(filter.keyframe(17).points.size(), 40u);
   // Map 1's keyframes are finished by the new map: keyframe 7 keeps only its converged seeds
-  // (its map points were stand-ins), keyframe 16 (no converged seed, no map points) nothing.
+  // (its map points and provisional seeds were stand-ins), keyframe 16 (no converged seed, no
+  // map points) nothing.
   EXPECT_TRUE(filter.keyframe(7).finished);
   EXPECT_EQ(filter.keyframe(7).from_features, 0u);
-  EXPECT_EQ(filter.keyframe(7).points.size(), before - 40);
+  EXPECT_EQ(filter.keyframe(7).provisional, 0u);
+  EXPECT_EQ(filter.keyframe(7).points.size(), before - 40 - provisional);
 
   // Off.
   options.young_map_points = 0;
@@ -281,4 +284,80 @@ TEST(DepthFilter, AYoungMapsKeyframesStartFromTheirMapPoints) {
   again.new_keyframes.front().sparse = kf.sparse;
   off.process(again);
   EXPECT_EQ(off.keyframe(7).points.size(), 0u);
+}
+
+namespace {
+
+size_t countProvisional(const SemiDenseKeyframe& kf) {
+  return static_cast<size_t>(std::count_if(kf.points.begin(), kf.points.end(),
+                                           [](const SemiDensePoint& p) { return p.provisional; }));
+}
+
+}  // namespace
+
+// A young map's seeds are also published once they are as certain as young_convergence_ratio
+// asks: at 30 fps its first keyframe's seeds need about ten frames of baseline to converge, and
+// its objects would have no points until then. They are stand-ins, as its map points: filtered
+// on, and dropped when the keyframe finishes, leaving the converged seeds alone. A keyframe of a
+// map that is no longer young has none.
+TEST(DepthFilter, AYoungMapsSeedsStandInProvisionallyUntilItsKeyframeFinishes) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 5);
+  DepthFilterOptions options;
+  options.young_map_points = 1000;
+  options.young_convergence_ratio = 30;
+  DepthFilterOptions strict_options = options;
+  strict_options.young_convergence_ratio = 0;
+  DepthFilter filter(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  DepthFilter strict(strict_options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  const auto young = [&](int k) {  // frame k, keyframe 7 with one map point when k = 0
+    DepthFrameInput f = slidingFrame(texture, cam, k, 0.01, k == 0);
+    if (k == 0)
+      f.new_keyframes.front().sparse.push_back(
+          {Eigen::Vector2i(int(cam.cx), int(cam.cy)), Eigen::Vector3f(0, 0, float(kPlaneZ))});
+    return f;
+  };
+  // A short baseline (1 cm per frame at 2 m): after six frames the seeds are certain to a few
+  // per cent, not yet to the half per cent of convergence_ratio.
+  for (int k = 0; k <= 6; ++k) {
+    filter.process(young(k));
+    strict.process(young(k));
+  }
+  const SemiDenseKeyframe early = filter.keyframe(7);
+  ASSERT_EQ(strict.keyframe(7).provisional, 0u);
+  const size_t converged_strict = strict.keyframe(7).points.size() - strict.keyframe(7).from_features;
+  EXPECT_EQ(early.provisional, countProvisional(early));
+  EXPECT_GT(early.provisional, 1000u);
+  EXPECT_GT(early.provisional, 4 * converged_strict + 500);
+  std::vector<double> rel;
+  for (const auto& p : early.points)
+    if (p.provisional) rel.push_back(std::abs(p.p_camera.z() - kPlaneZ) / kPlaneZ);
+  std::sort(rel.begin(), rel.end());
+  EXPECT_LT(rel[rel.size() / 2], 0.03);
+  const auto live = filter.liveKeyframes(1);
+  ASSERT_EQ(live.size(), 1u);
+  EXPECT_EQ(live[0].points, early.points.size());
+
+  // Filtered on: the seeds converge (the map is no longer young), and a new map finishes map 1's
+  // keyframe, which drops its stand-ins and keeps exactly its converged seeds.
+  for (int k = 7; k <= 40; ++k) {
+    filter.process(young(k));
+    strict.process(young(k));
+  }
+  ASSERT_GE(filter.keyframe(7).points.size() - filter.keyframe(7).from_features - filter.keyframe(7).provisional,
+            1000u);
+  DepthFrameInput later = slidingFrame(texture, cam, 41, 0.01, true);
+  filter.process(later);
+  EXPECT_EQ(filter.keyframe(48).provisional, 0u);  // not young any more: no provisional seeds
+  DepthFrameInput other = slidingFrame(texture, cam, 42, 0.01, true);
+  other.map_id = 2;
+  other.new_keyframes.front().map_id = 2;
+  filter.process(other);
+  const SemiDenseKeyframe done = filter.keyframe(7);
+  ASSERT_TRUE(done.finished);
+  EXPECT_TRUE(done.features_dropped);
+  EXPECT_EQ(done.provisional, 0u);
+  EXPECT_EQ(done.from_features, 0u);
+  EXPECT_EQ(countProvisional(done), 0u);
+  EXPECT_GE(done.points.size(), 1000u);
 }

@@ -100,13 +100,24 @@ void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
       ++measurements_;
     }
     if (s.inlierRatio() < options_.min_inlier_ratio) continue;  // dropped: mostly outliers
-    if (s.updates >= 2 && std::sqrt(s.sigma2) < s.z_range / options_.convergence_ratio) {
+    const auto point = [&s](bool provisional) {
       SemiDensePoint p;
       p.p_camera = s.f / s.mu;
       p.depth_std = std::sqrt(s.sigma2) / (s.mu * s.mu);
       std::copy(s.rgb, s.rgb + 3, p.rgb);
-      converged->push_back(p);
+      p.provisional = provisional;
+      return p;
+    };
+    if (s.updates >= 2 && std::sqrt(s.sigma2) < s.z_range / options_.convergence_ratio) {
+      converged->push_back(point(false));
       continue;
+    }
+    // A young map's seed: published once it is as certain as young_convergence_ratio asks, and
+    // filtered on.
+    if (host.young && !s.provisional && s.updates >= 2 &&
+        std::sqrt(s.sigma2) < s.z_range / options_.young_convergence_ratio) {
+      s.provisional = true;
+      converged->push_back(point(true));
     }
     host.seeds[kept++] = s;
   }
@@ -137,7 +148,10 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       used = true;
       if (converged.empty()) continue;
       std::lock_guard<std::mutex> lock(store_mutex_);
-      converged_per_map_[input.map_id] += static_cast<int64_t>(converged.size());
+      const auto provisional = static_cast<int64_t>(
+          std::count_if(converged.begin(), converged.end(), [](const SemiDensePoint& p) { return p.provisional; }));
+      converged_per_map_[input.map_id] += static_cast<int64_t>(converged.size()) - provisional;
+      host.store->provisional += static_cast<size_t>(provisional);
       host.store->points.insert(host.store->points.end(), converged.begin(), converged.end());
       stats_.points += static_cast<int64_t>(converged.size());
     }
@@ -153,10 +167,13 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       // Once the map's seeds have converged, a keyframe's map points were only stand-ins: they
       // are snapshots from before bundle adjustment, and copies of one map point in several
       // keyframes would pass for surfaces that many keyframes agree on.
-      if (kf.from_features > 0 && converged_per_map_[kf.map_id] >= options_.young_map_points) {
+      if ((kf.from_features > 0 || kf.provisional > 0) && converged_per_map_[kf.map_id] >= options_.young_map_points) {
         kf.points.erase(kf.points.begin(), kf.points.begin() + static_cast<long>(kf.from_features));
-        stats_.points -= static_cast<int64_t>(kf.from_features);
-        kf.from_features = 0;
+        kf.points.erase(std::remove_if(kf.points.begin(), kf.points.end(),
+                                       [](const SemiDensePoint& p) { return p.provisional; }),
+                        kf.points.end());
+        stats_.points -= static_cast<int64_t>(kf.from_features + kf.provisional);
+        kf.from_features = kf.provisional = 0;
         kf.features_dropped = true;
       }
     }
@@ -211,6 +228,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
           s.points.push_back(p);
         }
         s.from_features = s.points.size();
+        host.young = options_.young_convergence_ratio > 0;
         stats_.points += static_cast<int64_t>(s.points.size());
       }
     }

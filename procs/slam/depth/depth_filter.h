@@ -56,6 +56,9 @@ struct SemiDensePoint {
   Eigen::Vector3f p_camera;  ///< map units, host keyframe's camera frame
   float depth_std = 0;       ///< map units, along the host ray
   uint8_t rgb[3] = {0, 0, 0};
+  /// A young map's seed, converged at young_convergence_ratio only: it stands in for the map's
+  /// converged points, like the keyframe's map points, and is dropped with them.
+  bool provisional = false;
 };
 
 /// The semi-dense points of one keyframe.
@@ -67,7 +70,8 @@ struct SemiDenseKeyframe {
   SE3 T_world_camera = SE3::Identity();  ///< last known pose of the keyframe
   std::vector<SemiDensePoint> points;
   size_t from_features = 0;  ///< the first points are its map points (a young map's keyframe)
-  bool features_dropped = false;  ///< ...which it dropped when it finished (DepthFilter::process)
+  size_t provisional = 0;    ///< points of provisional seeds (SemiDensePoint::provisional)
+  bool features_dropped = false;  ///< ...which it dropped, and those, when it finished (DepthFilter::process)
   bool finished = false;          ///< no seeds left: the points are final
 };
 
@@ -116,6 +120,7 @@ class DepthFilter {
     std::vector<DepthSeed> seeds;
     int newer_keyframes = 0;
     int frames_searched = 0;  ///< frames whose baseline sufficed to search the seeds
+    bool young = false;       ///< a young map's keyframe (its seeds also converge provisionally)
   };
   void updateHost(Host& host, const DepthFrameInput& input, std::vector<SemiDensePoint>* converged);
 
