@@ -73,9 +73,9 @@ struct ProposalOptions {
                                  ///< on position and colour at the coarser scales, whose clusters are added
                                  ///< (<= 0: position only)
   int min_points = 60;           ///< smallest cluster, in map points (on the voxel grid) at every scale
-  int young_map_points = 2000;   ///< a map of fewer points (SLAM's first keyframes: its triangulated features
-                                 ///< and the first converged seeds) is young ... (0: never). All of the map's
-                                 ///< points: SLAM's depth.young_map_points counts converged seeds only
+  int young_map_points = 16000;  ///< a map of fewer points (SLAM's first keyframes: its triangulated features,
+                                 ///< provisional and first converged seeds) is young ... (0: never). All of the
+                                 ///< map's points: SLAM's depth.young_map_points counts converged seeds only
   int young_min_points = 15;     ///< ... and its smallest cluster is this (its objects hold few points yet)
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
