@@ -181,8 +181,10 @@ struct DepthFilterOptions {
   /// before its first seeds converge, which at low frame rates takes several frames.
   int young_map_points = 2000;
   double sparse_depth_std = 0.01;  ///< depth std of those points, as a share of their distance
-  /// Those keyframes' seeds converge at this ratio instead of convergence_ratio (<= 0: the same):
-  /// a young map's first seeds would otherwise converge ten frames later at 30 fps.
+  /// Those keyframes also publish each seed once sigma < inverse-depth range / this, as a
+  /// provisional point, and filter it on to convergence_ratio (<= 0: off): at 30 fps a young map's
+  /// first seeds converge about ten frames after it is made. The provisional points are dropped
+  /// with the map points.
   double young_convergence_ratio = 30.0;
 
   template <class V>
@@ -209,7 +211,7 @@ struct DepthFilterOptions {
       "keyframes of a map with fewer converged seeds take its map points (0: never)");
     v("sparse_depth_std", sparse_depth_std, "depth std of those points, share of their distance");
     v("young_convergence_ratio", young_convergence_ratio,
-      "their seeds converge when sigma < inverse-depth range / this (<= 0: convergence_ratio)");
+      "their seeds are also published, provisionally, once sigma < inverse-depth range / this (<= 0: off)");
   }
 };
 

@@ -113,7 +113,8 @@ void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
       continue;
     }
     // A young map's seed: published once it is as certain as young_convergence_ratio asks, and
-    // filtered on.
+    // filtered on (converged, it adds its point as any seed; the provisional one goes when the
+    // keyframe finishes).
     if (host.young && !s.provisional && s.updates >= 2 &&
         std::sqrt(s.sigma2) < s.z_range / options_.young_convergence_ratio) {
       s.provisional = true;
