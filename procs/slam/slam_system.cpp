@@ -379,8 +379,9 @@ void SlamSystem::publishLiveClouds(int map_id, int64_t utime, int32_t seq, SlamO
   if (growth <= 0) return;
   const auto min_points = static_cast<size_t>(std::max(1, options_.output.live_cloud_min_points));
   for (const auto& kf : depth_->liveKeyframes(map_id)) {
-    // Published once its converged points number min_points, and again whenever they have grown
-    // by `growth`; a young map's keyframe also at once, with its map points (however few).
+    // Published once its converged points (provisional ones included) number min_points, and again
+    // whenever they have grown by `growth`; a young map's keyframe also at once, with its map
+    // points (however few).
     auto& [published, any] = live_published_[kf.id];
     const size_t converged = kf.points - kf.from_features;
     bool due = false;

@@ -16,6 +16,19 @@ void rgbAt(const cv::Mat& bgr, const Eigen::Vector2i& px, uint8_t rgb[3]) {
   rgb[1] = c[1];
   rgb[2] = c[0];
 }
+
+// The point of a seed at its posterior mean, in its keyframe's camera frame.
+SemiDensePoint pointOfSeed(const DepthSeed& s, bool provisional) {
+  SemiDensePoint p;
+  p.p_camera = s.f / s.mu;
+  p.depth_std = std::sqrt(s.sigma2) / (s.mu * s.mu);
+  std::copy(s.rgb, s.rgb + 3, p.rgb);
+  p.provisional = provisional;
+  return p;
+}
+
+bool isProvisional(const SemiDensePoint& p) { return p.provisional; }
+
 }  // namespace
 
 DepthFilter::DepthFilter(const DepthFilterOptions& options, int width, int height, double fx,
@@ -100,16 +113,8 @@ void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
       ++measurements_;
     }
     if (s.inlierRatio() < options_.min_inlier_ratio) continue;  // dropped: mostly outliers
-    const auto point = [&s](bool provisional) {
-      SemiDensePoint p;
-      p.p_camera = s.f / s.mu;
-      p.depth_std = std::sqrt(s.sigma2) / (s.mu * s.mu);
-      std::copy(s.rgb, s.rgb + 3, p.rgb);
-      p.provisional = provisional;
-      return p;
-    };
     if (s.updates >= 2 && std::sqrt(s.sigma2) < s.z_range / options_.convergence_ratio) {
-      converged->push_back(point(false));
+      converged->push_back(pointOfSeed(s, false));
       continue;
     }
     // A young map's seed: published once it is as certain as young_convergence_ratio asks, and
@@ -118,7 +123,7 @@ void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
     if (host.young && !s.provisional && s.updates >= 2 &&
         std::sqrt(s.sigma2) < s.z_range / options_.young_convergence_ratio) {
       s.provisional = true;
-      converged->push_back(point(true));
+      converged->push_back(pointOfSeed(s, true));
     }
     host.seeds[kept++] = s;
   }
@@ -149,8 +154,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       used = true;
       if (converged.empty()) continue;
       std::lock_guard<std::mutex> lock(store_mutex_);
-      const auto provisional = static_cast<int64_t>(
-          std::count_if(converged.begin(), converged.end(), [](const SemiDensePoint& p) { return p.provisional; }));
+      const auto provisional = static_cast<int64_t>(std::count_if(converged.begin(), converged.end(), isProvisional));
       converged_per_map_[input.map_id] += static_cast<int64_t>(converged.size()) - provisional;
       host.store->provisional += static_cast<size_t>(provisional);
       host.store->points.insert(host.store->points.end(), converged.begin(), converged.end());
@@ -170,9 +174,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       // keyframes would pass for surfaces that many keyframes agree on.
       if ((kf.from_features > 0 || kf.provisional > 0) && converged_per_map_[kf.map_id] >= options_.young_map_points) {
         kf.points.erase(kf.points.begin(), kf.points.begin() + static_cast<long>(kf.from_features));
-        kf.points.erase(std::remove_if(kf.points.begin(), kf.points.end(),
-                                       [](const SemiDensePoint& p) { return p.provisional; }),
-                        kf.points.end());
+        kf.points.erase(std::remove_if(kf.points.begin(), kf.points.end(), isProvisional), kf.points.end());
         stats_.points -= static_cast<int64_t>(kf.from_features + kf.provisional);
         kf.from_features = kf.provisional = 0;
         kf.features_dropped = true;
