@@ -174,6 +174,7 @@ void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, cons
     std::nth_element(h.begin(), h.begin() + static_cast<long>(k), h.end());
     if (h.empty() || h[k] < o.min_height) continue;
     c.height = h[k];
+    c.on_support = true;
     if (o.add_footprint) {
       const size_t count = c.points.size();
       for (size_t i = 0; i < count; ++i) c.points.push_back(c.points[i] - plane.distance(c.points[i]) * n);

@@ -27,6 +27,7 @@ struct Candidate {
   Eigen::Vector3f min, max;            ///< axis-aligned bounds
   Eigen::Vector3f centroid;
   float height = 0;                    ///< map units, over the support (0 without one)
+  bool on_support = false;             ///< stands on the map's support (its box is trimmed by box_trim_pct)
 };
 
 struct ClusterStats {

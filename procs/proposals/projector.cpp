@@ -116,14 +116,15 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
       continue;
     }
     // The box of the projected points without the outer box_trim_pct % on each side: a few
-    // stray points around an object (depths smeared at its occluding edges) would otherwise
-    // widen the box far beyond it.
+    // stray points around an object on a support (its footprint, depths smeared at its occluding
+    // edges against the textured support) would otherwise widen the box far beyond it. With no
+    // support under it, a candidate's outermost points are its own: box_trim_pct_unsupported.
     std::vector<float> us(p.pixels.size()), vs(p.pixels.size());
     for (size_t i = 0; i < p.pixels.size(); ++i) {
       us[i] = p.pixels[i].x();
       vs[i] = p.pixels[i].y();
     }
-    const double trim = std::clamp(o.box_trim_pct, 0.0, 49.0);
+    const double trim = std::clamp(c.on_support ? o.box_trim_pct : o.box_trim_pct_unsupported, 0.0, 49.0);
     float x0, x1, y0, y1;
     trimmedRange(us, trim, o.box_trim_gap, &x0, &x1);
     trimmedRange(vs, trim, o.box_trim_gap, &y0, &y1);

@@ -91,6 +91,9 @@ struct ProposalOptions {
   double occluded_fraction = 0.6; ///< candidates with more of their points hidden are culled
   double min_visible_fraction = 0.5; ///< of a candidate's points in front of the camera and in the image
   double box_trim_pct = 3;       ///< %, a box spans its projected points without this share on each side
+  /// %, the same for a candidate that does not stand on a support (no table found under it: an
+  /// object on an untextured ground, whose outermost points are its own).
+  double box_trim_pct_unsupported = 0;
   /// ...and then grows over the trimmed points while each is within this many times the mean
   /// spacing of the points inside of the last (<= 0: off): an object's own points run on densely
   /// to its outline, a smear thins out.
@@ -152,6 +155,7 @@ struct ProposalOptions {
     v("occluded_fraction", occluded_fraction, "share of hidden points that culls a candidate");
     v("min_visible_fraction", min_visible_fraction, "share of points that must be in the image");
     v("box_trim_pct", box_trim_pct, "%, a box spans its projected points without this share on each side");
+    v("box_trim_pct_unsupported", box_trim_pct_unsupported, "%, the same for a candidate that does not stand on a support");
     v("box_trim_gap", box_trim_gap, "...then grows over trimmed points this close (x mean spacing) to the last (<= 0: off)");
     v("min_box_px", min_box_px, "px, smallest box side");
     v("nms_iou", nms_iou, "IoU above which boxes are suppressed");

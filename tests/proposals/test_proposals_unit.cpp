@@ -152,7 +152,8 @@ TEST(ProposalClustering, TouchingObjectsJoinedAtACoarserScaleAreTwoParts) {
 }
 
 // The whole map path: a table with two objects on it; the table is removed as the support plane
-// and each object is a candidate spanning its own extent (down to the table) at every scale.
+// and each object is a candidate spanning its own extent (down to the table) at every scale,
+// standing on the support; without the table the same objects do not stand on one.
 TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
   ProposalOptions o = metricOptions();
   CandidateMap map(o);
@@ -166,12 +167,21 @@ TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
   for (const auto& c : map.candidates()) {
     EXPECT_EQ(sidesOf(c, 0.0f).size(), 1u) << "a candidate spans both objects";
     EXPECT_LT(c.max.z(), 0.13f);
+    EXPECT_TRUE(c.on_support) << "its box is trimmed as one on a support";
     if (c.min.x() > -0.15f && c.max.x() < -0.05f && c.max.z() > 0.11f && c.min.z() < 0.005f) ++tall;
     if (c.min.x() > 0.05f && c.max.x() < 0.15f && c.max.z() > 0.07f && c.max.z() < 0.09f && c.min.z() < 0.005f)
       ++short_;
   }
   EXPECT_GE(tall, 1);
   EXPECT_GE(short_, 1);
+  // The same objects without the table: no support, and candidates that do not stand on one.
+  CandidateMap bare(o);
+  const auto objects = join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f));
+  bare.update(1, true, 0, std::vector<int32_t>(objects.size(), 0), objects);
+  ASSERT_TRUE(reclusterFromAbove(bare));
+  EXPECT_FALSE(bare.stats().support);
+  ASSERT_FALSE(bare.candidates().empty());
+  for (const auto& c : bare.candidates()) EXPECT_FALSE(c.on_support);
 }
 
 // A young map is sparse (SLAM's first keyframes: its triangulated features, a few converged
@@ -286,13 +296,16 @@ TEST(ProposalProjection, SmallBoxesAreDroppedAndOverlapsSuppressed) {
   EXPECT_NEAR(boxes[0].w, 100, 3);
 }
 
-// A box spans its points without the outer box_trim_pct % on each side (a thin smear off an
-// object does not widen it); box_trim_gap grows it back over the trimmed points that run on
-// densely to the object's outline, and not over the smear.
+// A box of a candidate on a support spans its points without the outer box_trim_pct % on each
+// side (a thin smear off an object does not widen it); box_trim_gap grows it back over the trimmed
+// points that run on densely to the object's outline, and not over the smear. A candidate with no
+// support under it is trimmed by box_trim_pct_unsupported instead.
 TEST(ProposalProjection, TrimmedBoxesGrowBackToTheOutlineButNotOverASmear) {
   ProposalOptions o = metricOptions();
+  o.box_trim_pct_unsupported = 0;
   Candidate c;
   c.id = 1;
+  c.on_support = true;
   // A 0.2 m square at 1 m (100 px with f = 500, centred on the principal point)...
   for (float u = -0.1f; u <= 0.1001f; u += 0.005f)
     for (float v = -0.1f; v <= 0.1001f; v += 0.005f) c.points.emplace_back(u, v, 1.0f);
@@ -315,6 +328,12 @@ TEST(ProposalProjection, TrimmedBoxesGrowBackToTheOutlineButNotOverASmear) {
   EXPECT_NEAR(grown.x + grown.w, right, 1.5);
   EXPECT_NEAR(grown.y, cam.cy() - 50, 1.5);
   EXPECT_NEAR(grown.y + grown.h, cam.cy() + 50, 1.5);
+  c.on_support = false;
+  const ProposalBox unsupported = box(3, 0);
+  EXPECT_EQ(unsupported.x, all.x);  // untrimmed, the smear too
+  EXPECT_EQ(unsupported.w, all.w);
+  o.box_trim_pct_unsupported = 3;
+  EXPECT_EQ(box(3, 0).w, trimmed.w);
 }
 
 // Two touching objects, found alike at more scales than the larger of them alone, and boxed

@@ -11,6 +11,7 @@
 #include "slamaware/detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
 #include "tests/support/test_support.h"
+#include "tests/system/lockstep_pipeline.h"
 #include "tools/eval/pipeline_run.h"
 
 using namespace slamaware;
@@ -37,19 +38,12 @@ Recording record(const std::string& log_path, const Channels& ch) {
 }  // namespace
 
 TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetectionsAndObjectMaps) {
-  // The processes read config/*.yaml and the model path in it relative to the project folder.
-  fs::current_path(test::sourcePath(""));
+  SystemConfig sys;
+  PipelineRunOptions options = test::lockstepPipeline(&sys);
   const std::string sample = test::sourcePath("logs/sample.lcm");
   ASSERT_TRUE(fs::exists(sample)) << sample;
   ASSERT_TRUE(fs::exists(test::sourcePath("models/recognizer.model")));
-  SystemConfig sys;
-  sys.bus.url = test::testUrl();
-  sys.bus.lockstep = true;
   const std::string dir = test::tempDir("pipeline_replay");
-  PipelineRunOptions options;
-  options.bin_dir = fs::path(test::binPath("slamaware-slam")).parent_path().string();
-  options.config_dir = test::sourcePath("config");
-  options.lcm_url = sys.bus.url;
 
   std::vector<Recording> runs;
   for (int run = 0; run < 2; ++run) {
