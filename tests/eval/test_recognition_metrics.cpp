@@ -228,6 +228,38 @@ TEST(RecognitionSection, HasTheKeysOfDesignSection7InPercent) {
   EXPECT_EQ(j["ground_truth_boxes"], 2);
 }
 
+// A ground-truth box that no box overlaps at the threshold is missed whatever the labels: the share
+// of boxed ground truth bounds recall and AP, per class and (mean over classes) the mAP. Three caps:
+// one boxed and found, one boxed but called background, one overlapped at IoU 0.33 only; and a
+// frame without boxes. A mug nobody boxed makes the class bound 0.
+TEST(RecognitionSection, TheBoxedShareBoundsRecallAndAp) {
+  RecognitionScores s = emptyScores({"cap", "coffee_mug"});
+  scoreFrame(kModel,
+             {box(100, 100, 50, 50, {0.8, 0.1, 0.1}), box(300, 100, 50, 50, {0.1, 0.1, 0.8}),
+              box(525, 100, 50, 50, {0.7, 0.2, 0.1})},
+             {truth(0, 100, 100, 50, 50, "cap"), truth(0, 300, 100, 50, 50, "cap"), truth(0, 500, 100, 50, 50, "cap")},
+             0.5, &s);
+  scoreFrame(kModel, {}, {truth(5, 100, 100, 50, 50, "cap"), truth(5, 300, 300, 40, 60, "coffee_mug")}, 0.5, &s);
+  EXPECT_EQ(s.classes.at("cap").boxed, 2);
+  EXPECT_EQ(s.classes.at("coffee_mug").boxed, 0);
+  const nlohmann::json j = recognitionSection(s);
+  EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["boxed"].get<double>(), 50.0);
+  EXPECT_DOUBLE_EQ(j["per_class"]["coffee_mug"]["boxed"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(j["boxed"].get<double>(), 40.0) << "2 of 5 ground-truth boxes";
+  EXPECT_DOUBLE_EQ(j["mAP_bound"].get<double>(), 25.0) << "the mean of 50 and 0";
+  // p(cap) 0.1 on the second cap still ranks it, after the partial box: AP 1/4 + 1/4 x 2/3 = 5/12.
+  EXPECT_LE(j["per_class"]["cap"]["AP"].get<double>(), j["per_class"]["cap"]["boxed"].get<double>());
+  EXPECT_NEAR(j["per_class"]["cap"]["AP"].get<double>(), 500.0 / 12.0, 1e-9);
+  EXPECT_LE(j["mAP"].get<double>(), j["mAP_bound"].get<double>());
+  EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["recall"].get<double>(), 25.0) << "at the argmax label, 1 of 4";
+  // Pooled over a suite, the counts add up.
+  RecognitionScores suite;
+  mergeRecognition(&suite, s);
+  mergeRecognition(&suite, s);
+  EXPECT_EQ(suite.classes.at("cap").boxed, 4);
+  EXPECT_DOUBLE_EQ(recognitionSection(suite)["mAP_bound"].get<double>(), 25.0);
+}
+
 // The suite's AP is the AP of the pooled detections, not the mean of the sequences' APs:
 // A: one cap found first (AP 1); B: a false positive above its cap (AP 1/2). Pooled: FP (B) 0.95,
 // TP (A) 0.9, TP (B) 0.5 -> precision 2/3 up to recall 1: AP 2/3 (the mean would be 3/4).

@@ -52,6 +52,8 @@ struct ClassTally {
   int truth = 0;                        ///< ground-truth boxes of the class
   int labelled = 0;                     ///< boxes whose argmax is the class
   int labelled_tp = 0;                  ///< of those, matched to a ground-truth box of the class
+  int boxed = 0;  ///< ground-truth boxes of the class that some box overlaps at the IoU threshold: no
+                  ///< labelling of these boxes can find more (recall <= boxed / truth, so AP too)
 };
 
 /// Detection scores of one sequence or (merged) of a suite.
