@@ -185,13 +185,16 @@ void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, cons
   *candidates = std::move(kept);
 }
 
+// Band points outside a candidate's surroundings below which its colour reference is the whole band.
+constexpr double kMinReferencePoints = 100;
+
 // What of an object lies as low as the support's depth noise (a cap's brim, a bowl's foot) was
 // removed with the support's band. A band point whose colour is more likely the candidate's than
 // the support's (RGB histograms of band_colour_bin levels: the candidate's own points against the
-// band, which is mostly the support) and that is connected to the candidate's base through such
-// points (steps of 2 x radius), within band_grow of its bounds, is the candidate's. `coloured`:
-// the clustered points, on a grid of `voxel` (candidates' points are positions of these).
-// Returns the points taken (summed over candidates).
+// band outside its surroundings, which is the support) and that is connected to the candidate's
+// base through such points (steps of 2 x radius), within band_grow of its bounds, is the
+// candidate's. `coloured`: the clustered points, on a grid of `voxel` (candidates' points are
+// positions of these). Returns the points taken (summed over candidates).
 int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<MapPoint>& band,
                        const std::vector<MapPoint>& coloured, double voxel, const Plane& plane, const ProposalOptions& o) {
   if (!(o.band_grow > 0) || band.empty() || candidates->empty()) return 0;
@@ -227,9 +230,25 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
         n += 1;
       }
     if (n == 0) continue;
-    for (size_t b = 0; b < bins; ++b) own_colour[b] = own[b] / n > o.band_colour_ratio * support[b];
+    // The support's colours are measured on its band away from this candidate: the candidate's own
+    // brim or foot is band too, and a large one (a cap's brim near the camera) made its colour the
+    // support's. Too few band points elsewhere: the whole band.
     const Eigen::Vector3f lo = c.min.array() - static_cast<float>(o.band_grow);
     const Eigen::Vector3f hi = c.max.array() + static_cast<float>(o.band_grow);
+    std::vector<double> reference(bins, 0.0);
+    double elsewhere = 0;
+    if (o.band_reference_elsewhere)
+      for (size_t u = 0; u < band.size(); ++u) {
+        const Eigen::Vector3f& p = band[u].p;
+        if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) continue;
+        reference[band_bin[u]] += 1;
+        elsewhere += 1;
+      }
+    if (elsewhere < kMinReferencePoints)
+      reference = support;
+    else
+      for (double& r : reference) r /= elsewhere;
+    for (size_t b = 0; b < bins; ++b) own_colour[b] = own[b] / n > o.band_colour_ratio * reference[b];
     std::vector<Eigen::Vector3f> front;
     for (const auto& p : c.points)
       if (plane.distance(p) <= base) front.push_back(p);

@@ -59,6 +59,7 @@ struct ProposalOptions {
   double band_colour_ratio = 5;  ///< a band point's colour is the candidate's when its share of the candidate's
                                  ///< points is over this x its share of the band
   int band_colour_bin = 32;      ///< RGB levels per bin of the candidate's and the band's colour histograms
+  bool band_reference_elsewhere = true;  ///< a candidate's band colours are compared with the band outside its bounds (false: the whole band)
   FreeSpaceOptions free_space;   ///< points seen through by other keyframes are not objects
   int max_maps = 4;              ///< SLAM maps whose candidates are kept (SLAM may relocalise into an older one)
   int max_views = 512;           ///< camera poses kept for the up / look-at priors (thinned beyond)
@@ -132,6 +133,7 @@ struct ProposalOptions {
     v("band_grow", band_grow, "map units, how far past its bounds a candidate takes support-band points (<= 0: off)");
     v("band_colour_ratio", band_colour_ratio, "a band point is the candidate's when its colour's share of the candidate is over this x its share of the band");
     v("band_colour_bin", band_colour_bin, "RGB levels per bin of the candidate's and the band's colour histograms");
+    v("band_reference_elsewhere", band_reference_elsewhere, "a candidate's band colours are compared with the band outside its bounds grown by band_grow (false: the whole band)");
     v.section("free_space", free_space);
     v("max_maps", max_maps, "SLAM maps whose candidates are kept (SLAM may return to an older one)");
     v("max_views", max_views, "camera poses kept for the up and look-at priors");

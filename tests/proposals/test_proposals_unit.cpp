@@ -251,6 +251,40 @@ TEST(ProposalClustering, AnObjectsPartInTheSupportsBandIsTheObjects) {
   }
 }
 
+// A wide brim near the camera is a large share of the support's band: compared with the whole
+// band, its colour looked like the support's and it stayed out (band_reference_elsewhere false).
+// Compared with the band outside the candidate's surroundings (the table), it is the cap's.
+TEST(ProposalClustering, ABrimThatIsMuchOfTheBandIsStillTheObjects) {
+  std::vector<MapPoint> brim;
+  for (float x = -0.1f; x <= 0.1f; x += 0.004f)
+    for (float y = -0.1f; y <= 0.1f; y += 0.004f) {
+      const float r = std::hypot(x, y);
+      if (r > 0.042f && r < 0.1f) brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
+    }
+  const auto tabletop = table(0.8f, 0.012f);
+  ASSERT_GT(brim.size(), tabletop.size() / 4) << "the brim is over a fifth of the band";
+  const auto points = join(join(tabletop, cylinder(0, 0, 0.04f, 0.1f, 0.004f, 40)), brim);
+  for (const bool elsewhere : {false, true}) {
+    ProposalOptions o = metricOptions();
+    o.band_reference_elsewhere = elsewhere;
+    CandidateMap map(o);
+    map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
+    ASSERT_TRUE(reclusterFromAbove(map));
+    ASSERT_TRUE(map.stats().support);
+    float reach = 0;  // how far from the crown's axis the candidates reach
+    for (const auto& c : map.candidates()) {
+      EXPECT_LT((c.max - c.min).head<2>().maxCoeff(), 0.21f) << "the table was taken (elsewhere " << elsewhere << ")";
+      reach = std::max({reach, c.max.x(), -c.min.x()});
+    }
+    if (elsewhere) {
+      EXPECT_GT(reach, 0.09f) << "the brim was not taken";
+      EXPECT_GT(map.stats().band_taken, static_cast<int64_t>(brim.size() / 2));
+    } else {
+      EXPECT_LT(reach, 0.05f) << "the whole band as reference: the brim's colour is the support's";
+    }
+  }
+}
+
 // Of two candidates on one line of sight, the far one is culled; moved aside, both are kept.
 TEST(ProposalProjection, FarCandidateBehindANearOneIsCulled) {
   const ProposalOptions o = metricOptions();
