@@ -61,6 +61,18 @@ bool reclusterFromAbove(CandidateMap& map) {
   return map.recluster();
 }
 
+// A dark cap's brim lying flat around a crown of radius 0.04 at the origin, 4 mm above the table
+// (in its band), out to 0.1; `right_half`: only where x > 0.
+std::vector<MapPoint> capBrim(bool right_half) {
+  std::vector<MapPoint> brim;
+  for (float x = -0.1f; x <= 0.1f; x += 0.004f)
+    for (float y = -0.1f; y <= 0.1f; y += 0.004f) {
+      const float r = std::hypot(x, y);
+      if ((x > 0 || !right_half) && r > 0.042f && r < 0.1f) brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
+    }
+  return brim;
+}
+
 }  // namespace
 
 // At each density scale alone, two objects whose gap is larger than the scale's radius are two
@@ -219,12 +231,8 @@ TEST(ProposalClustering, AYoungMapsSparseObjectsAreCandidates) {
 // has: it is taken back by the crown's candidates. The table, and a flat towel of another colour
 // touching the brim, are not.
 TEST(ProposalClustering, AnObjectsPartInTheSupportsBandIsTheObjects) {
-  std::vector<MapPoint> brim, towel;
-  for (float x = -0.1f; x <= 0.1f; x += 0.004f)
-    for (float y = -0.1f; y <= 0.1f; y += 0.004f) {
-      const float r = std::hypot(x, y);
-      if (x > 0 && r > 0.042f && r < 0.1f) brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
-    }
+  const std::vector<MapPoint> brim = capBrim(true);
+  std::vector<MapPoint> towel;
   for (float x = 0.106f; x <= 0.2f; x += 0.004f)
     for (float y = -0.05f; y <= 0.05f; y += 0.004f) towel.push_back({Eigen::Vector3f(x, y, 0.004f), 120, 60, 60});
   const auto points = join(join(table(0.8f, 0.004f), cylinder(0, 0, 0.04f, 0.1f, 0.004f, 40)), join(brim, towel));
@@ -255,12 +263,7 @@ TEST(ProposalClustering, AnObjectsPartInTheSupportsBandIsTheObjects) {
 // band, its colour looked like the support's and it stayed out (band_reference_elsewhere false).
 // Compared with the band outside the candidate's surroundings (the table), it is the cap's.
 TEST(ProposalClustering, ABrimThatIsMuchOfTheBandIsStillTheObjects) {
-  std::vector<MapPoint> brim;
-  for (float x = -0.1f; x <= 0.1f; x += 0.004f)
-    for (float y = -0.1f; y <= 0.1f; y += 0.004f) {
-      const float r = std::hypot(x, y);
-      if (r > 0.042f && r < 0.1f) brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
-    }
+  const std::vector<MapPoint> brim = capBrim(false);
   const auto tabletop = table(0.8f, 0.012f);
   ASSERT_GT(brim.size(), tabletop.size() / 4) << "the brim is over a fifth of the band";
   const auto points = join(join(tabletop, cylinder(0, 0, 0.04f, 0.1f, 0.004f, 40)), brim);
