@@ -59,7 +59,8 @@ struct ProposalOptions {
   double band_colour_ratio = 5;  ///< a band point's colour is the candidate's when its share of the candidate's
                                  ///< points is over this x its share of the band
   int band_colour_bin = 32;      ///< RGB levels per bin of the candidate's and the band's colour histograms
-  bool band_reference_elsewhere = true;  ///< a candidate's band colours are compared with the band outside its bounds (false: the whole band)
+  bool band_reference_elsewhere = true;  ///< the support's colours for a candidate: the band outside its bounds
+                                         ///< grown by band_grow (false: the whole band)
   FreeSpaceOptions free_space;   ///< points seen through by other keyframes are not objects
   int max_maps = 4;              ///< SLAM maps whose candidates are kept (SLAM may relocalise into an older one)
   int max_views = 512;           ///< camera poses kept for the up / look-at priors (thinned beyond)
