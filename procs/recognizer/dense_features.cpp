@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "procs/recognizer/dense_sift.h"
@@ -97,7 +98,42 @@ CellRect DenseFeatureExtractor::imageCells() const {
   return CellRect{0, 0, (width_ + T - 1) / T, (height_ + T - 1) / T};
 }
 
-void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out) {
+std::vector<CellRect> DenseFeatureExtractor::blocks(const std::vector<CellRect>& rects,
+                                                    const CellRect& within) const {
+  // Each block costs its pixels plus margin_ on every side (blur, gradients, filtering): two
+  // blocks become their bounding rectangle when that costs no more than the two apart.
+  const int T = params_.pool_cell_px, M = margin_;
+  const auto cost = [&](const CellRect& r) {
+    return int64_t{r.width() * T + 2 * M} * (r.height() * T + 2 * M);
+  };
+  std::vector<CellRect> out;
+  for (const CellRect& r : rects) {
+    const CellRect c{std::max(r.u0, within.u0), std::max(r.v0, within.v0), std::min(r.u1, within.u1),
+                     std::min(r.v1, within.v1)};
+    if (!c.empty()) out.push_back(c);
+  }
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t i = 0; i < out.size() && !merged; ++i)
+      for (size_t j = i + 1; j < out.size() && !merged; ++j) {
+        const CellRect u = out[i].united(out[j]);
+        const bool overlap = out[i].u0 < out[j].u1 && out[j].u0 < out[i].u1 &&
+                             out[i].v0 < out[j].v1 && out[j].v0 < out[i].v1;
+        if (overlap || cost(u) <= cost(out[i]) + cost(out[j])) {
+          out[i] = u;
+          out.erase(out.begin() + static_cast<long>(j));
+          merged = true;
+        }
+      }
+  }
+  std::sort(out.begin(), out.end(), [](const CellRect& a, const CellRect& b) {
+    return std::tie(a.v0, a.u0) < std::tie(b.v0, b.u0);
+  });
+  return out;
+}
+
+void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
+                                    const std::vector<CellRect>* only) {
   const CellRect all = imageCells();
   CellRect region{std::max(requested.u0, all.u0), std::max(requested.v0, all.v0),
                   std::min(requested.u1, all.u1), std::min(requested.v1, all.v1)};
@@ -110,16 +146,29 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out)
     return;
   }
   grid.region = region;
-  const int T = params_.pool_cell_px, step = params_.step_px, s = params_.stepsPerCell();
-  const int M = margin_;
+  const int s = params_.stepsPerCell();
   grid.nx = region.width() * s;
   grid.ny = region.height() * s;
-  const int64_t points = int64_t{grid.nx} * grid.ny;
-  grid.features.resize(points * grid.scales, kFeatureDims);
+  grid.features.resize(int64_t{grid.nx} * grid.ny * grid.scales, kFeatureDims);
+  if (!only) {
+    extractBlock(region, &grid);
+    return;
+  }
+  for (const CellRect& b : blocks(*only, region)) extractBlock(b, &grid);
+}
 
-  // The region plus its margin, in padded-image coordinates (the padding is M on the left/top).
-  const cv::Rect sub(region.u0 * T, region.v0 * T, region.width() * T + 2 * M,
-                     region.height() * T + 2 * M);
+void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out) {
+  FeatureGrid& grid = *out;
+  const int T = params_.pool_cell_px, step = params_.step_px, s = params_.stepsPerCell();
+  const int M = margin_;
+  const int nx = block.width() * s, ny = block.height() * s;
+  const int64_t points = int64_t{nx} * ny;
+  // Grid point (i, j) of the block is point (gx + i, gy + j) of the grid.
+  const int gx = (block.u0 - grid.region.u0) * s, gy = (block.v0 - grid.region.v0) * s;
+
+  // The block plus its margin, in padded-image coordinates (the padding is M on the left/top).
+  const cv::Rect sub(block.u0 * T, block.v0 * T, block.width() * T + 2 * M,
+                     block.height() * T + 2 * M);
   const cv::Mat grey_sub = grey_padded_(sub);
   const int c0 = M + step / 2;  // centre of grid point 0 inside `sub`
   std::vector<float>& norms = norms_;
@@ -140,16 +189,17 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out)
     geometry.step = step;
     geometry.min_x = c0 - 3 * b / 2;
     geometry.min_y = c0 - 3 * b / 2;
-    geometry.nx = grid.nx;
-    geometry.ny = grid.ny;
+    geometry.nx = nx;
+    geometry.ny = ny;
     norms.resize(static_cast<size_t>(points));
-    // Descriptor p of this scale goes to row t * points + p.
     denseSiftFlat(smooth.ptr<float>(), smooth.cols, smooth.rows, geometry,
-                  grid.features.row(t * points), kFeatureDims, norms.data());
+                  grid.features.row(grid.rowOf(gx, gy, t)), kFeatureDims, norms.data(),
+                  static_cast<size_t>(grid.nx));
     const float threshold = static_cast<float>(params_.contrast_threshold);
-    for (int64_t p = 0; p < points; ++p)
-      if (norms[static_cast<size_t>(p)] < threshold)
-        std::memset(grid.features.row(t * points + p), 0, sizeof(float) * kSiftDims);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        if (norms[static_cast<size_t>(j) * nx + i] < threshold)
+          std::memset(grid.features.row(grid.rowOf(gx + i, gy + j, t)), 0, sizeof(float) * kSiftDims);
   }
 
   // Mean RGB over each descriptor's support: the 4 x 4 bins around its centre.
@@ -159,14 +209,14 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out)
   for (int t = 0; t < grid.scales; ++t) {
     const int half = 2 * params_.bin_sizes_px[t];
     const double inv_area = 1.0 / (4.0 * half * half);
-    for (int j = 0; j < grid.ny; ++j) {
+    for (int j = 0; j < ny; ++j) {
       const int y0 = c0 + step * j - half, y1 = c0 + step * j + half;
       const cv::Vec3d* top = integral.ptr<cv::Vec3d>(y0);
       const cv::Vec3d* bottom = integral.ptr<cv::Vec3d>(y1);
-      for (int i = 0; i < grid.nx; ++i) {
+      for (int i = 0; i < nx; ++i) {
         const int x0 = c0 + step * i - half, x1 = c0 + step * i + half;
         const cv::Vec3d sum = bottom[x1] - bottom[x0] - top[x1] + top[x0];
-        float* row = grid.features.row(grid.rowOf(i, j, t));
+        float* row = grid.features.row(grid.rowOf(gx + i, gy + j, t));
         for (int c = 0; c < 3; ++c) row[kSiftDims + c] = w * static_cast<float>(sum[c] * inv_area);
       }
     }

@@ -55,8 +55,13 @@ class DenseFeatureExtractor {
   /// Pooling cells covering the image (the last row / column may extend beyond it).
   CellRect imageCells() const;
   /// Features of every grid point in `region` (clipped to imageCells()) into *grid (its memory is
-  /// reused).
-  void extract(const CellRect& region, FeatureGrid* grid);
+  /// reused). With `only`, just those of the cells of blocks(*only, region); the other rows of the
+  /// grid are left undefined.
+  void extract(const CellRect& region, FeatureGrid* grid, const std::vector<CellRect>* only = nullptr);
+  /// The rectangles clipped to `within`, overlapping ones and those whose bounding rectangle costs
+  /// no more than the two apart (each block is computed with a margin of filter support around
+  /// it) joined: disjoint blocks that hold every cell of the rectangles, top to bottom.
+  std::vector<CellRect> blocks(const std::vector<CellRect>& rects, const CellRect& within) const;
   const FeatureParams& params() const { return params_; }
 
  private:
@@ -65,6 +70,8 @@ class DenseFeatureExtractor {
   int width_ = 0, height_ = 0;
   cv::Mat grey_padded_;  ///< CV_32F, 0..1, margin_ px of mirrored border (more at right/bottom)
   cv::Mat rgb_padded_;   ///< CV_32FC3 in R, G, B order, 0..1
+  void extractBlock(const CellRect& block, FeatureGrid* grid);
+
   cv::Mat smooth_, integral_;  ///< scratch
   std::vector<float> norms_;   ///< scratch
 };

@@ -243,10 +243,11 @@ void triangleFilter(const float* in, int64_t in_step, int64_t in_stride, int b, 
 }  // namespace
 
 void denseSiftFlat(const float* image, int width, int height, const DsiftGeometry& g,
-                   float* descriptors, size_t stride, float* norms) {
+                   float* descriptors, size_t stride, float* norms, size_t row_pitch) {
   const int b = g.bin;
-  if (b < 1 || g.step < 1 || g.nx < 1 || g.ny < 1)
+  if (b < 1 || g.step < 1 || g.nx < 1 || g.ny < 1 || (row_pitch != 0 && row_pitch < static_cast<size_t>(g.nx)))
     throw std::invalid_argument("denseSiftFlat: bad geometry");
+  const size_t pitch_out = row_pitch ? row_pitch : static_cast<size_t>(g.nx);
   const int span_x = g.step * (g.nx - 1) + 3 * b, span_y = g.step * (g.ny - 1) + 3 * b;
   // Pixels the frames read: their bin centres +- (b - 1).
   const int x0 = g.min_x - (b - 1), x1 = g.min_x + span_x + (b - 1);
@@ -300,7 +301,7 @@ void denseSiftFlat(const float* image, int width, int height, const DsiftGeometr
   const int step_cols = g.step / pitch, bin_cols = b / pitch;
   for (int j = 0; j < g.ny; ++j)
     for (int i = 0; i < g.nx; ++i) {
-      float* d = descriptors + (static_cast<size_t>(j) * g.nx + i) * stride;
+      float* d = descriptors + (static_cast<size_t>(j) * pitch_out + i) * stride;
       for (int by = 0; by < 4; ++by) {
         const float* src_row = filtered.data() + (j * step_cols + by * bin_cols) * row_stride;
         for (int bx = 0; bx < 4; ++bx) {

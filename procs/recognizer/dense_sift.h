@@ -26,12 +26,13 @@ struct DsiftGeometry {
 };
 
 /// Computes nx * ny descriptors of 128 floats (VLFeat's element order: orientation fastest, then
-/// bin x, then bin y) of a row-major float image. Descriptor p = j * nx + i goes to
-/// descriptors + p * stride, its mean gradient mass (VLFeat's keypoint norm) to norms[p].
+/// bin x, then bin y) of a row-major float image. Descriptor (i, j) goes to descriptors +
+/// (j * row_pitch + i) * stride (row_pitch 0: nx; a larger one writes into a wider grid), its mean
+/// gradient mass (VLFeat's keypoint norm) to norms[j * nx + i].
 /// Every frame's support (origin - bin + 1 .. origin + 4 bins - 1) must lie inside the image.
 /// Throws std::invalid_argument otherwise.
 void denseSiftFlat(const float* image, int width, int height, const DsiftGeometry& geometry,
-                   float* descriptors, size_t stride, float* norms);
+                   float* descriptors, size_t stride, float* norms, size_t row_pitch = 0);
 
 /// The same descriptors computed by VLFeat's vl_dsift (for tests and comparisons; slow).
 void denseSiftVlfeat(const float* image, int width, int height, const DsiftGeometry& geometry,

@@ -99,12 +99,16 @@ void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& box
   const CellRect region = spanOf(boxes);
   if (!image_cells.contains(region))
     throw std::invalid_argument("FrameEncoder: box outside the image");
-  extractor_.extract(region, &grid_);
+  // Features and codes only where some box is: a few boxes spread over the frame cover about
+  // half of their span.
+  box_cells_.clear();
+  for (const auto& b : boxes) box_cells_.push_back(b.cells());
+  extractor_.extract(region, &grid_, &box_cells_);
   st.features_ms = msSince(t0);
   st.region = region;
 
   t0 = Clock::now();
-  codeFeatures(grid_, params_.features.stepsPerCell(), pca_, vocabulary_, &codes_);
+  codeFeatures(grid_, params_.features.stepsPerCell(), pca_, vocabulary_, &codes_, &box_cells_);
   st.coding_ms = msSince(t0);
 
   t0 = Clock::now();

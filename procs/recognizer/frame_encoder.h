@@ -77,6 +77,7 @@ class FrameEncoder {
   DenseFeatureExtractor extractor_;
   FeatureGrid grid_;
   FrameCodes codes_;
+  std::vector<CellRect> box_cells_;
   FlairEncoder flair_;
 };
 

@@ -82,17 +82,22 @@ Vocabulary Vocabulary::train(const MatrixRM& samples, int k, uint32_t seed, int 
 }
 
 void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* words) const {
+  words->resize(static_cast<size_t>(y.rows()));
+  assign(y, words->data());
+}
+
+void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, int16_t* words) const {
   if (y.cols() != dims()) throw std::invalid_argument("Vocabulary::assign: wrong dimension");
   const int64_t n = y.rows();
   const int k = size();
-  words->resize(static_cast<size_t>(n));
   const Eigen::RowVectorXf half_norm = 0.5f * centers.rowwise().squaredNorm().transpose();
   const Eigen::MatrixXf ct = centers.transpose();  // D x K
   const int64_t block = 2048;
-  thread_local MatrixRM scores;
+  thread_local std::vector<float> buffer;  // scores of a block of rows (grows, never shrinks)
+  buffer.resize(std::max(buffer.size(), static_cast<size_t>(std::min(block, n) * k)));
   for (int64_t r = 0; r < n; r += block) {
     const int64_t m = std::min(block, n - r);
-    if (scores.rows() != m || scores.cols() != k) scores.resize(m, k);
+    Eigen::Map<MatrixRM> scores(buffer.data(), m, k);
     scores.noalias() = y.middleRows(r, m) * ct;
     for (int64_t i = 0; i < m; ++i) {
       const float* s = scores.row(i).data();
@@ -105,7 +110,7 @@ void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t
           best = c;
         }
       }
-      (*words)[static_cast<size_t>(r + i)] = static_cast<int16_t>(best);
+      words[r + i] = static_cast<int16_t>(best);
     }
   }
 }

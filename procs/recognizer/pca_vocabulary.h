@@ -34,6 +34,8 @@ struct Vocabulary {
   /// Nearest codeword of every row of y (ties: the lower index), via one matrix product
   /// (argmax of y.c - |c|^2 / 2).
   void assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* words) const;
+  /// The same into words[0 .. y.rows()).
+  void assign(const Eigen::Ref<const MatrixRM>& y, int16_t* words) const;
 };
 
 }  // namespace slamaware

@@ -67,7 +67,7 @@ PyramidBox pyramidFromCells(const CellRect& c) {
 }
 
 void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
-                  const Vocabulary& vocabulary, FrameCodes* out) {
+                  const Vocabulary& vocabulary, FrameCodes* out, const std::vector<CellRect>* only) {
   if (pca.outDims() != vocabulary.dims())
     throw std::invalid_argument("codeFeatures: PCA and vocabulary dimensions differ");
   out->region = grid.region;
@@ -76,8 +76,37 @@ void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
   out->scales = grid.scales;
   out->steps_per_cell = steps_per_cell;
   out->projected.resize(grid.features.rows(), pca.outDims());
-  pca.project(grid.features.map(), out->projected.map());
-  vocabulary.assign(out->projected.map(), &out->words);
+  if (!only) {
+    pca.project(grid.features.map(), out->projected.map());
+    vocabulary.assign(out->projected.map(), &out->words);
+    return;
+  }
+  out->words.assign(static_cast<size_t>(grid.features.rows()), FrameCodes::kNotCoded);
+  const CellRect& region = grid.region;
+  const int W = region.width(), s = steps_per_cell;
+  std::vector<uint8_t> covered(static_cast<size_t>(std::max(0, W)));
+  for (int v = region.v0; v < region.v1; ++v) {
+    std::fill(covered.begin(), covered.end(), 0);
+    for (const CellRect& r : *only)
+      if (v >= r.v0 && v < r.v1)
+        for (int u = std::max(r.u0, region.u0); u < std::min(r.u1, region.u1); ++u) covered[u - region.u0] = 1;
+    // Runs of covered cells [a, b).
+    std::vector<std::pair<int, int>> runs;
+    for (int a = 0; a < W; ++a) {
+      if (!covered[a]) continue;
+      int b = a;
+      while (b < W && covered[b]) ++b;
+      runs.emplace_back(a, b);
+      a = b;
+    }
+    for (int t = 0; t < grid.scales; ++t)
+      for (int gy = (v - region.v0) * s; gy < (v - region.v0 + 1) * s; ++gy)
+        for (const auto& [a, b] : runs) {
+          const int64_t first = grid.rowOf(a * s, gy, t), n = int64_t{b - a} * s;
+          pca.project(grid.features.map().middleRows(first, n), out->projected.map().middleRows(first, n));
+          vocabulary.assign(out->projected.map().middleRows(first, n), out->words.data() + first);
+        }
+  }
 }
 
 void sumPyramidLevels(float* v, float* counts, int K, int D) {
@@ -215,6 +244,7 @@ void FlairEncoder::build(const FrameCodes& codes, const Vocabulary& vocabulary,
           for (int gx = gx0; gx < gx0 + s; ++gx) {
             const int64_t r = codes.rowOf(gx, gy, t);
             const int k = words[r];
+            if (k < 0) continue;  // no box reads this cell
             float* __restrict acc = row_sums_.data() + int64_t{k} * D_;
             const float* __restrict x = y + r * D_;
             const float* __restrict ck = vocabulary.centers.row(k).data();

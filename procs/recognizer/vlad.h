@@ -46,14 +46,19 @@ struct FrameCodes {
   CellRect region;  ///< pooling cells covered
   int nx = 0, ny = 0, scales = 0;
   int steps_per_cell = 0;      ///< grid points per pooling cell along x and y
-  ReusableMatrix projected;    ///< N x D
-  std::vector<int16_t> words;  ///< N codeword indices
+  ReusableMatrix projected;    ///< N x D (rows of uncoded descriptors: undefined)
+  std::vector<int16_t> words;  ///< N codeword indices; kNotCoded where no box reads the descriptor
   int64_t rowOf(int i, int j, int t) const { return (int64_t{t} * ny + j) * nx + i; }
+  static constexpr int16_t kNotCoded = -1;
 };
 
 /// Projects the raw features with `pca` and assigns them to `vocabulary` (reuses out's memory).
+/// With `only` (cell rectangles, e.g. the boxes to encode), only the descriptors of the cells
+/// some rectangle covers are read and coded (one matrix product per run of such cells on a row);
+/// the others get kNotCoded. Both encoders read only the cells of their boxes.
 void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
-                  const Vocabulary& vocabulary, FrameCodes* out);
+                  const Vocabulary& vocabulary, FrameCodes* out,
+                  const std::vector<CellRect>* only = nullptr);
 
 /// Normalises the 21 * K * D raw residual sums in place: blocks whose count is zero are set to
 /// exactly zero (FLAIR's table differences leave rounding noise there), then each element

@@ -125,6 +125,72 @@ TEST(Encoders, BoxVectorDoesNotDependOnTheOtherBoxes) {
   EXPECT_LT(max_abs, 1e-4);
 }
 
+TEST(Encoders, OnlyTheCellsOfTheBoxesAreCodedAndTheVectorsAreThoseOfAFullCoding) {
+  Fixture& fx = fixture();
+  FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
+  PyramidBox a, b, all;
+  ASSERT_TRUE(enc.snap(16, 16, 96, 64, 640, 480, &a));     // cells 2..14 x 2..10
+  ASSERT_TRUE(enc.snap(480, 360, 80, 96, 640, 480, &b));   // cells 60..70 x 45..57
+  ASSERT_TRUE(enc.snap(0, 0, 640, 480, 640, 480, &all));
+  for (const EncoderKind kind : {EncoderKind::kDirect, EncoderKind::kFlair}) {
+    SCOPED_TRACE(encoderName(kind));
+    ReusableMatrix some, full;
+    FrameEncoder::Stats st;
+    enc.encode(fx.frame, {a, b}, kind, &some, &st);
+    EXPECT_EQ(st.region, (CellRect{2, 2, 70, 57}));
+    const FrameCodes& c = enc.codes();
+    const int s = c.steps_per_cell;
+    const auto word = [&](int u, int v, int t) {
+      return c.words[static_cast<size_t>(c.rowOf((u - c.region.u0) * s, (v - c.region.v0) * s, t))];
+    };
+    for (int t = 0; t < c.scales; ++t) {
+      EXPECT_GE(word(2, 2, t), 0);    // inside a
+      EXPECT_GE(word(69, 56, t), 0);  // inside b
+      EXPECT_EQ(word(40, 30, t), FrameCodes::kNotCoded);  // between them: no box reads it
+      EXPECT_EQ(word(69, 2, t), FrameCodes::kNotCoded);
+    }
+    enc.encode(fx.frame, {a, b, all}, kind, &full, &st);
+    double max_abs = 0;
+    for (int r = 0; r < 2; ++r)
+      for (int64_t k = 0; k < some.cols(); ++k)
+        max_abs = std::max(max_abs, static_cast<double>(std::fabs(some.row(r)[k] - full.row(r)[k])));
+    // The direct encoder sums the same codes; FLAIR's tables over another span round otherwise.
+    EXPECT_LT(max_abs, kind == EncoderKind::kDirect ? 1e-6 : 2e-4) << max_abs;
+  }
+}
+
+TEST(Encoders, FeaturesAreComputedInBlocksThatHoldEveryBoxCell) {
+  Fixture& fx = fixture();
+  DenseFeatureExtractor ex(fx.params.features);
+  ex.setImage(fx.frame);
+  const CellRect all = ex.imageCells();  // 80 x 60 cells of 8 px
+  // Overlapping rectangles are one block; far apart ones stay apart; near ones are joined when
+  // their bounding block costs no more than the two with their margins.
+  EXPECT_EQ(ex.blocks({{2, 2, 10, 10}, {8, 8, 14, 12}}, all), (std::vector<CellRect>{{2, 2, 14, 12}}));
+  EXPECT_EQ(ex.blocks({{60, 45, 70, 57}, {2, 2, 14, 10}}, all),
+            (std::vector<CellRect>{{2, 2, 14, 10}, {60, 45, 70, 57}}));
+  EXPECT_EQ(ex.blocks({{2, 2, 12, 12}, {13, 2, 23, 12}}, all), (std::vector<CellRect>{{2, 2, 23, 12}}));
+  EXPECT_EQ(ex.blocks({{-5, 50, 4, 70}}, all), (std::vector<CellRect>{{0, 50, 4, 60}}));  // clipped
+  // The features of the boxes' cells are those of the whole frame.
+  FeatureGrid whole, some;
+  ex.extract(all, &whole);
+  const std::vector<CellRect> boxes{{2, 2, 14, 10}, {60, 45, 70, 57}, {30, 20, 31, 21}};
+  ex.extract(all, &some, &boxes);
+  ASSERT_EQ(some.features.rows(), whole.features.rows());
+  const int s = fx.params.features.stepsPerCell();
+  double max_abs = 0;
+  int64_t compared = 0;
+  for (const CellRect& r : boxes)
+    for (int t = 0; t < whole.scales; ++t)
+      for (int j = r.v0 * s; j < r.v1 * s; ++j)
+        for (int i = r.u0 * s; i < r.u1 * s; ++i, ++compared)
+          for (int c = 0; c < kFeatureDims; ++c)
+            max_abs = std::max(max_abs, static_cast<double>(std::fabs(some.features.row(some.rowOf(i, j, t))[c] -
+                                                                      whole.features.row(whole.rowOf(i, j, t))[c])));
+  EXPECT_EQ(compared, int64_t{(12 * 8 + 10 * 12 + 1) * 4} * whole.scales);
+  EXPECT_LT(max_abs, 1e-6);
+}
+
 TEST(Encoders, FlairTablesCoverTheBoxesSpanAndAreReported) {
   Fixture& fx = fixture();
   FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
