@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <set>
 
 #include "common/config.h"
@@ -228,6 +229,41 @@ TEST(Occupancy, RayCastingMarksPointsOccupiedAndTheRaysInFrontFree) {
   // once; hits from two batches keep a voxel occupied.
   whole.insert(wall, &origin);
   EXPECT_EQ(whole.cell(Eigen::Vector3d(0.0, 0.0, 1.0)), OccupancyMap::Cell::kOccupied);
+}
+
+// The occupied list is kept up to date from the voxels each batch touches: after every batch it
+// is what a rebuild from the tree's leaves (a map read back from its bytes) finds, also when rays
+// from other keyframes free voxels that were occupied.
+TEST(Occupancy, TheOccupiedListFollowsEveryUpdateAsARebuildWouldFindIt) {
+  OccupancyOptions o;
+  o.resolution = 0.02;
+  o.free_band = 0;  // whole rays: later views carve through earlier points
+  OccupancyMap map(o, o.resolution);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> u(-0.3f, 0.3f);
+  size_t freed = 0;
+  std::vector<VoxelKey> before;
+  for (int batch = 0; batch < 12; ++batch) {
+    // A noisy surface at depth ~1 seen from a camera that moves sideways.
+    std::vector<Eigen::Vector3f> points;
+    for (int i = 0; i < 400; ++i) points.emplace_back(u(rng), u(rng), 1.0f + 0.3f * u(rng));
+    const Eigen::Vector3f origin(0.2f * static_cast<float>(batch % 5) - 0.4f, 0, 0);
+    map.insert(points, &origin);
+    if (batch == 5) map.occupied();  // read in between: later batches update the list in place
+    const OccupancyMap rebuilt =
+        OccupancyMap::deserialize(map.serialize([](VoxelKey) { return Rgb{}; }), o, "rebuilt");
+    std::vector<VoxelKey> now, expected;
+    for (const auto& v : map.occupied()) now.push_back(v.key);
+    for (const auto& v : rebuilt.occupied()) expected.push_back(v.key);
+    ASSERT_EQ(now, expected) << "after batch " << batch;
+    for (size_t i = 0; i < now.size(); ++i)
+      ASSERT_TRUE(map.occupied()[i].centre.isApprox(rebuilt.occupied()[i].centre)) << i;
+    for (VoxelKey k : before) freed += !std::binary_search(now.begin(), now.end(), k);
+    before = now;
+  }
+  EXPECT_GT(freed, 0u) << "no voxel was ever freed: the test would not see a stale list";
+  map.clear();
+  EXPECT_TRUE(map.occupied().empty());
 }
 
 TEST(Occupancy, PointsBeyondMaxRangeOrNotFiniteAreDropped) {
