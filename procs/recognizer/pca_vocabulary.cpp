@@ -51,9 +51,15 @@ Pca Pca::fit(const MatrixRM& samples, int out_dims) {
 void Pca::project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y) const {
   if (x.cols() != inDims() || y.rows() != x.rows() || y.cols() != outDims())
     throw std::invalid_argument("Pca::project: wrong dimensions");
+  project(x, y, offset());
+}
+
+void Pca::project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y,
+                  const Eigen::RowVectorXf& offset) const {
+  if (x.cols() != inDims() || y.rows() != x.rows() || y.cols() != outDims() || offset.size() != outDims())
+    throw std::invalid_argument("Pca::project: wrong dimensions");
   if (x.rows() == 0) return;
   y.noalias() = x * basis;
-  const Eigen::RowVectorXf offset = mean * basis;
   y.rowwise() -= offset;
 }
 
@@ -83,15 +89,20 @@ Vocabulary Vocabulary::train(const MatrixRM& samples, int k, uint32_t seed, int 
 
 void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* words) const {
   words->resize(static_cast<size_t>(y.rows()));
-  assign(y, words->data());
+  assign(y, words->data(), lookup());
 }
 
-void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, int16_t* words) const {
-  if (y.cols() != dims()) throw std::invalid_argument("Vocabulary::assign: wrong dimension");
+Vocabulary::Lookup Vocabulary::lookup() const {
+  return Lookup{centers.transpose(), 0.5f * centers.rowwise().squaredNorm().transpose()};
+}
+
+void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, int16_t* words, const Lookup& lookup) const {
+  if (y.cols() != dims() || lookup.ct.cols() != size())
+    throw std::invalid_argument("Vocabulary::assign: wrong dimension");
   const int64_t n = y.rows();
   const int k = size();
-  const Eigen::RowVectorXf half_norm = 0.5f * centers.rowwise().squaredNorm().transpose();
-  const Eigen::MatrixXf ct = centers.transpose();  // D x K
+  const Eigen::RowVectorXf& half_norm = lookup.half_norm;
+  const Eigen::MatrixXf& ct = lookup.ct;
   const int64_t block = 2048;
   thread_local std::vector<float> buffer;  // scores of a block of rows (grows, never shrinks)
   buffer.resize(std::max(buffer.size(), static_cast<size_t>(std::min(block, n) * k)));

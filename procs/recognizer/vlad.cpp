@@ -82,6 +82,8 @@ void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
     return;
   }
   out->words.assign(static_cast<size_t>(grid.features.rows()), FrameCodes::kNotCoded);
+  const Eigen::RowVectorXf offset = pca.offset();
+  const Vocabulary::Lookup lookup = vocabulary.lookup();
   const CellRect& region = grid.region;
   const int W = region.width(), s = steps_per_cell;
   std::vector<uint8_t> covered(static_cast<size_t>(std::max(0, W)));
@@ -103,8 +105,8 @@ void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
       for (int gy = (v - region.v0) * s; gy < (v - region.v0 + 1) * s; ++gy)
         for (const auto& [a, b] : runs) {
           const int64_t first = grid.rowOf(a * s, gy, t), n = int64_t{b - a} * s;
-          pca.project(grid.features.map().middleRows(first, n), out->projected.map().middleRows(first, n));
-          vocabulary.assign(out->projected.map().middleRows(first, n), out->words.data() + first);
+          pca.project(grid.features.map().middleRows(first, n), out->projected.map().middleRows(first, n), offset);
+          vocabulary.assign(out->projected.map().middleRows(first, n), out->words.data() + first, lookup);
         }
   }
 }
