@@ -108,8 +108,7 @@ std::vector<CellRect> DenseFeatureExtractor::blocks(const std::vector<CellRect>&
   };
   std::vector<CellRect> out;
   for (const CellRect& r : rects) {
-    const CellRect c{std::max(r.u0, within.u0), std::max(r.v0, within.v0), std::min(r.u1, within.u1),
-                     std::min(r.v1, within.v1)};
+    const CellRect c = r.intersected(within);
     if (!c.empty()) out.push_back(c);
   }
   for (bool merged = true; merged;) {
@@ -117,9 +116,7 @@ std::vector<CellRect> DenseFeatureExtractor::blocks(const std::vector<CellRect>&
     for (size_t i = 0; i < out.size() && !merged; ++i)
       for (size_t j = i + 1; j < out.size() && !merged; ++j) {
         const CellRect u = out[i].united(out[j]);
-        const bool overlap = out[i].u0 < out[j].u1 && out[j].u0 < out[i].u1 &&
-                             out[i].v0 < out[j].v1 && out[j].v0 < out[i].v1;
-        if (overlap || cost(u) <= cost(out[i]) + cost(out[j])) {
+        if (!out[i].intersected(out[j]).empty() || cost(u) <= cost(out[i]) + cost(out[j])) {
           out[i] = u;
           out.erase(out.begin() + static_cast<long>(j));
           merged = true;
@@ -134,9 +131,7 @@ std::vector<CellRect> DenseFeatureExtractor::blocks(const std::vector<CellRect>&
 
 void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
                                     const std::vector<CellRect>* only) {
-  const CellRect all = imageCells();
-  CellRect region{std::max(requested.u0, all.u0), std::max(requested.v0, all.v0),
-                  std::min(requested.u1, all.u1), std::min(requested.v1, all.v1)};
+  const CellRect region = requested.intersected(imageCells());
   FeatureGrid& grid = *out;
   grid.scales = params_.scales();
   if (region.empty() || grey_padded_.empty()) {

@@ -8,6 +8,7 @@
 // point has one descriptor per bin size, all centred there. Pixels beyond the image (a descriptor's
 // support near the border, the last partial cell) are the image mirrored at its border
 // (BORDER_REFLECT_101), so a grid point's descriptor does not depend on which region is computed.
+#include <algorithm>
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
@@ -27,6 +28,10 @@ struct CellRect {
   }
   /// The smallest rectangle holding both (an empty one is ignored).
   CellRect united(const CellRect& o) const;
+  /// The cells in both (empty when they do not overlap).
+  CellRect intersected(const CellRect& o) const {
+    return CellRect{std::max(u0, o.u0), std::max(v0, o.v0), std::min(u1, o.u1), std::min(v1, o.v1)};
+  }
   bool operator==(const CellRect& o) const {
     return u0 == o.u0 && v0 == o.v0 && u1 == o.u1 && v1 == o.v1;
   }
@@ -65,13 +70,14 @@ class DenseFeatureExtractor {
   const FeatureParams& params() const { return params_; }
 
  private:
+  /// Features of the grid points of one block (inside grid->region) into their rows of *grid.
+  void extractBlock(const CellRect& block, FeatureGrid* grid);
+
   FeatureParams params_;
   int margin_ = 0;
   int width_ = 0, height_ = 0;
   cv::Mat grey_padded_;  ///< CV_32F, 0..1, margin_ px of mirrored border (more at right/bottom)
   cv::Mat rgb_padded_;   ///< CV_32FC3 in R, G, B order, 0..1
-  void extractBlock(const CellRect& block, FeatureGrid* grid);
-
   cv::Mat smooth_, integral_;  ///< scratch
   std::vector<float> norms_;   ///< scratch
 };

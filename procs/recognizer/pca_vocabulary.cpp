@@ -49,8 +49,6 @@ Pca Pca::fit(const MatrixRM& samples, int out_dims) {
 }
 
 void Pca::project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y) const {
-  if (x.cols() != inDims() || y.rows() != x.rows() || y.cols() != outDims())
-    throw std::invalid_argument("Pca::project: wrong dimensions");
   project(x, y, offset());
 }
 

@@ -87,13 +87,15 @@ void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
   const CellRect& region = grid.region;
   const int W = region.width(), s = steps_per_cell;
   std::vector<uint8_t> covered(static_cast<size_t>(std::max(0, W)));
+  std::vector<std::pair<int, int>> runs;  // of covered cells [a, b) on a row of cells
   for (int v = region.v0; v < region.v1; ++v) {
     std::fill(covered.begin(), covered.end(), 0);
-    for (const CellRect& r : *only)
-      if (v >= r.v0 && v < r.v1)
-        for (int u = std::max(r.u0, region.u0); u < std::min(r.u1, region.u1); ++u) covered[u - region.u0] = 1;
-    // Runs of covered cells [a, b).
-    std::vector<std::pair<int, int>> runs;
+    for (const CellRect& r : *only) {
+      const CellRect c = r.intersected(region);
+      if (v >= c.v0 && v < c.v1)
+        for (int u = c.u0; u < c.u1; ++u) covered[u - region.u0] = 1;
+    }
+    runs.clear();
     for (int a = 0; a < W; ++a) {
       if (!covered[a]) continue;
       int b = a;
