@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 
 namespace slamaware {
@@ -123,6 +124,14 @@ Sim3 alignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eig
   out.R = sR / out.s;
   out.t = M.topRightCorner<3, 1>();
   return out;
+}
+
+double rectIou(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh) {
+  const double x0 = std::max(ax, bx), y0 = std::max(ay, by);
+  const double x1 = std::min(ax + aw, bx + bw), y1 = std::min(ay + ah, by + bh);
+  const double inter = std::max(0.0, x1 - x0) * std::max(0.0, y1 - y0);
+  const double uni = aw * ah + bw * bh - inter;
+  return uni > 0 ? inter / uni : 0.0;
 }
 
 }  // namespace slamaware

@@ -101,7 +101,10 @@ struct ProposalOptions {
   /// to its outline, a smear thins out.
   double box_trim_gap = 0;
   int min_box_px = 20;           ///< boxes smaller than this along either side are dropped
-  double nms_iou = 0.5;          ///< boxes overlapping a kept box more than this are suppressed
+  /// Boxes overlapping a kept box (ranked ahead) by more than this IoU are suppressed here; >= 1:
+  /// none, the default: the recognizer suppresses at IoU 0.5 by the classifier's confidence
+  /// (config/recognizer.yaml nms_iou), which keeps whole objects whose parts this ranking put first.
+  double nms_iou = 1.0;
   int max_boxes = 100;           ///< boxes per frame at most
 
   template <class V>
@@ -161,7 +164,7 @@ struct ProposalOptions {
     v("box_trim_pct_unsupported", box_trim_pct_unsupported, "%, the same for a candidate that does not stand on a support");
     v("box_trim_gap", box_trim_gap, "...then grows over trimmed points this close (x mean spacing) to the last (<= 0: off)");
     v("min_box_px", min_box_px, "px, smallest box side");
-    v("nms_iou", nms_iou, "IoU above which boxes are suppressed");
+    v("nms_iou", nms_iou, "IoU above which boxes are suppressed here (>= 1: none; the recognizer suppresses by confidence)");
     v("max_boxes", max_boxes, "boxes per frame at most");
   }
 };

@@ -3,6 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "common/config.h"
+#include "common/geometry.h"
 
 namespace slamaware {
 
@@ -82,6 +87,57 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
   out.total_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
+}
+
+void checkOptions(const RecognizerOptions& options, const std::string& source) {
+  try {
+    parseEncoderKind(options.encoder);
+  } catch (const std::exception& e) {
+    throw ConfigError(source + ": key 'recognizer.encoder': " + e.what());
+  }
+  if (!(options.nms_iou > 0))
+    throw ConfigError(source + ": key 'recognizer.nms_iou': must be above 0 (1 or more: no suppression), got " +
+                      std::to_string(options.nms_iou));
+}
+
+int suppressOverlaps(FrameDetections* d, double max_iou) {
+  const size_t n = d->boxes.size();
+  if (!(max_iou < 1) || n < 2) return 0;
+  const size_t objects = !d->classes.empty() && d->classes.back() == "background" ? d->classes.size() - 1
+                                                                                     : d->classes.size();
+  std::vector<float> confidence(n, -std::numeric_limits<float>::infinity());
+  for (size_t i = 0; i < n; ++i) {
+    const auto& lp = d->boxes[i].log_prob;
+    for (size_t c = 0; c < std::min(objects, lp.size()); ++c)
+      if (lp[c] > confidence[i]) confidence[i] = lp[c];  // NaN never wins
+  }
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return confidence[a] > confidence[b]; });
+  std::vector<size_t> kept;
+  std::vector<char> keep(n, 0);
+  for (size_t i : order) {
+    const BoxDetection& a = d->boxes[i];
+    bool overlaps = false;
+    for (size_t k : kept) {
+      const BoxDetection& b = d->boxes[k];
+      if (rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > max_iou) {
+        overlaps = true;
+        break;
+      }
+    }
+    if (overlaps) continue;
+    kept.push_back(i);
+    keep[i] = 1;
+  }
+  std::vector<BoxDetection> out;
+  out.reserve(kept.size());
+  for (size_t i = 0; i < n; ++i)
+    if (keep[i]) out.push_back(std::move(d->boxes[i]));
+  d->boxes = std::move(out);
+  const int removed = static_cast<int>(n - kept.size());
+  d->suppressed += removed;
+  return removed;
 }
 
 }  // namespace slamaware

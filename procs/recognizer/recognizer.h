@@ -18,6 +18,9 @@ struct RecognizerOptions {
   std::vector<std::string> expected_classes;
   std::string encoder = "auto";  ///< auto | direct | flair
   int max_boxes = 300;           ///< boxes per frame beyond this are rejected
+  /// The node: of two classified boxes of a frame that overlap by more than this IoU, the less
+  /// confident is not published (suppressOverlaps; >= 1: every box is published).
+  double nms_iou = 0.5;
   /// Log-probability given to "background" when the model was trained without negatives (it has
   /// no background class); the object classes share the rest.
   double missing_background_log_prob = -13.8;
@@ -35,6 +38,8 @@ struct RecognizerOptions {
       "classes the system expects; missing ones are reported");
     v("encoder", encoder, "auto (cheaper of the two per frame), direct or flair");
     v("max_boxes", max_boxes, "boxes per frame beyond this are rejected");
+    v("nms_iou", nms_iou,
+      "of two classified boxes overlapping by more than this IoU, the less confident is not published (>= 1: none)");
     v("missing_background_log_prob", missing_background_log_prob,
       "log p(background) published when the model has no background class");
     v.section("cost", cost);
@@ -44,6 +49,10 @@ struct RecognizerOptions {
     v("model_retry_s", model_retry_s, "s between attempts to load a missing or unreadable model");
   }
 };
+
+/// Throws ConfigError naming `source` (the file) and the key for an unknown encoder or an
+/// `nms_iou` that is not positive.
+void checkOptions(const RecognizerOptions& options, const std::string& source);
 
 /// A proposal box: pixels, (x, y) = top-left corner.
 struct BoxRequest {
@@ -63,12 +72,24 @@ struct FrameDetections {
   std::vector<BoxDetection> boxes;   ///< valid boxes, in request order
   int rejected_not_finite = 0, rejected_empty = 0, rejected_outside = 0, rejected_over_limit = 0;
   int clipped = 0;
+  int suppressed = 0;  ///< boxes removed by suppressOverlaps()
   FrameEncoder::Stats stats;
   double total_ms = 0;  ///< encoding + scoring
   int rejected() const {
     return rejected_not_finite + rejected_empty + rejected_outside + rejected_over_limit;
   }
 };
+
+/// Non-maximum suppression of classified boxes (DESIGN.md §3: overlapping boxes, IoU > max_iou,
+/// are suppressed). The boxes are taken in order of their most probable object class's
+/// probability (the background excluded; ties: request order), and a box is removed when it
+/// overlaps one kept before it by IoU > max_iou. The others stay, in request order. Done after
+/// classification rather than in the proposals stage, which can only rank the boxes by the
+/// geometry of their candidates: there a part of an object found at more density scales (a cap's
+/// crown) outranked and suppressed the whole object's box, while the classifier, trained with
+/// such parts as background, is the surer of the whole. Returns the number removed (also in
+/// `suppressed`); nothing is removed for max_iou >= 1.
+int suppressOverlaps(FrameDetections* detections, double max_iou);
 
 class Recognizer {
  public:

@@ -167,13 +167,15 @@ class RecognizerNode {
       publish(out);
       return;
     }
+    suppressOverlaps(&d, options_.nms_iou);
     status_.count("boxes_rejected", d.rejected());
     if (d.rejected_not_finite) status_.count("boxes_rejected.not_finite", d.rejected_not_finite);
     if (d.rejected_empty) status_.count("boxes_rejected.zero_size", d.rejected_empty);
     if (d.rejected_outside) status_.count("boxes_rejected.outside_image", d.rejected_outside);
     if (d.rejected_over_limit) status_.count("boxes_rejected.over_limit", d.rejected_over_limit);
     if (d.clipped) status_.count("boxes_clipped", d.clipped);
-    status_.count("boxes_classified", static_cast<int64_t>(d.boxes.size()));
+    status_.count("boxes_classified", static_cast<int64_t>(d.boxes.size()) + d.suppressed);
+    if (d.suppressed) status_.count("boxes_suppressed", d.suppressed);
     if (!d.boxes.empty()) status_.count(std::string("encoder.") + encoderName(d.stats.used));
     const double ms = d.stats.features_ms + d.stats.coding_ms + d.stats.encode_ms;
     status_.setCounter("encode_us_last", static_cast<int64_t>(ms * 1000));
@@ -224,12 +226,7 @@ int main(int argc, char** argv) {
     lowerThreadPriority(sys.scheduling.recognizer_nice, "the recognizer");
     RecognizerOptions options = loadConfig<RecognizerOptions>(node.config, "recognizer");
     if (!model.empty()) options.model = model;
-    try {
-      parseEncoderKind(options.encoder);
-    } catch (const std::exception& e) {
-      throw ConfigError((node.config.empty() ? std::string("defaults") : node.config) +
-                        ": key 'recognizer.encoder': " + e.what());
-    }
+    checkOptions(options, node.config.empty() ? std::string("defaults") : node.config);
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("recognizer"), sys.channels.statusOf(node.nameOr("recognizer")));
     RecognizerNode rec(bus, status, sys, options);

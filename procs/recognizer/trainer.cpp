@@ -226,7 +226,13 @@ std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path
 std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
                                 const TrainOptions& options) {
   std::vector<int> labels;
+  std::vector<cv::Rect2d> kept;  // suppression in the file's (rank) order
   for (const auto& r : frame.proposals) {
+    if (std::any_of(kept.begin(), kept.end(), [&](const cv::Rect2d& k) { return iou(r, k) > options.proposal_nms_iou; })) {
+      labels.push_back(-1);
+      continue;
+    }
+    kept.push_back(r);
     double best = 0;
     int label = background;
     for (size_t o = 0; o < frame.objects.size(); ++o) {

@@ -73,6 +73,11 @@ struct TrainOptions {
   int proposal_every = 2;                ///< every n-th scene frame gives its proposal boxes (0: none)
   double proposal_positive_iou = 0.5;    ///< a proposal box this close to an object is an example of it
   double proposal_background_iou = 0.4;  ///< a proposal box below this with every object is background
+  /// A proposal box overlapping one ranked ahead of it (earlier in the file) by more than this IoU is
+  /// not used (>= 1: every box). The dumps hold every box the proposals stage draws (the
+  /// recognizer suppresses after classifying them); the shipped model was trained on them
+  /// suppressed at 0.5 in the stage's order, and twice the boxes would need about twice the memory.
+  double proposal_nms_iou = 0.5;
 
   template <class V>
   void visit(V& v) {
@@ -110,6 +115,8 @@ struct TrainOptions {
       "a scene's proposal box with this IoU with an object is an example of that object");
     v("proposal_background_iou", proposal_background_iou,
       "a scene's proposal box with less IoU than this with every object is background");
+    v("proposal_nms_iou", proposal_nms_iou,
+      "a scene's proposal box overlapping one ranked ahead by more than this IoU is not used (>= 1: all)");
   }
 };
 
@@ -150,7 +157,8 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
 std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path);
 /// The examples a frame's proposal boxes give: the label of each box (index into `classes`; an
 /// object of a category the model lacks is `background`), or -1 for a box between the two IoU
-/// thresholds (neither a view of an object nor background).
+/// thresholds (neither a view of an object nor background) and for a box suppressed by one ahead
+/// of it (proposal_nms_iou).
 std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
                                 const TrainOptions& options);
 

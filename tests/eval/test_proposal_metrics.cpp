@@ -89,7 +89,8 @@ TEST(ProposalMisses, ABoxTheRankingSuppressedIsCountedAsSuppressed) {
   // A can and a small one 2.5 cm beside it: apart at the fine density scales, one cluster at the
   // coarse ones. The pair's box overlaps the can's by IoU > 0.5, so only the can's (found at more
   // scales alike) is published; ground truth around the pair is covered by a candidate but suppressed.
-  const ProposalOptions o = metricOptions();
+  ProposalOptions o = metricOptions();
+  o.nms_iou = 0.5;  // the stage's own suppression (off by default: the recognizer's, by confidence)
   const SE3 T = lookingDown(1.0);
   const auto scene = join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f),
                                                     cylinder(-0.015f, 0, 0.02f, 0.12f, 0.004f)));

@@ -315,6 +315,7 @@ TEST(ProposalProjection, FarCandidateBehindANearOneIsCulled) {
 
 TEST(ProposalProjection, SmallBoxesAreDroppedAndOverlapsSuppressed) {
   ProposalOptions o = metricOptions();
+  o.nms_iou = 0.5;  // the stage's own suppression (off by default: the recognizer's, by confidence)
   auto square = [](int id, float x, float half, int scale) {
     Candidate c;
     c.id = id;
@@ -377,7 +378,8 @@ TEST(ProposalProjection, TrimmedBoxesGrowBackToTheOutlineButNotOverASmear) {
 // almost as that one: the pair would suppress it. A cluster of two parts ranks after single
 // objects, so the larger object keeps its box and the pair is suppressed.
 TEST(ProposalProjection, APairOfTouchingObjectsRanksAfterAnObjectAlone) {
-  const ProposalOptions o = metricOptions();
+  ProposalOptions o = metricOptions();
+  o.nms_iou = 0.5;  // the stage's own suppression (off by default: the recognizer's, by confidence)
   auto square = [](int id, float x, float half, int stability, int parts) {
     Candidate c;
     c.id = id;

@@ -137,7 +137,8 @@ TEST(RecognizerNode, SurvivesBadInputAndCountsIt) {
   l.bus.publish("PROPOSALS", proposals(9, {{200, 150, 96, 96}}));  // frame 9 never comes (time-out)
   const std::vector<uint8_t> junk(100, 0xAB);
   l.bus.publishRaw("PROPOSALS", junk.data(), junk.size());  // not a proposals_t at all
-  l.bus.publish("PROPOSALS", proposals(4, {{0, 0, 640, 480}}));
+  // seq 4: two boxes overlapping by IoU 0.98: the less confident is not published.
+  l.bus.publish("PROPOSALS", proposals(4, {{0, 0, 640, 480}, {0, 0, 640, 470}}));
 
   ASSERT_TRUE(l.pump([&] { return l.answers >= 6; }, 20s)) << l.answers << " answers\n"
                                                            << node.log();
@@ -177,6 +178,7 @@ TEST(RecognizerNode, SurvivesBadInputAndCountsIt) {
   EXPECT_EQ(counter(s, "boxes_rejected.zero_size"), 2);
   EXPECT_EQ(counter(s, "boxes_rejected.not_finite"), 1);
   EXPECT_EQ(counter(s, "boxes_clipped"), 1);
+  EXPECT_EQ(counter(s, "boxes_suppressed"), 1);
   EXPECT_EQ(counter(s, "proposals_without_frame"), 2);
   EXPECT_EQ(counter(s, "frames_corrupt"), 1);
   EXPECT_EQ(counter(s, "classes_missing"), 1);

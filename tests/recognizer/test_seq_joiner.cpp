@@ -1,7 +1,9 @@
 // The CAMERA / PROPOSALS join on seq: bounded buffers, proposals for frames never seen, waiting,
-// time-outs and a camera stream that restarts; and config/recognizer.yaml equals the defaults.
+// time-outs and a camera stream that restarts; config/recognizer.yaml equals the defaults, and bad
+// options are refused naming the key.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "common/config.h"
@@ -92,4 +94,23 @@ TEST(ShippedConfig, RecognizerYamlEqualsDefaults) {
                                                          "recognizer", false);
   RecognizerOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+}
+
+TEST(RecognizerConfig, AnUnknownEncoderOrANonPositiveSuppressionIoUIsRefusedNamingTheKey) {
+  RecognizerOptions o;
+  EXPECT_NO_THROW(checkOptions(o, "recognizer.yaml"));
+  o.nms_iou = 1.0;  // no suppression
+  EXPECT_NO_THROW(checkOptions(o, "recognizer.yaml"));
+  for (const double bad : {0.0, -0.5, std::nan("")}) {
+    o.nms_iou = bad;
+    try {
+      checkOptions(o, "my.yaml");
+      ADD_FAILURE() << "nms_iou " << bad << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("my.yaml: key 'recognizer.nms_iou'"), std::string::npos) << e.what();
+    }
+  }
+  o = RecognizerOptions{};
+  o.encoder = "fast";
+  EXPECT_THROW(checkOptions(o, "my.yaml"), ConfigError);
 }

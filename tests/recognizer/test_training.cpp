@@ -154,6 +154,9 @@ TEST(Training, ProposalBoxesAreLabelledByTheirOverlapWithTheGroundTruth) {
   };
   const std::vector<std::string> classes{"bowl", "mug", "background"};
   TrainOptions o;  // positives from IoU 0.5, background below 0.4
+  // Suppression at IoU 0.5 in rank order: the top of the mug overlaps the first box by IoU 0.55.
+  EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, -1, -1, 2, 2, 2}));
+  o.proposal_nms_iou = 1;  // every box
   EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, 1, -1, 2, 2, 2}));
   o.proposal_background_iou = 0.5;  // no gap: every box is an example
   EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, 1, 2, 2, 2, 2}));
@@ -203,6 +206,37 @@ TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
     for (float lp : b.log_prob) sum += std::exp(static_cast<double>(lp));
     EXPECT_NEAR(sum, 1.0, 1e-4);
   }
+}
+
+// Suppression after classification: of two boxes overlapping by IoU > 0.5 the one surer of an
+// object class stays, whatever the order of the request; the background's probability does not
+// count; IoU 0.5 itself is not suppressed; the survivors keep the request's order.
+TEST(Recognizer, SuppressionKeepsTheSurerOfTwoOverlappingBoxes) {
+  auto box = [](float x, float y, float w, float h, float p_object) {
+    BoxDetection b;
+    b.x = x, b.y = y, b.w = w, b.h = h;
+    b.log_prob = {std::log(p_object), std::log(0.01f), std::log(0.99f - p_object)};  // a, b, background
+    return b;
+  };
+  FrameDetections d;
+  d.classes = {"a", "b", "background"};
+  d.boxes = {box(0, 0, 100, 60, 0.6f),     // 0: a part ranked first: IoU 0.6 with 1
+             box(0, 0, 100, 100, 0.9f),    // 1: the whole, surer: kept
+             box(0, 0, 100, 100, 0.9f),    // 2: the same box, as sure: the earlier (1) stays
+             box(0, 50, 100, 100, 0.95f),  // 3: IoU 1/3 with 1, the surest: kept
+             box(200, 0, 50, 50, 0.02f),   // 4: background 0.97, object 0.02: suppressed by 5
+             box(200, 0, 50, 40, 0.05f),   // 5: IoU 0.8 with 4; background 0.94, object 0.05: kept
+             box(300, 0, 100, 50, 0.5f),   // 6: IoU exactly 0.5 with 7: both kept
+             box(300, 0, 50, 50, 0.4f)};   // 7
+  for (size_t i = 0; i < d.boxes.size(); ++i) d.boxes[i].candidate_id = static_cast<int32_t>(i);
+  FrameDetections none = d;
+  EXPECT_EQ(suppressOverlaps(&none, 1.0), 0);
+  EXPECT_EQ(none.boxes.size(), d.boxes.size());
+  EXPECT_EQ(suppressOverlaps(&d, 0.5), 3);
+  EXPECT_EQ(d.suppressed, 3);
+  std::vector<int32_t> kept;
+  for (const auto& b : d.boxes) kept.push_back(b.candidate_id);
+  EXPECT_EQ(kept, (std::vector<int32_t>{1, 3, 5, 6, 7}));
 }
 
 TEST(ModelFile, ReloadsToIdenticalPredictions) {

@@ -19,13 +19,7 @@
 
 namespace slamaware {
 
-double iou(const Box2& a, const Box2& b) {
-  const double x0 = std::max(a.x, b.x), y0 = std::max(a.y, b.y);
-  const double x1 = std::min(a.x + a.w, b.x + b.w), y1 = std::min(a.y + a.h, b.y + b.h);
-  const double inter = std::max(0.0, x1 - x0) * std::max(0.0, y1 - y0);
-  const double uni = a.w * a.h + b.w * b.h - inter;
-  return uni > 0 ? inter / uni : 0.0;
-}
+double iou(const Box2& a, const Box2& b) { return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h); }
 
 namespace {
 
