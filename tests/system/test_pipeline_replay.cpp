@@ -1,15 +1,18 @@
 // The whole pipeline (camera -> slam -> proposals -> recognizer -> objectmap, every stage its own
 // process) replayed lockstep on the bundled recording logs/sample.lcm, twice, in a private network
 // namespace: every frame gets its DETECTIONS and OBJECT_MAP, the two runs publish byte-identical
-// payloads on both channels, and the recognised objects are there (not only empty messages).
+// payloads on both channels, and the recognised objects are there (not only empty messages); no
+// two published boxes of a frame overlap by IoU > 0.5 (DESIGN.md §3), though the proposals did.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
 #include "common/bus/log_reader.h"
 #include "common/bus/system_config.h"
+#include "common/geometry.h"
 #include "slamaware/detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
+#include "slamaware/proposals_t.hpp"
 #include "tests/support/test_support.h"
 #include "tests/system/lockstep_pipeline.h"
 #include "tools/eval/pipeline_run.h"
@@ -22,6 +25,7 @@ namespace {
 struct Recording {
   std::vector<std::vector<uint8_t>> detections, object_maps;
   int camera_frames = 0;
+  int64_t proposal_boxes = 0, overlapping_proposal_pairs = 0;
 };
 
 Recording record(const std::string& log_path, const Channels& ch) {
@@ -30,6 +34,13 @@ Recording record(const std::string& log_path, const Channels& ch) {
   while (auto m = reader.next()) {
     if (m->channel == ch.detections) r.detections.push_back(m->data);
     if (m->channel == ch.object_map) r.object_maps.push_back(m->data);
+    proposals_t p;
+    if (m->channel == ch.proposals && p.decode(m->data.data(), 0, static_cast<int>(m->data.size())) > 0) {
+      r.proposal_boxes += p.num_boxes;
+      for (const box_t& a : p.boxes)
+        for (const box_t& b : p.boxes)
+          r.overlapping_proposal_pairs += &a < &b && rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > 0.5;
+    }
     r.camera_frames += m->channel == ch.camera;
   }
   return r;
@@ -74,8 +85,17 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
     detections_t d;
     ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
     boxes += d.num_boxes;
+    for (int i = 0; i < d.num_boxes; ++i)
+      for (int j = i + 1; j < d.num_boxes; ++j) {
+        const box_t& a = d.boxes[static_cast<size_t>(i)];
+        const box_t& b = d.boxes[static_cast<size_t>(j)];
+        EXPECT_LE(rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h), 0.5) << "DETECTIONS seq " << d.seq;
+      }
   }
   EXPECT_GT(boxes, frames) << "fewer than one classified box per frame";
+  // The proposals publish every box they draw; the recognizer suppressed the overlapping ones.
+  EXPECT_GT(runs[0].overlapping_proposal_pairs, 0);
+  EXPECT_LT(boxes, runs[0].proposal_boxes);
   object_map_t last;
   const auto& bytes = runs[0].object_maps.back();
   ASSERT_EQ(last.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
