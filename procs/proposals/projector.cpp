@@ -158,10 +158,11 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     return a.candidate_id < b.candidate_id;
   });
   std::vector<ProposalBox> kept;
+  const bool suppress = o.nms_iou < 1;  // else the recognizer does it (config/recognizer.yaml)
   for (const auto& b : boxes) {
     bool suppressed = false;
-    for (const auto& k : kept)
-      if (boxIou(b, k) > o.nms_iou) {
+    for (size_t k = 0; suppress && k < kept.size(); ++k)
+      if (boxIou(b, kept[k]) > o.nms_iou) {
         suppressed = true;
         break;
       }

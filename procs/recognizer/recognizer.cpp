@@ -115,25 +115,18 @@ int suppressOverlaps(FrameDetections* d, double max_iou) {
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return confidence[a] > confidence[b]; });
   std::vector<size_t> kept;
-  std::vector<char> keep(n, 0);
   for (size_t i : order) {
     const BoxDetection& a = d->boxes[i];
-    bool overlaps = false;
-    for (size_t k : kept) {
-      const BoxDetection& b = d->boxes[k];
-      if (rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > max_iou) {
-        overlaps = true;
-        break;
-      }
-    }
-    if (overlaps) continue;
-    kept.push_back(i);
-    keep[i] = 1;
+    if (std::none_of(kept.begin(), kept.end(), [&](size_t k) {
+          const BoxDetection& b = d->boxes[k];
+          return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > max_iou;
+        }))
+      kept.push_back(i);
   }
+  std::sort(kept.begin(), kept.end());  // request order
   std::vector<BoxDetection> out;
   out.reserve(kept.size());
-  for (size_t i = 0; i < n; ++i)
-    if (keep[i]) out.push_back(std::move(d->boxes[i]));
+  for (size_t i : kept) out.push_back(std::move(d->boxes[i]));
   d->boxes = std::move(out);
   const int removed = static_cast<int>(n - kept.size());
   d->suppressed += removed;

@@ -37,9 +37,12 @@ Recording record(const std::string& log_path, const Channels& ch) {
     proposals_t p;
     if (m->channel == ch.proposals && p.decode(m->data.data(), 0, static_cast<int>(m->data.size())) > 0) {
       r.proposal_boxes += p.num_boxes;
-      for (const box_t& a : p.boxes)
-        for (const box_t& b : p.boxes)
-          r.overlapping_proposal_pairs += &a < &b && rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > 0.5;
+      for (size_t i = 0; i < p.boxes.size(); ++i)
+        for (size_t j = i + 1; j < p.boxes.size(); ++j) {
+          const box_t& a = p.boxes[i];
+          const box_t& b = p.boxes[j];
+          r.overlapping_proposal_pairs += rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > 0.5;
+        }
     }
     r.camera_frames += m->channel == ch.camera;
   }
