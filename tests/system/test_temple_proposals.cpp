@@ -1,7 +1,7 @@
 // The proposals target on real data: SLAM and the proposals stage (each its own process, lockstep,
 // in a private network namespace) on every frame of the Middlebury temple ring, scored against its
 // ground-truth boxes. The temple must be proposed (IoU >= 0.5) in at least 90 % of the views SLAM
-// localises (procs/proposals/README.md: 40 of 43; the ground truth's own offset bounds it at 41).
+// localises (procs/proposals/README.md: 41 of 43, all that the ground truth's own offset allows).
 #include <gtest/gtest.h>
 
 #include "common/bus/system_config.h"
