@@ -2,8 +2,10 @@
 // object of medians:
 //   recognizer_ms_per_frame            a 640x480 frame with 30 boxes: features, PCA, assignment,
 //                                      encoding (the encoder the cost model picks) and scoring
-//   recognizer_ms_per_frame_12_boxes   the same with 12 boxes of 20 to 128 px, as the proposals
-//                                      send them (features and codes only where a box is)
+//   recognizer_ms_per_frame_12_boxes   the same with 12 boxes of 20 to 128 px, about what a frame
+//                                      publishes (features and codes only where a box is; the
+//                                      proposals send about twice as many, the suppression drops
+//                                      the rest)
 //   flair_speedup_vs_direct_1000_boxes direct time / FLAIR time (table build included) for 1000
 //                                      boxes of uniformly random size from 20x20 px to the image
 //   flair_area_ratio_full_vs_32px      FLAIR time per box: whole-image box / 32x32 box
@@ -186,8 +188,8 @@ int main(int argc, char** argv) {
     j["recognizer_score_ms_30_boxes"] = median(score);
     j["recognizer_frames_using_flair_pct"] = 100.0 * flair_frames / std::max<size_t>(1, t5.size());
     j["recognizer_jpeg_decode_ms"] = median(decode);
-    // A frame as the pipeline sends it: about 12 proposal boxes of 20 to 128 px (features and
-    // codes are computed only where a box is).
+    // About 12 boxes of 20 to 128 px, as many as a frame publishes (features and codes are
+    // computed only where a box is).
     std::vector<double> t12;
     for (int r = 0; r < 3; ++r)
       for (const cv::Mat& f : frames) {
