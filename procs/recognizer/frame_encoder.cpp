@@ -1,6 +1,7 @@
 #include "procs/recognizer/frame_encoder.h"
 
 #include <chrono>
+#include <opencv2/core.hpp>
 #include <stdexcept>
 
 namespace slamaware {
@@ -125,6 +126,22 @@ void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& box
       direct.encode(boxes[i], out->row(static_cast<int64_t>(i)));
   }
   st.encode_ms = msSince(t0);
+}
+
+double FrameEncoder::warmUp(int width, int height, EncoderKind kind) {
+  const auto t0 = Clock::now();
+  PyramidBox whole;
+  if (width <= 0 || height <= 0 || !snap(0, 0, width, height, width, height, &whole)) return 0;
+  cv::Mat noise(height, width, CV_8UC3);
+  cv::RNG(1).fill(noise, cv::RNG::UNIFORM, 0, 256);
+  const std::vector<PyramidBox> boxes{whole};
+  ReusableMatrix out;
+  encode(noise, boxes, EncoderKind::kDirect, &out);
+  const double table_mb =
+      FlairEncoder::tableBytesFor(whole.cells(), params_.vocabulary_size, params_.pca_dims) / 1e6;
+  if (kind != EncoderKind::kDirect && table_mb <= cost_.flair_max_table_mb)
+    encode(noise, boxes, EncoderKind::kFlair, &out);
+  return msSince(t0);
 }
 
 }  // namespace slamaware

@@ -65,6 +65,14 @@ class FrameEncoder {
   void encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes, EncoderKind kind,
               ReusableMatrix* out, Stats* stats = nullptr);
 
+  /// Encodes one box over a whole `width` x `height` frame of noise with the direct encoder and,
+  /// unless `kind` is kDirect or the tables would exceed flair_max_table_mb, with FLAIR, so that
+  /// the memory of the features, codes and tables of any frame of that size exists before the
+  /// first real frame: the buffers grow to a frame's span and stay, and growing them is most of a
+  /// cold frame's time (a whole VGA frame: about 540 ms the first time, 70 ms after). Later
+  /// results do not depend on it. Returns the ms spent.
+  double warmUp(int width, int height, EncoderKind kind);
+
   /// The last frame's codes (for benchmarks and tests).
   const FrameCodes& codes() const { return codes_; }
   const EncodingParams& params() const { return params_; }

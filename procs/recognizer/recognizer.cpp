@@ -98,6 +98,12 @@ void checkOptions(const RecognizerOptions& options, const std::string& source) {
   if (!(options.nms_iou > 0))
     throw ConfigError(source + ": key 'recognizer.nms_iou': must be above 0 (1 or more: no suppression), got " +
                       std::to_string(options.nms_iou));
+  const auto size_ok = [](int px) { return px >= 0 && px <= kMaxWarmUpPx; };
+  if (!size_ok(options.warm_up_width) || !size_ok(options.warm_up_height) ||
+      (options.warm_up_width == 0) != (options.warm_up_height == 0))
+    throw ConfigError(source + ": keys 'recognizer.warm_up_width' / 'warm_up_height': a frame size of 1 to " +
+                      std::to_string(kMaxWarmUpPx) + " px each, or both 0 (none), got " +
+                      std::to_string(options.warm_up_width) + " x " + std::to_string(options.warm_up_height));
 }
 
 int suppressOverlaps(FrameDetections* d, double max_iou) {

@@ -30,6 +30,8 @@ struct RecognizerOptions {
   int proposals_buffer = 30;       ///< PROPOSALS waiting for their frame
   double pending_timeout_s = 2.0;  ///< s a PROPOSALS message waits for its frame (wall clock)
   double model_retry_s = 5.0;      ///< s between attempts to load a missing or bad model
+  /// Frame size whose buffers are prepared when the model loads (FrameEncoder::warmUp); 0: none.
+  int warm_up_width = 640, warm_up_height = 480;
 
   template <class V>
   void visit(V& v) {
@@ -47,11 +49,17 @@ struct RecognizerOptions {
     v("proposals_buffer", proposals_buffer, "PROPOSALS waiting for their frame");
     v("pending_timeout_s", pending_timeout_s, "s a PROPOSALS message waits for its CAMERA frame");
     v("model_retry_s", model_retry_s, "s between attempts to load a missing or unreadable model");
+    v("warm_up_width", warm_up_width,
+      "px, frame width whose buffers are prepared when the model loads (0: none; the first frames pay)");
+    v("warm_up_height", warm_up_height, "px, frame height of the same");
   }
 };
 
-/// Throws ConfigError naming `source` (the file) and the key for an unknown encoder or an
-/// `nms_iou` that is not positive.
+/// Largest warm-up frame side accepted (a typo must not allocate gigabytes).
+constexpr int kMaxWarmUpPx = 4096;
+
+/// Throws ConfigError naming `source` (the file) and the key for an unknown encoder, an
+/// `nms_iou` that is not positive, or a warm-up size that is not a frame size (or 0 x 0).
 void checkOptions(const RecognizerOptions& options, const std::string& source);
 
 /// A proposal box: pixels, (x, y) = top-left corner.
@@ -105,6 +113,10 @@ class Recognizer {
   /// or lie outside the image are rejected (counted); boxes partly outside are clipped.
   /// Deterministic for a given input.
   FrameDetections recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& boxes);
+
+  /// Prepares the buffers of frames of this size with the configured encoder
+  /// (FrameEncoder::warmUp); returns the ms spent.
+  double warmUp(int width, int height) { return encoder_.warmUp(width, height, kind_); }
 
  private:
   std::shared_ptr<const RecognizerModel> model_;

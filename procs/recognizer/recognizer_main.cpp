@@ -69,6 +69,7 @@ class RecognizerNode {
     try {
       auto model = std::make_shared<const RecognizerModel>(loadModel(options_.model));
       recognizer_ = std::make_unique<Recognizer>(model, options_);
+      warmUp();
       const auto missing = recognizer_->missingClasses();
       status_.setCounter("classes_missing", static_cast<int64_t>(missing.size()));
       spdlog::info("model {}: classes {}", options_.model, fmt::join(recognizer_->classes(), ", "));
@@ -88,6 +89,22 @@ class RecognizerNode {
       status_.setState(StatusReporter::State::kDegraded);
       spdlog::error("{} (answering with empty detections; retrying every {:.0f} s)", e.what(),
                     options_.model_retry_s);
+    }
+  }
+
+  /// Grows the buffers of a whole frame before the first one arrives; without it the first frames
+  /// with boxes take several times as long (growing the memory of the features, codes and FLAIR
+  /// tables), and their latency is the stream's worst.
+  void warmUp() {
+    try {
+      const double ms = recognizer_->warmUp(options_.warm_up_width, options_.warm_up_height);
+      status_.setCounter("warm_up_ms", static_cast<int64_t>(ms));
+      if (ms > 0)
+        spdlog::info("buffers for {}x{} frames prepared in {:.0f} ms", options_.warm_up_width,
+                     options_.warm_up_height, ms);
+    } catch (const std::exception& e) {
+      spdlog::warn("preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
+                   options_.warm_up_width, options_.warm_up_height, e.what());
     }
   }
 

@@ -216,3 +216,25 @@ TEST(Encoders, CostModelPicksDirectForFewSmallBoxesAndFlairForMany) {
   EXPECT_EQ(enc.choose({small}), EncoderKind::kDirect);
   EXPECT_EQ(enc.choose(std::vector<PyramidBox>(500, large)), EncoderKind::kFlair);
 }
+
+TEST(Encoders, WarmingUpForAFrameSizeChangesNoVector) {
+  // Warming up grows every buffer to a whole frame of noise and leaves it there; a frame encoded
+  // afterwards must not see anything of it (a buffer read before it is written would).
+  Fixture& fx = fixture();
+  FrameEncoder cold(fx.params, fx.pca, fx.vocabulary), warm(fx.params, fx.pca, fx.vocabulary);
+  EXPECT_EQ(warm.warmUp(0, 0, EncoderKind::kAuto), 0.0);  // none
+  EXPECT_GT(warm.warmUp(fx.frame.cols, fx.frame.rows, EncoderKind::kAuto), 0.0);
+  std::vector<PyramidBox> boxes(3);
+  ASSERT_TRUE(cold.snap(37, 51, 90, 70, fx.frame.cols, fx.frame.rows, &boxes[0]));
+  ASSERT_TRUE(cold.snap(300, 200, 150, 120, fx.frame.cols, fx.frame.rows, &boxes[1]));
+  ASSERT_TRUE(cold.snap(560, 400, 80, 80, fx.frame.cols, fx.frame.rows, &boxes[2]));  // at the border
+  for (const EncoderKind kind : {EncoderKind::kDirect, EncoderKind::kFlair}) {
+    ReusableMatrix a, b;
+    cold.encode(fx.frame, boxes, kind, &a);
+    warm.encode(fx.frame, boxes, kind, &b);
+    ASSERT_EQ(a.rows(), b.rows());
+    for (int64_t r = 0; r < a.rows(); ++r)
+      for (int64_t c = 0; c < a.cols(); ++c)
+        ASSERT_EQ(a.row(r)[c], b.row(r)[c]) << encoderName(kind) << " box " << r << " element " << c;
+  }
+}

@@ -96,7 +96,7 @@ TEST(ShippedConfig, RecognizerYamlEqualsDefaults) {
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
 }
 
-TEST(RecognizerConfig, AnUnknownEncoderOrANonPositiveSuppressionIoUIsRefusedNamingTheKey) {
+TEST(RecognizerConfig, AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSizeIsRefusedNamingTheKey) {
   RecognizerOptions o;
   EXPECT_NO_THROW(checkOptions(o, "recognizer.yaml"));
   o.nms_iou = 1.0;  // no suppression
@@ -113,4 +113,18 @@ TEST(RecognizerConfig, AnUnknownEncoderOrANonPositiveSuppressionIoUIsRefusedNami
   o = RecognizerOptions{};
   o.encoder = "fast";
   EXPECT_THROW(checkOptions(o, "my.yaml"), ConfigError);
+  // The warm-up frame: a size, or none.
+  o = RecognizerOptions{};
+  o.warm_up_width = o.warm_up_height = 0;
+  EXPECT_NO_THROW(checkOptions(o, "my.yaml"));
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{-640, 480}, {640, 0}, {0, 480}, {64000, 48000}}) {
+    o.warm_up_width = w;
+    o.warm_up_height = h;
+    try {
+      checkOptions(o, "my.yaml");
+      ADD_FAILURE() << "warm-up " << w << " x " << h << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("my.yaml: keys 'recognizer.warm_up_width'"), std::string::npos) << e.what();
+    }
+  }
 }
