@@ -62,7 +62,7 @@ TEST(ReportMarkdown, RuntimeAgainstTheNumberOfClassesWhenTheBenchHasIt) {
   r["recognizer_ms_per_frame_12_boxes"] = 21.3;
   const std::string md = renderMarkdown(r);
   EXPECT_NE(md.find("| 5 | 80.0 | 1.00 |"), std::string::npos) << md;
-  EXPECT_NE(md.find("as the proposals send them (features only where a box is): 21.3 ms per frame"),
+  EXPECT_NE(md.find("about as many as a frame publishes (features only where a box is): 21.3 ms per frame"),
             std::string::npos) << md;
   EXPECT_NE(md.find("| 51 | 84.0 | 1.05 |"), std::string::npos) << md;
   EXPECT_EQ(md.find("Recognition: single view"), std::string::npos) << "no recognition in a bench report";
