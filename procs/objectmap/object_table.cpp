@@ -66,22 +66,59 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     const std::function<bool(size_t, size_t, size_t)>& listed,
     const std::function<double(size_t, size_t, size_t)>& rank,
     const std::function<bool(size_t, const std::vector<VoxelKey>&, const std::vector<VoxelKey>&)>& joins) {
-  std::unordered_map<VoxelKey, std::vector<size_t>> owners;
-  for (size_t i = 0; i < voxels.size(); ++i)
-    for (VoxelKey k : *voxels[i]) owners[k].push_back(i);
-  std::map<std::pair<size_t, size_t>, size_t> shared;
-  for (const auto& [key, list] : owners)
-    for (size_t a = 0; a < list.size(); ++a)
-      for (size_t b = a + 1; b < list.size(); ++b) ++shared[{list[a], list[b]}];
+  // The voxels each pair of items shares, from one sorted list of (voxel, item): a run of one voxel
+  // lists its owners in ascending order (each item's voxels are sorted and unique). Then, item by
+  // item, a dense counter over the later items it shares voxels with. This runs for every DETECTIONS
+  // message over every candidate's voxels; hash and tree maps allocating a node per voxel and per
+  // pair were most of its time.
+  const size_t items = voxels.size();
+  std::vector<std::pair<VoxelKey, uint32_t>> owned;
+  size_t total = 0;
+  for (const auto* v : voxels) total += v->size();
+  owned.reserve(total);
+  for (size_t i = 0; i < items; ++i)
+    for (VoxelKey k : *voxels[i]) owned.emplace_back(k, static_cast<uint32_t>(i));
+  std::sort(owned.begin(), owned.end());
+  std::vector<std::pair<size_t, size_t>> runs;       // [begin, end) in owned: two or more owners
+  std::vector<std::vector<uint32_t>> runs_of(items);  // item -> its voxels' runs
+  for (size_t p = 0; p < owned.size();) {
+    size_t end = p + 1;
+    while (end < owned.size() && owned[end].first == owned[p].first) ++end;
+    if (end - p > 1) {
+      for (size_t q = p; q < end; ++q) runs_of[owned[q].second].push_back(static_cast<uint32_t>(runs.size()));
+      runs.emplace_back(p, end);
+    }
+    p = end;
+  }
   std::vector<std::tuple<double, size_t, size_t>> pairs;
-  for (const auto& [pair, n] : shared)
-    if (listed(pair.first, pair.second, n))
-      pairs.emplace_back(rank(n, voxels[pair.first]->size(), voxels[pair.second]->size()), pair.first, pair.second);
+  std::vector<uint32_t> shared(items, 0), touched;
+  for (size_t i = 0; i < items; ++i) {
+    for (uint32_t r : runs_of[i])
+      for (size_t q = runs[r].first; q < runs[r].second; ++q) {
+        const uint32_t j = owned[q].second;
+        if (j > i && shared[j]++ == 0) touched.push_back(j);
+      }
+    std::sort(touched.begin(), touched.end());
+    for (uint32_t j : touched) {
+      const size_t n = shared[j];
+      shared[j] = 0;
+      if (listed(i, j, n)) pairs.emplace_back(rank(n, voxels[i]->size(), voxels[j]->size()), i, j);
+    }
+    touched.clear();
+  }
   std::sort(pairs.begin(), pairs.end());
   return joinInOrder(pairs, voxels, uf, [&](const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
-    std::vector<VoxelKey> both;
-    std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
-    return joins(both.size(), a, b);
+    size_t both = 0;  // |a ∩ b| of the two sorted sets, without building it
+    for (auto i = a.begin(), j = b.begin(); i != a.end() && j != b.end();) {
+      if (*i < *j) {
+        ++i;
+      } else if (*j < *i) {
+        ++j;
+      } else {
+        ++both, ++i, ++j;
+      }
+    }
+    return joins(both, a, b);
   });
 }
 
