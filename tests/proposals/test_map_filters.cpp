@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "procs/proposals/candidate_map.h"
@@ -81,6 +82,81 @@ TEST(DensityClustering, StrayPointsBetweenObjectsDoNotBridgeThem) {
   o.min_neighbours = 1;
   label = densityClusters(points, {}, o, &count);
   EXPECT_TRUE(joined(label, count)) << "single linkage should chain through the bridge";
+}
+
+// The grid version against DBSCAN by its definition, every pair of points compared: the same
+// core points, the same clusters numbered by their lowest point, border points in the cluster of
+// their nearest core point; with and without colour, on blobs, a sparse haze between them and
+// points exactly on cell boundaries.
+TEST(DensityClustering, EqualsDbscanByDefinition) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1, 1), c(0, 255);
+  std::vector<Eigen::Vector3f> points, colours;
+  for (int blob = 0; blob < 6; ++blob) {
+    const Eigen::Vector3f centre(0.08f * blob, 0.03f * (blob % 2), 0);
+    const Eigen::Vector3f colour(c(rng), c(rng), c(rng));
+    for (int i = 0; i < 250; ++i) {
+      points.push_back(centre + 0.025f * Eigen::Vector3f(u(rng), u(rng), u(rng)));
+      colours.push_back(colour + Eigen::Vector3f::Constant(20 * u(rng)));
+    }
+  }
+  for (int i = 0; i < 300; ++i) {
+    points.emplace_back(0.25f + 0.3f * u(rng), 0.1f * u(rng), 0.05f * u(rng));
+    colours.emplace_back(c(rng), c(rng), c(rng));
+  }
+  for (int i = 0; i < 40; ++i) {  // on multiples of the radius
+    points.emplace_back(0.008f * (i % 7), 0.008f * (i % 3), 0);
+    colours.emplace_back(100, 100, 100);
+  }
+  for (const float colour_distance : {0.f, 40.f}) {
+    DensityClusterOptions o;
+    o.radius = 0.008f;
+    o.min_neighbours = 4;
+    o.colour_distance = colour_distance;
+    int count = 0;
+    const std::vector<int> label = densityClusters(points, colours, o, &count);
+
+    const size_t n = points.size();
+    const float r2 = o.radius * o.radius, c2 = colour_distance * colour_distance;
+    std::vector<char> core(n);
+    for (size_t i = 0; i < n; ++i) {
+      int near = 0;
+      for (size_t j = 0; j < n; ++j) near += (points[j] - points[i]).squaredNorm() <= r2;
+      core[i] = near >= o.min_neighbours;
+    }
+    std::vector<int> expected(n, -1);
+    int expected_count = 0;
+    for (size_t seed = 0; seed < n; ++seed) {  // flood fill over linked core points
+      if (!core[seed] || expected[seed] >= 0) continue;
+      std::vector<size_t> stack{seed};
+      expected[seed] = expected_count;
+      while (!stack.empty()) {
+        const size_t i = stack.back();
+        stack.pop_back();
+        for (size_t j = 0; j < n; ++j)
+          if (core[j] && expected[j] < 0 && (points[j] - points[i]).squaredNorm() <= r2 &&
+              (colour_distance <= 0 || (colours[j] - colours[i]).squaredNorm() < c2)) {
+            expected[j] = expected_count;
+            stack.push_back(j);
+          }
+      }
+      ++expected_count;
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (core[i]) continue;
+      float best = std::numeric_limits<float>::infinity();
+      for (size_t j = 0; j < n; ++j) {
+        const float d = (points[j] - points[i]).squaredNorm();
+        if (core[j] && d <= r2 && (d < best || (d == best && expected[j] < expected[i]))) {
+          best = d;
+          expected[i] = expected[j];
+        }
+      }
+    }
+    EXPECT_EQ(count, expected_count) << "colour distance " << colour_distance;
+    EXPECT_EQ(label, expected) << "colour distance " << colour_distance;
+    EXPECT_GT(expected_count, 3) << "the cloud should hold several clusters";
+  }
 }
 
 // With little roll, the cameras' x axes are horizontal: up is perpendicular to all of them even
