@@ -70,7 +70,7 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
   // lists its owners in ascending order (each item's voxels are sorted and unique). Then, item by
   // item, a dense counter over the later items it shares voxels with. This runs for every DETECTIONS
   // message over every candidate's voxels; hash and tree maps allocating a node per voxel and per
-  // pair were most of its time.
+  // pair took a quarter of the object map's time in a real-time replay.
   const size_t items = voxels.size();
   std::vector<std::pair<VoxelKey, uint32_t>> owned;
   size_t total = 0;
