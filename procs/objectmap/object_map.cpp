@@ -302,7 +302,7 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
   last_utime_ = d.utime;
   last_seq_ = d.seq;
   if (nb == 0 || nc == 0) {
-    updateObjects();  // occupancy may have changed since the last frame
+    if (!defer_regrouping_) updateObjects();  // occupancy may have changed since the last frame
     if (report) *report = r;
     return true;
   }
@@ -388,7 +388,8 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
   ++changes_;
   // Objects are regrouped here and only here (and after a restore): what the map shows then
   // depends only on the messages fused so far, never on when it is read, saved or queried.
-  updateObjects();
+  // Deferred (real time): at the node's regroup().
+  if (!defer_regrouping_) updateObjects();
   if (report) *report = r;
   return true;
 }
@@ -401,7 +402,14 @@ void ObjectMapEngine::updateObjects() {
                    options_.grouping, classes_.size(), [this] { return next_object_id_++; },
                    options_.fusion());
     s.dirty = false;
+    ++regroupings_;
   }
+}
+
+bool ObjectMapEngine::regroupPending() const {
+  for (const auto& [id, seg] : segments_)
+    if (seg->dirty) return true;
+  return false;
 }
 
 const Object* ObjectMapEngine::objectOfCandidate(int32_t slam_map_id, int32_t candidate) const {
@@ -707,6 +715,7 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
   fresh.have_camera_ = have_camera_;
   fresh.updateObjects();
   fresh.changes_ = 0;
+  fresh.defer_regrouping_ = defer_regrouping_;
   *this = std::move(fresh);
 }
 

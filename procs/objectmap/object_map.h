@@ -16,6 +16,9 @@
 // regrouped after each DETECTIONS (and after a restore): reading the map (objectMap(), answer(),
 // snapshot(): const) never changes it, so in lockstep the objects and their ids do not depend on
 // when the node saved or was queried; occupancy changes show at the next DETECTIONS.
+// Regrouping is the costly part and its cost grows with the session (every candidate of a segment
+// is grouped again); in real time the node defers it (deferRegrouping()) and calls regroup() at
+// most every regroup_period_s, before answering a query and before the last save.
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -114,8 +117,18 @@ class ObjectMapEngine {
   /// inconsistent; the state is then unchanged.
   void restore(const MapSnapshot& snapshot);
 
-  /// Increments whenever objects or occupancy may have changed (publish and save on change).
+  /// Increments whenever objects or occupancy may have changed (save on change).
   int64_t changes() const { return changes_; }
+
+  /// true: DETECTIONS only collect evidence and votes, and the objects change at regroup() (real
+  /// time); false (the default: lockstep, the evaluator): regrouped after every DETECTIONS.
+  void deferRegrouping(bool defer) { defer_regrouping_ = defer; }
+  /// Whether inputs since the last regrouping may change the objects.
+  bool regroupPending() const;
+  /// Regroups the segments whose voxels or evidence changed.
+  void regroup() { updateObjects(); }
+  /// Increments at each regrouping that changed a segment (publish on change).
+  int64_t regroupings() const { return regroupings_; }
   const std::vector<std::string>& classes() const { return classes_; }
   /// Segments by id.
   const std::map<int32_t, std::unique_ptr<Segment>>& segments() const { return segments_; }
@@ -152,6 +165,8 @@ class ObjectMapEngine {
   int64_t last_utime_ = 0;
   int32_t last_seq_ = -1;
   int64_t changes_ = 0;
+  bool defer_regrouping_ = false;
+  int64_t regroupings_ = 0;
 };
 
 }  // namespace slamaware

@@ -4,8 +4,9 @@
 // save_period_s and at shutdown, and loads it at start (procs/objectmap/README.md).
 //
 // Lockstep: exactly one OBJECT_MAP per DETECTIONS message, whose content depends only on the
-// inputs (no wall-clock or save information). Real time: OBJECT_MAP whenever the map changed and
-// every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and never stops the process; a
+// inputs (no wall-clock or save information). Real time: the objects are regrouped at most every
+// regroup_period_s (and before a query's answer and the last save), and OBJECT_MAP goes out
+// whenever they were and every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and never stops the process; a
 // damaged map file is refused with a message naming it, and the previous good generation is used.
 #include <spdlog/spdlog.h>
 
@@ -67,6 +68,7 @@ class ObjectMapNode {
         options_(options),
         engine_(options),
         store_(options.persistence.dir) {
+    deferRegrouping();
     const size_t max_msg = static_cast<size_t>(sys.bus.max_message_bytes);
     bus_.subscribe<camera_info_t>(
         ch_.camera_info,
@@ -126,6 +128,7 @@ class ObjectMapNode {
       return;
     }
     engine_ = std::move(*loaded.engine);
+    deferRegrouping();
     saved_changes_ = engine_.changes();
     status_.setCounter("loaded_generation", report.generation);
     status_.setCounter("load_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
@@ -135,9 +138,10 @@ class ObjectMapNode {
                  report.failures.empty() ? "" : " (newer generations were refused, see above)");
   }
 
-  /// Periodic work: OBJECT_MAP (real time), saving, counters.
+  /// Periodic work: regrouping and OBJECT_MAP (real time), saving, counters.
   void tick() {
-    if (!lockstep_ && (engine_.changes() != published_changes_ ||
+    if (secondsSince(last_regroup_) >= options_.regroup_period_s) regroup();
+    if (!lockstep_ && (engine_.regroupings() != published_regroupings_ ||
                        secondsSince(last_publish_) >= options_.publish_period_s))
       publishMap();
     if (options_.persistence.save_period_s > 0 &&
@@ -149,6 +153,7 @@ class ObjectMapNode {
 
   /// Saves what changed since the last save (at shutdown).
   void finish() {
+    regroup();
     if (engine_.changes() != saved_changes_) save("shutdown");
     updateCounters();
   }
@@ -191,6 +196,7 @@ class ObjectMapNode {
   }
 
   void onQuery(const object_query_t& q) {
+    regroup();  // the answer holds everything fused so far
     object_query_reply_t reply = engine_.answer(q);
     reply.utime = wallUtime();
     status_.count("queries");
@@ -213,8 +219,22 @@ class ObjectMapNode {
       m.saved_utime = saved_utime_;
     }
     bus_.publish(ch_.object_map, m);
-    published_changes_ = engine_.changes();
+    published_regroupings_ = engine_.regroupings();
     last_publish_ = Clock::now();
+  }
+
+  /// Real time, deferred: regroups what the inputs since the last regrouping changed.
+  void deferRegrouping() {
+    deferred_ = !lockstep_ && options_.regroup_period_s > 0;
+    engine_.deferRegrouping(deferred_);
+  }
+  void regroup() {
+    if (!deferred_ || !engine_.regroupPending()) return;
+    const auto t0 = Clock::now();
+    engine_.regroup();
+    last_regroup_ = Clock::now();
+    status_.count("regroupings");
+    status_.setCounter("regroup_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
   }
 
   void save(const char* why) {
@@ -269,13 +289,14 @@ class ObjectMapNode {
   ObjectMapOptions options_;
   ObjectMapEngine engine_;
   MapStore store_;
+  bool deferred_ = false;  ///< regrouping deferred to regroup() (real time)
   bool can_save_ = false;
   bool save_failed_ = false;
-  int64_t published_changes_ = -1;
+  int64_t published_regroupings_ = -1;
   int64_t saved_changes_ = 0;
   std::string saved_path_;
   int64_t saved_utime_ = 0;
-  Clock::time_point last_publish_{}, last_save_ = Clock::now(), last_counters_{};
+  Clock::time_point last_publish_{}, last_save_ = Clock::now(), last_counters_{}, last_regroup_{};
 };
 
 /// --export: the newest good generation of `dir` as `out`/map.ot (the segment with the most

@@ -137,6 +137,9 @@ struct ObjectMapOptions {
   VotingOptions voting;
   GroupingOptions grouping;
   double publish_period_s = 1.0;  ///< s, OBJECT_MAP also goes out this often (real time)
+  /// Real time: s between regroupings of the objects (each costs more as the session grows);
+  /// lockstep and <= 0: after every DETECTIONS.
+  double regroup_period_s = 0.5;
   /// Each view's log p weighted by 1 - p(background | view) in the sum (procs/objectmap/fusion.h).
   bool objectness_weights = true;
   /// The posterior is the softmax of the summed evidence / W^e, W the views' total weight
@@ -153,6 +156,8 @@ struct ObjectMapOptions {
     v.section("voting", voting);
     v.section("grouping", grouping);
     v("publish_period_s", publish_period_s, "s between periodic OBJECT_MAP messages (real time)");
+    v("regroup_period_s", regroup_period_s,
+      "real time: s between regroupings of the objects (lockstep and <= 0: after every DETECTIONS)");
     v("objectness_weights", objectness_weights,
       "each view's log p weighted by 1 - p(background | view) in the fused sum (false: the paper's plain sum)");
     v("posterior_views_exponent", posterior_views_exponent,

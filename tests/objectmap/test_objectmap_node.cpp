@@ -25,10 +25,10 @@ using namespace std::chrono_literals;
 
 namespace {
 
-std::string writeConfig(const std::string& dir, double save_period_s) {
+std::string writeConfig(const std::string& dir, double save_period_s, double regroup_period_s = 0.5) {
   const std::string path = dir + "/objectmap.yaml";
   std::ofstream f(path);
-  f << "objectmap:\n  persistence:\n    dir: " << dir
+  f << "objectmap:\n  regroup_period_s: " << regroup_period_s << "\n  persistence:\n    dir: " << dir
     << "/map\n    save_period_s: " << save_period_s << "\n";
   return path;
 }
@@ -219,6 +219,37 @@ TEST(ObjectMapNode, AnswersQueriesByLabelAndRegionOverLcm) {
     EXPECT_EQ(r->num_objects, fresh ? 0 : 3) << (fresh ? "--fresh" : "reloaded");
     EXPECT_EQ(again.stop(), 0) << again.log();
   }
+}
+
+// Real time: frames only add evidence and votes; the objects are regrouped at most every
+// regroup_period_s (here 60 s: once, at the first frame), and a query regroups first, so its answer
+// holds every view fused so far. The node regrouped a handful of times, not once per frame.
+TEST(ObjectMapNode, RealTimeRegroupsAtMostEveryPeriodAndAQueryFirst) {
+  const std::string dir = test::tempDir("objectmap_node_regroup");
+  Client c;
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config", writeConfig(dir, 60, 60),
+                           "--lcm-url", test::testUrl()},
+                          dir + "/node.log");
+  ASSERT_TRUE(c.waitRunning()) << node.log();
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  c.bus.publish("CAMERA_INFO", w.cameraInfo());
+  const auto clouds = w.keyframeClouds(1);
+  for (int f = 0; f < 30; ++f) {
+    c.sendFrame(w, f, clouds);
+    c.bus.handle(5);
+  }
+  ASSERT_TRUE(c.pump([&] { return c.status && c.status->frames_processed >= 30; }, 10s)) << node.log();
+  const std::vector<object_map_t> before_query = c.maps;
+  ASSERT_FALSE(before_query.empty());
+  for (const auto& m : before_query)
+    for (const auto& o : m.objects) EXPECT_LT(o.num_views, 30) << "regrouped before the query";
+  auto r = c.ask(query(object_query_t::KIND_ALL));
+  ASSERT_TRUE(r) << "no reply\n" << node.log();
+  ASSERT_EQ(r->num_objects, 3) << node.log();
+  for (const auto& o : r->objects) EXPECT_EQ(o.num_views, 30) << o.label;
+  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "regroupings") >= 2; }, 5s)) << node.log();
+  EXPECT_LE(counter(*c.status, "regroupings"), 3);
+  EXPECT_TRUE(node.running()) << node.log();
 }
 
 TEST(ObjectMapNode, CountsMalformedMessagesOnEveryInputAndKeepsRunning) {

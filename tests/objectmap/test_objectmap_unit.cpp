@@ -8,6 +8,7 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "common/config.h"
 #include "procs/objectmap/candidate_voxels.h"
@@ -697,6 +698,41 @@ TEST(ObjectMapEngine, ACandidateLeadsToTheObjectThatHoldsIt) {
   ASSERT_TRUE(added);
   EXPECT_EQ(added->candidates, (std::vector<int32_t>{77}));
   EXPECT_EQ(added->num_views, 1);
+}
+
+// Real time defers the regrouping (the node regroups at most every regroup_period_s): the frames
+// only collect evidence and votes until regroup(), which then gives the objects that regrouping
+// after every frame gives (the same candidates, labels, views and voxels; ids may differ).
+TEST(ObjectMapEngine, ADeferredRegroupingGivesTheObjectsOfRegroupingEveryFrame) {
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  ObjectMapEngine every(ObjectMapOptions{});
+  feed(every, w, 1, 0, 40);
+  EXPECT_FALSE(every.regroupPending());
+
+  ObjectMapEngine deferred(ObjectMapOptions{});
+  deferred.deferRegrouping(true);
+  feed(deferred, w, 1, 0, 20);
+  EXPECT_TRUE(deferred.regroupPending());
+  EXPECT_EQ(deferred.numObjects(), 0u) << "nothing regrouped yet";
+  const int64_t before = deferred.regroupings();
+  deferred.regroup();
+  EXPECT_FALSE(deferred.regroupPending());
+  EXPECT_EQ(deferred.regroupings(), before + 1);
+  EXPECT_EQ(deferred.objectMap().num_objects, 3);
+  feed(deferred, w, 1, 20, 40);
+  EXPECT_EQ(deferred.objectMap().objects.at(0).num_views, 20) << "views since the regrouping not shown yet";
+  deferred.regroup();
+
+  const auto summary = [](const ObjectMapEngine& e) {
+    std::vector<std::tuple<std::vector<int32_t>, int, int32_t, int32_t>> s;
+    for (const auto& [id, o] : e.segments().at(1)->table.objects())
+      s.emplace_back(o.candidates, o.label, o.num_views, o.num_voxels);
+    std::sort(s.begin(), s.end());
+    return s;
+  };
+  EXPECT_EQ(summary(deferred), summary(every));
+  ASSERT_EQ(summary(every).size(), 3u);
+  EXPECT_EQ(std::get<2>(summary(every)[0]), 40);
 }
 
 TEST(ObjectMapEngine, ANewMapIdStartsANewSegmentAndTheOldOneIsUnchanged) {
