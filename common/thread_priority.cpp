@@ -1,6 +1,7 @@
 #include "common/thread_priority.h"
 
 #include <spdlog/spdlog.h>
+#include <pthread.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -31,5 +32,9 @@ bool lowerThreadPriority(int increment, const std::string& what) {
 void setBackgroundNice(int increment) { g_background_nice = increment < 0 ? 0 : increment; }
 
 bool enterBackground(const std::string& what) { return lowerThreadPriority(g_background_nice, what); }
+
+void nameThisThread(const std::string& name) {
+  pthread_setname_np(pthread_self(), name.substr(0, 15).c_str());
+}
 
 }  // namespace slamaware

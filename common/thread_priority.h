@@ -23,4 +23,7 @@ void setBackgroundNice(int increment);
 /// a library (a clustering job) that does not see the configuration.
 bool enterBackground(const std::string& what);
 
+/// Names the calling thread (at most 15 characters are kept) as top -H, ps -L and perf show it.
+void nameThisThread(const std::string& name);
+
 }  // namespace slamaware

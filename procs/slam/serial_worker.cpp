@@ -2,9 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/thread_priority.h"
+
 namespace slamaware {
 
-SerialWorker::SerialWorker(bool threaded) : threaded_(threaded) {
+SerialWorker::SerialWorker(bool threaded, std::string name)
+    : threaded_(threaded), name_(std::move(name)) {
   if (threaded_) thread_ = std::thread([this] { run(); });
 }
 
@@ -40,6 +43,7 @@ void SerialWorker::waitIdle() {
 }
 
 void SerialWorker::run() {
+  nameThisThread(name_);
   while (true) {
     std::function<void()> job;
     {

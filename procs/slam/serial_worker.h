@@ -5,13 +5,15 @@
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <string>
 #include <thread>
 
 namespace slamaware {
 
 class SerialWorker {
  public:
-  explicit SerialWorker(bool threaded);
+  /// `name`: the worker thread's name (top -H, perf).
+  SerialWorker(bool threaded, std::string name);
   /// Finishes the jobs already posted, then stops.
   ~SerialWorker();
   SerialWorker(const SerialWorker&) = delete;
@@ -25,6 +27,7 @@ class SerialWorker {
  private:
   void run();
   const bool threaded_;
+  const std::string name_;
   mutable std::mutex mutex_;
   std::condition_variable work_cv_, idle_cv_;
   std::deque<std::function<void()>> jobs_;

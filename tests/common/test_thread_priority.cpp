@@ -4,6 +4,9 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <pthread.h>
+
+#include <string>
 #include <thread>
 
 #include "common/thread_priority.h"
@@ -52,4 +55,21 @@ TEST(ThreadPriority, BackgroundTakesTheProcessIncrement) {
   setBackgroundNice(0);
   EXPECT_EQ(off, before);
   EXPECT_EQ(on, before + 3);
+}
+
+// top -H, ps -L and perf show a thread by the name the kernel keeps (15 characters at most).
+TEST(ThreadPriority, NamesTheCallingThreadOnly) {
+  const auto nameOf = [](pthread_t t) {
+    char buf[32] = {};
+    pthread_getname_np(t, buf, sizeof(buf));
+    return std::string(buf);
+  };
+  const std::string mine = nameOf(pthread_self());
+  std::string named;
+  std::thread([&] {
+    nameThisThread("slam-mapping-and-more");
+    named = nameOf(pthread_self());
+  }).join();
+  EXPECT_EQ(named, "slam-mapping-an");
+  EXPECT_EQ(nameOf(pthread_self()), mine);
 }

@@ -7,6 +7,7 @@
 #include <set>
 #include <shared_mutex>
 
+#include "common/thread_priority.h"
 #include "procs/slam/geometry/triangulation.h"
 #include "procs/slam/matching/matcher.h"
 #include "procs/slam/optimization/bundle_adjustment.h"
@@ -69,6 +70,7 @@ MappingEvents LocalMapper::takeEvents() {
 }
 
 void LocalMapper::run() {
+  nameThisThread("slam-mapping");
   while (true) {
     Job job;
     bool more = false;
