@@ -9,7 +9,9 @@
 //              realtime_recognizer_hz (frames classified per second; the recognizer takes the
 //              newest frame and drops the rest), latency_ms_p95 (CAMERA to the frame's DETECTIONS),
 //              rss_mb_total (sum of the processes' peak resident memory), realtime_cpu_cores
-//              (each process's CPU time, start-up included, per second of stream).
+//              (each process's CPU time, start-up included, per second of stream);
+// and lockstep_slam_work / realtime_slam_work: SLAM's keyframes, bundle adjustments, semi-dense
+// points and depth-filter frames skipped (its last SLAM_STATUS): what a CPU-starved SLAM gives up.
 // Times are the logger's receive times of the messages, so process start-up is not counted.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -24,6 +26,7 @@
 #include "slamaware/image_t.hpp"
 #include "slamaware/pose_t.hpp"
 #include "slamaware/proposals_t.hpp"
+#include "slamaware/status_t.hpp"
 #include "tools/eval/pipeline_run.h"
 
 using namespace slamaware;
@@ -36,12 +39,21 @@ struct RunTimes {
   std::map<int32_t, int64_t> camera, pose, proposals, detections;  ///< seq -> first receive time
   int64_t poses_located = 0;  ///< SLAM_POSE in TRACKING or RELOCALIZED
   int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
+  std::map<std::string, int64_t> slam_counters;  ///< of SLAM's last SLAM_STATUS
 };
 
 RunTimes readRun(const std::string& log_path, const Channels& ch) {
   RunTimes t;
   LogReader reader(log_path);
+  const std::string slam_status = ch.statusOf("slam");
   while (auto r = reader.next()) {
+    if (r->channel == slam_status) {
+      status_t m;
+      if (!decodeRecord(*r, &m)) continue;
+      for (int i = 0; i < m.num_counters; ++i)
+        t.slam_counters[m.counter_names[static_cast<size_t>(i)]] = m.counter_values[static_cast<size_t>(i)];
+      continue;
+    }
     if (r->channel == ch.camera) {
       image_t m;
       if (!decodeRecord(*r, &m)) continue;
@@ -74,6 +86,15 @@ std::vector<double> delays(const std::map<int32_t, int64_t>& from, const std::ma
     if (f != from.end()) ms.push_back(1e-3 * static_cast<double>(t - f->second));
   }
   return ms;
+}
+
+/// What SLAM built in a run: a real-time run starved of CPU skips depth-filter frames (fewer
+/// semi-dense points for the proposals) and makes fewer keyframes.
+nlohmann::json slamWork(const RunTimes& t) {
+  nlohmann::json j;
+  for (const char* k : {"keyframes", "bundle_adjustments", "depth_points", "depth_frames_skipped"})
+    if (auto it = t.slam_counters.find(k); it != t.slam_counters.end()) j[k] = it->second;
+  return j;
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -127,6 +148,7 @@ int main(int argc, char** argv) {
   const double lock_s = 1e-6 * static_cast<double>(lock.last_object_map - lock.first_camera);
   j["system_frames"] = lock.camera.size();
   j["pipeline_lockstep_fps"] = lock_s > 0 ? static_cast<double>(lock.camera.size()) / lock_s : 0;
+  j["lockstep_slam_work"] = slamWork(lock);
 
   // Real time.
   options.realtime = true;
@@ -152,6 +174,7 @@ int main(int argc, char** argv) {
   // until it is lost (the same recording lockstep is located throughout).
   j["realtime_slam_located_pct"] =
       rt.pose.empty() ? 0 : 100.0 * static_cast<double>(rt.poses_located) / static_cast<double>(rt.pose.size());
+  j["realtime_slam_work"] = slamWork(rt);
   j["realtime_recognizer_hz"] = stream_s > 0 ? static_cast<double>(rt.detections.size()) / stream_s : 0;
   j["latency_ms_p95"] = percentile(latency, 0.95);
   j["latency_ms_median"] = percentile(latency, 0.5);

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -33,8 +34,13 @@ class Child {
     std::string line;
     for (const auto& a : argv) line += a + " ";
     spdlog::debug("start: {}", line);
+    const pid_t parent = getpid();
     pid_ = fork();
     if (pid_ == 0) {
+      // A stage outlives no evaluation or bench that was killed: it gets SIGTERM (and saves, as
+      // at any stop) when the process that started it dies.
+      prctl(PR_SET_PDEATHSIG, SIGTERM);
+      if (getppid() != parent) _exit(127);
       const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       if (fd >= 0) {
         dup2(fd, 1);
