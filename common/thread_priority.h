@@ -2,9 +2,10 @@
 // Who gets the CPU first. On 2 cores the pipeline asks for more than there is while a scene is
 // being mapped, and Linux shares the cores out by the threads' nice values. SLAM must handle
 // every frame as it comes and its local mapping must keep up, or tracking thins out and is lost;
-// everything after it adapts: the recognizer takes the newest frame with what CPU is left, the
-// proposals' clustering and the object map catch up later. So SLAM runs at the normal priority
-// and the others lower theirs (an unprivileged process may lower its priority, never raise it).
+// the recognizer takes the newest frame and drops the rest; the proposals' clustering and the
+// object map catch up later. So SLAM and the recognizer run at the normal priority (the
+// recognizer's increment is configurable) and the background work lowers its own (an
+// unprivileged process may lower its priority, never raise it).
 // Only timing depends on it: lockstep runs are byte-identical at any value.
 #include <string>
 

@@ -27,15 +27,15 @@ struct BusOptions {
   }
 };
 
-/// Who gets the CPU first (common/thread_priority.h): SLAM at the normal priority, the rest
-/// lower. Nice increments, 0..19.
+/// Who gets the CPU first (common/thread_priority.h): SLAM and the recognizer at the normal
+/// priority, the background work lower. Nice increments, 0..19.
 struct SchedulingOptions {
-  int recognizer_nice = 3;   ///< the recognizer: takes the newest frame with what SLAM leaves
+  int recognizer_nice = 0;   ///< the recognizer: takes the newest frame, drops the rest
   int background_nice = 10;  ///< the proposals' clustering and the object map: they catch up
   template <class V>
   void visit(V& v) {
     v("recognizer_nice", recognizer_nice,
-      "nice increment of the recognizer (it takes the newest frame with the CPU SLAM leaves); 0: none");
+      "nice increment of the recognizer (it takes the newest frame and drops the rest); 0: none");
     v("background_nice", background_nice,
       "nice increment of the proposals' clustering and the object map (they catch up); 0: none");
   }
