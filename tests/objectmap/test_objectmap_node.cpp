@@ -84,6 +84,15 @@ struct Client {
     bus.publish("PROPOSALS", w.proposals(f, 1));
     bus.publish("DETECTIONS", w.detections(f, 1));
   }
+  /// The camera, then frames [0, n) of the world.
+  void sendFrames(const test::SyntheticWorld& w, int n) {
+    bus.publish("CAMERA_INFO", w.cameraInfo());
+    const auto clouds = w.keyframeClouds(1);
+    for (int f = 0; f < n; ++f) {
+      sendFrame(w, f, clouds);
+      bus.handle(5);
+    }
+  }
 };
 
 object_query_t query(int8_t kind) {
@@ -114,12 +123,7 @@ TEST(ObjectMapNode, AnswersQueriesByLabelAndRegionOverLcm) {
                           dir + "/node.log");
   ASSERT_TRUE(c.waitRunning()) << node.log();
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
-  c.bus.publish("CAMERA_INFO", w.cameraInfo());
-  const auto clouds = w.keyframeClouds(1);
-  for (int f = 0; f < 30; ++f) {
-    c.sendFrame(w, f, clouds);
-    c.bus.handle(5);
-  }
+  c.sendFrames(w, 30);
   ASSERT_TRUE(c.pump(
       [&] { return !c.maps.empty() && c.maps.back().seq == 29 && c.maps.back().num_objects == 3; },
       10s))
@@ -232,12 +236,7 @@ TEST(ObjectMapNode, RealTimeRegroupsAtMostEveryPeriodAndAQueryFirst) {
                           dir + "/node.log");
   ASSERT_TRUE(c.waitRunning()) << node.log();
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
-  c.bus.publish("CAMERA_INFO", w.cameraInfo());
-  const auto clouds = w.keyframeClouds(1);
-  for (int f = 0; f < 30; ++f) {
-    c.sendFrame(w, f, clouds);
-    c.bus.handle(5);
-  }
+  c.sendFrames(w, 30);
   ASSERT_TRUE(c.pump([&] { return c.status && c.status->frames_processed >= 30; }, 10s)) << node.log();
   const std::vector<object_map_t> before_query = c.maps;
   ASSERT_FALSE(before_query.empty());
