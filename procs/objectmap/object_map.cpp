@@ -302,7 +302,7 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
   last_utime_ = d.utime;
   last_seq_ = d.seq;
   if (nb == 0 || nc == 0) {
-    if (!defer_regrouping_) updateObjects();  // occupancy may have changed since the last frame
+    if (!defer_regrouping_) regroup();  // occupancy may have changed since the last frame
     if (report) *report = r;
     return true;
   }
@@ -389,12 +389,12 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
   // Objects are regrouped here and only here (and after a restore): what the map shows then
   // depends only on the messages fused so far, never on when it is read, saved or queried.
   // Deferred (real time): at the node's regroup().
-  if (!defer_regrouping_) updateObjects();
+  if (!defer_regrouping_) regroup();
   if (report) *report = r;
   return true;
 }
 
-void ObjectMapEngine::updateObjects() {
+void ObjectMapEngine::regroup() {
   for (auto& [id, seg] : segments_) {
     if (!seg->dirty) continue;
     Segment& s = *seg;
@@ -713,7 +713,7 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
   }
   fresh.camera_ = camera_;
   fresh.have_camera_ = have_camera_;
-  fresh.updateObjects();
+  fresh.regroup();
   fresh.changes_ = 0;
   fresh.defer_regrouping_ = defer_regrouping_;
   *this = std::move(fresh);

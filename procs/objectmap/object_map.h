@@ -125,9 +125,10 @@ class ObjectMapEngine {
   void deferRegrouping(bool defer) { defer_regrouping_ = defer; }
   /// Whether inputs since the last regrouping may change the objects.
   bool regroupPending() const;
-  /// Regroups the segments whose voxels or evidence changed.
-  void regroup() { updateObjects(); }
-  /// Increments at each regrouping that changed a segment (publish on change).
+  /// Regroups the segments whose voxels or evidence changed (after each input unless deferred, and
+  /// after a restore).
+  void regroup();
+  /// Increments for each segment regrouped (publish on change).
   int64_t regroupings() const { return regroupings_; }
   const std::vector<std::string>& classes() const { return classes_; }
   /// Segments by id.
@@ -144,8 +145,6 @@ class ObjectMapEngine {
   const Object* objectOfCandidate(int32_t slam_map_id, int32_t candidate) const;
 
  private:
-  /// Regroups the segments whose voxels or evidence changed (after each input and a restore).
-  void updateObjects();
   Segment& segmentFor(int32_t slam_map_id);
   std::vector<int> mapClasses(const std::vector<std::string>& names);
 

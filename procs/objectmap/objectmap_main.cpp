@@ -6,8 +6,9 @@
 // Lockstep: exactly one OBJECT_MAP per DETECTIONS message, whose content depends only on the
 // inputs (no wall-clock or save information). Real time: the objects are regrouped at most every
 // regroup_period_s (and before a query's answer and the last save), and OBJECT_MAP goes out
-// whenever they were and every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and never stops the process; a
-// damaged map file is refused with a message naming it, and the previous good generation is used.
+// whenever they were and every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and
+// never stops the process; a damaged map file is refused with a message naming it, and the
+// previous good generation is used.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -233,7 +234,6 @@ class ObjectMapNode {
     const auto t0 = Clock::now();
     engine_.regroup();
     last_regroup_ = Clock::now();
-    status_.count("regroupings");
     status_.setCounter("regroup_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
   }
 
@@ -275,6 +275,7 @@ class ObjectMapNode {
   void updateCounters() {
     last_counters_ = Clock::now();
     status_.setCounter("objects", static_cast<int64_t>(engine_.numObjects()));
+    status_.setCounter("regroupings", engine_.regroupings());
     status_.setCounter("segments", static_cast<int64_t>(engine_.segments().size()));
     status_.setCounter("candidates", static_cast<int64_t>(engine_.numCandidates()));
     status_.setCounter("voxels", static_cast<int64_t>(engine_.numOccupiedVoxels()));

@@ -226,8 +226,8 @@ TEST(ObjectMapNode, AnswersQueriesByLabelAndRegionOverLcm) {
 }
 
 // Real time: frames only add evidence and votes; the objects are regrouped at most every
-// regroup_period_s (here 60 s: once, at the first frame), and a query regroups first, so its answer
-// holds every view fused so far. The node regrouped a handful of times, not once per frame.
+// regroup_period_s (here 60 s: once, whenever the first tick finds input), and a query regroups
+// first, so its answer holds every view fused so far. Regrouping after every frame would make 30.
 TEST(ObjectMapNode, RealTimeRegroupsAtMostEveryPeriodAndAQueryFirst) {
   const std::string dir = test::tempDir("objectmap_node_regroup");
   Client c;
@@ -238,16 +238,12 @@ TEST(ObjectMapNode, RealTimeRegroupsAtMostEveryPeriodAndAQueryFirst) {
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
   c.sendFrames(w, 30);
   ASSERT_TRUE(c.pump([&] { return c.status && c.status->frames_processed >= 30; }, 10s)) << node.log();
-  const std::vector<object_map_t> before_query = c.maps;
-  ASSERT_FALSE(before_query.empty());
-  for (const auto& m : before_query)
-    for (const auto& o : m.objects) EXPECT_LT(o.num_views, 30) << "regrouped before the query";
   auto r = c.ask(query(object_query_t::KIND_ALL));
   ASSERT_TRUE(r) << "no reply\n" << node.log();
   ASSERT_EQ(r->num_objects, 3) << node.log();
   for (const auto& o : r->objects) EXPECT_EQ(o.num_views, 30) << o.label;
-  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "regroupings") >= 2; }, 5s)) << node.log();
-  EXPECT_LE(counter(*c.status, "regroupings"), 3);
+  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "regroupings") >= 1; }, 5s)) << node.log();
+  EXPECT_LE(counter(*c.status, "regroupings"), 3) << "regrouped more often than once per period";
   EXPECT_TRUE(node.running()) << node.log();
 }
 
