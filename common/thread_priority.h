@@ -1,11 +1,12 @@
 #pragma once
 // Who gets the CPU first. On 2 cores the pipeline asks for more than there is while a scene is
-// being mapped, and Linux shares the cores out by the threads' nice values. SLAM must handle
-// every frame as it comes and its local mapping must keep up, or tracking thins out and is lost;
-// the recognizer takes the newest frame and drops the rest; the proposals' clustering and the
-// object map catch up later. So SLAM and the recognizer run at the normal priority (the
-// recognizer's increment is configurable) and the background work lowers its own (an
-// unprivileged process may lower its priority, never raise it).
+// being mapped, and Linux shares the cores out by the threads' nice values. SLAM's tracking must
+// handle every frame as it comes (a frame it is late on delays every later frame and all that
+// follows from them); its local mapping must keep up, or tracking thins out and is lost; its
+// depth filter skips frames when behind; the recognizer takes the newest frame and drops the
+// rest; the proposals' clustering and the object map catch up later. So tracking alone runs at
+// the normal priority and everything else lowers its own, each by its increment in system.yaml's
+// `scheduling` (an unprivileged process may lower its priority, never raise it).
 // Only timing depends on it: lockstep runs are byte-identical at any value.
 #include <string>
 

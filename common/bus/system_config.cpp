@@ -42,7 +42,9 @@ SystemConfig loadSystemConfig(const std::string& path, bool print) {
     logOptions("scheduling", path.empty() ? "defaults" : path, scheduling);
   }
   for (const auto& [key, value] : {std::pair<const char*, int>{"recognizer_nice", sys.scheduling.recognizer_nice},
-                                   {"background_nice", sys.scheduling.background_nice}}) {
+                                   {"background_nice", sys.scheduling.background_nice},
+                                   {"slam_mapping_nice", sys.scheduling.slam_mapping_nice},
+                                   {"slam_depth_nice", sys.scheduling.slam_depth_nice}}) {
     if (value < 0 || value > 19)
       throw ConfigError((path.empty() ? std::string("defaults") : path) + ": key 'scheduling." + key +
                         "': a nice increment is 0..19, got " + std::to_string(value));

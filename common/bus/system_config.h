@@ -27,17 +27,22 @@ struct BusOptions {
   }
 };
 
-/// Who gets the CPU first (common/thread_priority.h): SLAM and the recognizer at the normal
-/// priority, the background work lower. Nice increments, 0..19.
+/// Who gets the CPU first (common/thread_priority.h): SLAM's tracking at the normal priority,
+/// everything else a little or much lower. Nice increments, 0..19.
 struct SchedulingOptions {
-  int recognizer_nice = 0;   ///< the recognizer: takes the newest frame, drops the rest
-  int background_nice = 10;  ///< the proposals' clustering and the object map: they catch up
+  int recognizer_nice = 2;    ///< the recognizer: takes the newest frame, drops the rest
+  int background_nice = 10;   ///< the proposals' clustering and the object map: they catch up
+  int slam_mapping_nice = 1;  ///< SLAM's local-mapping thread (its tracking stays at 0)
+  int slam_depth_nice = 3;    ///< SLAM's depth-filter thread (skips frames when behind)
   template <class V>
   void visit(V& v) {
     v("recognizer_nice", recognizer_nice,
       "nice increment of the recognizer (it takes the newest frame and drops the rest); 0: none");
     v("background_nice", background_nice,
       "nice increment of the proposals' clustering and the object map (they catch up); 0: none");
+    v("slam_mapping_nice", slam_mapping_nice,
+      "nice increment of SLAM's local-mapping thread (tracking stays at the normal priority); 0: none");
+    v("slam_depth_nice", slam_depth_nice, "nice increment of SLAM's depth-filter thread; 0: none");
   }
 };
 

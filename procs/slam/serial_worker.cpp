@@ -6,8 +6,8 @@
 
 namespace slamaware {
 
-SerialWorker::SerialWorker(bool threaded, std::string name)
-    : threaded_(threaded), name_(std::move(name)) {
+SerialWorker::SerialWorker(bool threaded, std::string name, int nice)
+    : threaded_(threaded), name_(std::move(name)), nice_(nice) {
   if (threaded_) thread_ = std::thread([this] { run(); });
 }
 
@@ -44,6 +44,7 @@ void SerialWorker::waitIdle() {
 
 void SerialWorker::run() {
   nameThisThread(name_);
+  lowerThreadPriority(nice_, "the " + name_ + " thread");
   while (true) {
     std::function<void()> job;
     {

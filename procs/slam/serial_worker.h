@@ -12,8 +12,9 @@ namespace slamaware {
 
 class SerialWorker {
  public:
-  /// `name`: the worker thread's name (top -H, perf).
-  SerialWorker(bool threaded, std::string name);
+  /// `name`: the worker thread's name (top -H, perf); `nice`: the increment it lowers its
+  /// priority by (common/thread_priority.h).
+  SerialWorker(bool threaded, std::string name, int nice = 0);
   /// Finishes the jobs already posted, then stops.
   ~SerialWorker();
   SerialWorker(const SerialWorker&) = delete;
@@ -28,6 +29,7 @@ class SerialWorker {
   void run();
   const bool threaded_;
   const std::string name_;
+  const int nice_;
   mutable std::mutex mutex_;
   std::condition_variable work_cv_, idle_cv_;
   std::deque<std::function<void()>> jobs_;

@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("slam"), ch.statusOf(node.nameOr("slam")));
-    SlamSystem slam(opts, lockstep);
+    SlamSystem slam(opts, lockstep,
+                    SlamThreadNice{sys.scheduling.slam_mapping_nice, sys.scheduling.slam_depth_nice});
 
     bus.subscribe<camera_info_t>(
         ch.camera_info,

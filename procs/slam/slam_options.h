@@ -44,6 +44,7 @@ struct InitOptions {
   double match_ratio = 0.8;          ///< nearest / second-nearest descriptor distance ratio
   int ba_iterations = 20;            ///< bundle adjustment iterations on the two-view map
   double max_reference_age_s = 3.0;  ///< s, a reference frame older than this is replaced
+  int threads = 2;  ///< candidate poses are refined on this many threads (results do not depend on it)
 
   template <class V>
   void visit(V& v) {
@@ -57,6 +58,8 @@ struct InitOptions {
     v("ba_iterations", ba_iterations, "bundle adjustment iterations on the two-view map");
     v("max_reference_age_s", max_reference_age_s,
       "s, a reference frame older than this is replaced");
+    v("threads", threads,
+      "threads the candidate poses are refined on (results do not depend on it)");
   }
 };
 

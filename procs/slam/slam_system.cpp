@@ -30,9 +30,10 @@ const char* poseStateName(PoseState s) {
   return "?";
 }
 
-SlamSystem::SlamSystem(const SlamOptions& options, bool lockstep)
+SlamSystem::SlamSystem(const SlamOptions& options, bool lockstep, SlamThreadNice nice)
     : options_(options),
       lockstep_(lockstep),
+      nice_(nice),
       extractor_(std::make_unique<OrbExtractor>(options.orb)),
       ids_(std::make_unique<IdSource>()) {}
 
@@ -57,11 +58,11 @@ void SlamSystem::restart() {
   depth_worker_.reset();
   mapper_.reset();
   tracker_ = std::make_unique<Tracker>(options_, *ids_);
-  mapper_ = std::make_unique<LocalMapper>(options_, *ids_, !lockstep_);
+  mapper_ = std::make_unique<LocalMapper>(options_, *ids_, !lockstep_, nice_.mapping);
   depth_ = std::make_unique<DepthFilter>(options_.depth, camera_.width(), camera_.height(),
                                          intrinsics_->fx, intrinsics_->fy, intrinsics_->cx,
                                          intrinsics_->cy);
-  depth_worker_ = std::make_unique<SerialWorker>(options_.depth.threaded, "slam-depth");
+  depth_worker_ = std::make_unique<SerialWorker>(options_.depth.threaded, "slam-depth", nice_.depth);
   {
     std::lock_guard<std::mutex> lock(finished_mutex_);
     depth_finished_.clear();

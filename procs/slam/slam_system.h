@@ -101,9 +101,16 @@ struct SlamStats {
   int64_t depth_updates = 0;   ///< depth-filter updates so far
 };
 
+/// Nice increments of SLAM's background threads (system.yaml `scheduling`); tracking, on every
+/// frame's path, stays at the process's priority. Only timing depends on them.
+struct SlamThreadNice {
+  int mapping = 0;
+  int depth = 0;
+};
+
 class SlamSystem {
  public:
-  SlamSystem(const SlamOptions& options, bool lockstep);
+  SlamSystem(const SlamOptions& options, bool lockstep, SlamThreadNice nice = {});
   ~SlamSystem();
   SlamSystem(const SlamSystem&) = delete;
   SlamSystem& operator=(const SlamSystem&) = delete;
@@ -146,6 +153,7 @@ class SlamSystem {
 
   SlamOptions options_;
   bool lockstep_;
+  SlamThreadNice nice_;
   CameraModel camera_;
   std::shared_ptr<const Intrinsics> intrinsics_;
   std::unique_ptr<OrbExtractor> extractor_;

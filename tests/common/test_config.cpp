@@ -154,11 +154,16 @@ TEST(Config, SystemConfigRejectsUnknownSection) {
 }
 
 TEST(Config, SchedulingNiceOutOfRangeIsRefused) {
-  const std::string ok = writeYaml("system3.yaml", "scheduling:\n  recognizer_nice: 0\n  background_nice: 19\n");
+  const std::string ok = writeYaml("system3.yaml",
+                                   "scheduling:\n  recognizer_nice: 0\n  background_nice: 19\n"
+                                   "  slam_mapping_nice: 1\n  slam_depth_nice: 3\n");
   const SystemConfig sys = loadSystemConfig(ok, false);
   EXPECT_EQ(sys.scheduling.recognizer_nice, 0);
   EXPECT_EQ(sys.scheduling.background_nice, 19);
-  for (const char* text : {"scheduling:\n  recognizer_nice: -5\n", "scheduling:\n  background_nice: 20\n"}) {
+  EXPECT_EQ(sys.scheduling.slam_mapping_nice, 1);
+  EXPECT_EQ(sys.scheduling.slam_depth_nice, 3);
+  for (const char* text : {"scheduling:\n  recognizer_nice: -5\n", "scheduling:\n  background_nice: 20\n",
+                           "scheduling:\n  slam_mapping_nice: -1\n", "scheduling:\n  slam_depth_nice: 20\n"}) {
     const std::string path = writeYaml("system4.yaml", text);
     try {
       loadSystemConfig(path, false);

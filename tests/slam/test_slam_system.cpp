@@ -3,7 +3,17 @@
 // rendered tabletop video it tracks every frame after initialisation with a small error.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <string>
+#include <thread>
 
 #include "common/geometry.h"
 #include "procs/slam/slam_system.h"
@@ -56,6 +66,7 @@ SlamRun runSlam(bool threaded, SlamOptions options = {}) {
   const Rendered& r = sampleFrames();
   options.mapping.threaded = threaded;
   options.depth.threaded = threaded;
+  if (!threaded) options.init.threads = 1;  // the two-view refinements too
   SlamSystem slam(options, true);
   slam.setCamera(r.camera);
   SlamRun run;
@@ -91,6 +102,33 @@ TEST(SlamSystem, LockstepOutputsDoNotDependOnThreads) {
   EXPECT_EQ(a.keyframes, b.keyframes);
   EXPECT_EQ(a.clouds, b.clouds);
   EXPECT_FALSE(a.clouds.empty());
+}
+
+// system.yaml's scheduling lowers SLAM's local mapping and depth filter below its tracking: each
+// thread takes its own increment, the caller (tracking) keeps its priority.
+TEST(SlamSystem, MappingAndDepthThreadsTakeTheirNiceIncrements) {
+  const int before = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
+  if (before + 3 > 19) GTEST_SKIP() << "this test already runs at nice " << before;
+  SlamSystem slam(SlamOptions(), false, SlamThreadNice{2, 3});
+  slam.setCamera(sampleFrames().camera);
+  // The threads lower their own priority as they start: wait until both are seen.
+  std::map<std::string, int> nice;
+  for (int attempt = 0; attempt < 200 && nice.size() < 2; ++attempt) {
+    nice.clear();
+    for (const auto& e : std::filesystem::directory_iterator("/proc/self/task")) {
+      std::ifstream comm(e.path() / "comm");
+      std::string name;
+      std::getline(comm, name);
+      if (name != "slam-mapping" && name != "slam-depth") continue;
+      errno = 0;
+      const int n = getpriority(PRIO_PROCESS, static_cast<id_t>(std::stol(e.path().filename())));
+      if (errno == 0 && n != before) nice[name] = n;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(nice["slam-mapping"], before + 2);
+  EXPECT_EQ(nice["slam-depth"], before + 3);
+  EXPECT_EQ(getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid))), before);
 }
 
 TEST(SlamSystem, TracksARenderedTabletopVideo) {

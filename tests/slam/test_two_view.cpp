@@ -75,6 +75,27 @@ TEST(TwoView, RecoversPoseAndStructureOfA3dScene) {
   EXPECT_GT(good, 0.9 * checked);
 }
 
+// The candidate poses are refined on several threads; the result must be the one of a single
+// thread, bit for bit, whatever the number of threads.
+TEST(TwoView, TheResultDoesNotDependOnTheThreads) {
+  const auto points = test::randomPoints(300, 1.5, 1.0, 3.0, 6.0, 11);
+  const SE3 T_cur_ref = test::cameraAt({0.3, 0.05, 0.25}, {0.01, -0.08, 0.02});
+  const Correspondences c = observe(points, T_cur_ref, 0.5, 0.1, 3);
+  InitOptions opt;
+  opt.threads = 1;
+  const TwoViewResult one = reconstructTwoView(c.ref, c.cur, test::PinholeCamera().K(), opt, 42);
+  ASSERT_TRUE(one.ok) << one.reason;
+  for (int threads : {2, 3, 16}) {
+    opt.threads = threads;
+    const TwoViewResult r = reconstructTwoView(c.ref, c.cur, test::PinholeCamera().K(), opt, 42);
+    ASSERT_TRUE(r.ok) << r.reason;
+    EXPECT_TRUE(r.T_cur_ref.isApprox(one.T_cur_ref, 0)) << threads << " threads";
+    EXPECT_EQ(r.triangulated, one.triangulated) << threads << " threads";
+    EXPECT_EQ(r.p_ref, one.p_ref) << threads << " threads";
+    EXPECT_EQ(r.model, one.model);
+  }
+}
+
 TEST(TwoView, ChoosesTheHomographyForAPlane) {
   auto points = test::randomPoints(300, 1.5, 1.0, 4.0, 4.0, 5);  // all on the plane z = 4
   const SE3 T_cur_ref = test::cameraAt({0.5, 0.0, 0.1}, {0.0, -0.1, 0.0});

@@ -11,6 +11,7 @@
 #include "procs/slam/geometry/pnp.h"
 #include "procs/slam/geometry/triangulation.h"
 #include "procs/slam/optimization/bundle_adjustment.h"
+#include "procs/slam/run_shared.h"
 
 namespace slamaware {
 
@@ -493,21 +494,28 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
     double rms;
     Hypothesis h;
   };
-  std::vector<Refined> refined;
-  auto refine = [&](const SE3& T0) {
-    double rms = 1e9;
-    const SE3 T = refinePose(T0, px_ref, px_cur, inliers, K, &rms);
-    refined.push_back({T, rms, checkPose(T, px_ref, px_cur, inliers, K, 2 * opt.sigma_px)});
+  // Each refinement is independent of the others (two bundle adjustments, most of the
+  // initialisation's time): they are shared out to opt.threads threads, each result kept at its
+  // candidate's index, so the outcome does not depend on the threads.
+  auto refineAll = [&](const std::vector<SE3>& starts) {
+    std::vector<Refined> out(starts.size());
+    runShared(static_cast<int>(starts.size()), opt.threads, [&](int k) {
+      double rms = 1e9;
+      const SE3 T = refinePose(starts[k], px_ref, px_cur, inliers, K, &rms);
+      out[k] = {T, rms, checkPose(T, px_ref, px_cur, inliers, K, 2 * opt.sigma_px)};
+    });
+    return out;
   };
-  for (const SE3& T0 : distinct) refine(T0);
+  std::vector<Refined> refined = refineAll(distinct);
   // The depth-reversed twin of each refined pose: every point stays on its reference ray with
   // its depth mirrored about the median depth, and the current camera is re-sectioned (PnP)
   // against the mirrored points.
-  const size_t refined_count = refined.size();
-  for (size_t k = 0; k < refined_count; ++k) {
+  std::vector<SE3> twins;
+  for (const Refined& k : refined) {
     SE3 twin;
-    if (neckerTwin(refined[k].h, px_ref, px_cur, K, seed, &twin)) refine(twin);
+    if (neckerTwin(k.h, px_ref, px_cur, K, seed, &twin)) twins.push_back(twin);
   }
+  for (Refined& k : refineAll(twins)) refined.push_back(std::move(k));
   // The refined pose that explains the most inliers, the lowest error among near ties.
   size_t best = 0;
   for (size_t k = 1; k < refined.size(); ++k) {

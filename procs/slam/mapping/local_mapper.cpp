@@ -14,8 +14,12 @@
 
 namespace slamaware {
 
-LocalMapper::LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort)
-    : options_(options), ids_(ids), threaded_(options.mapping.threaded), allow_abort_(allow_abort) {
+LocalMapper::LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort, int nice)
+    : options_(options),
+      ids_(ids),
+      threaded_(options.mapping.threaded),
+      allow_abort_(allow_abort),
+      nice_(nice) {
   if (threaded_) thread_ = std::thread([this] { run(); });
 }
 
@@ -71,6 +75,7 @@ MappingEvents LocalMapper::takeEvents() {
 
 void LocalMapper::run() {
   nameThisThread("slam-mapping");
+  lowerThreadPriority(nice_, "the slam-mapping thread");
   while (true) {
     Job job;
     bool more = false;

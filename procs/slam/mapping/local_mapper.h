@@ -31,8 +31,9 @@ struct MappingEvents {
 class LocalMapper {
  public:
   /// threaded = options.mapping.threaded; allow_abort: a new keyframe may cut a bundle adjustment
-  /// short (real time; never in lockstep, where results must not depend on timing).
-  LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort);
+  /// short (real time; never in lockstep, where results must not depend on timing); `nice`: the
+  /// increment its thread lowers its priority by (common/thread_priority.h).
+  LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort, int nice = 0);
   ~LocalMapper();
   LocalMapper(const LocalMapper&) = delete;
   LocalMapper& operator=(const LocalMapper&) = delete;
@@ -63,6 +64,7 @@ class LocalMapper {
   SlamOptions options_;
   IdSource& ids_;
   const bool threaded_, allow_abort_;
+  const int nice_;
   mutable std::mutex mutex_;
   std::condition_variable work_cv_, idle_cv_;
   std::deque<Job> queue_;
