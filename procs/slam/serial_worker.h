@@ -14,7 +14,7 @@ class SerialWorker {
  public:
   /// `name`: the worker thread's name (top -H, perf); `nice`: the increment it lowers its
   /// priority by (common/thread_priority.h).
-  SerialWorker(bool threaded, std::string name, int nice = 0);
+  SerialWorker(bool threaded, std::string name, int nice);
   /// Finishes the jobs already posted, then stops.
   ~SerialWorker();
   SerialWorker(const SerialWorker&) = delete;

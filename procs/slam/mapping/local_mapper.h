@@ -33,7 +33,7 @@ class LocalMapper {
   /// threaded = options.mapping.threaded; allow_abort: a new keyframe may cut a bundle adjustment
   /// short (real time; never in lockstep, where results must not depend on timing); `nice`: the
   /// increment its thread lowers its priority by (common/thread_priority.h).
-  LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort, int nice = 0);
+  LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort, int nice);
   ~LocalMapper();
   LocalMapper(const LocalMapper&) = delete;
   LocalMapper& operator=(const LocalMapper&) = delete;
