@@ -106,16 +106,17 @@ void checkOptions(const RecognizerOptions& options, const std::string& source) {
                       std::to_string(options.warm_up_width) + " x " + std::to_string(options.warm_up_height));
 }
 
-int suppressOverlaps(FrameDetections* d, double max_iou) {
+int suppressOverlaps(FrameDetections* d, double max_iou, bool per_class) {
   const size_t n = d->boxes.size();
   if (!(max_iou < 1) || n < 2) return 0;
   const size_t objects = !d->classes.empty() && d->classes.back() == "background" ? d->classes.size() - 1
                                                                                      : d->classes.size();
   std::vector<float> confidence(n, -std::numeric_limits<float>::infinity());
+  std::vector<int> best_class(n, -1);
   for (size_t i = 0; i < n; ++i) {
     const auto& lp = d->boxes[i].log_prob;
     for (size_t c = 0; c < std::min(objects, lp.size()); ++c)
-      if (lp[c] > confidence[i]) confidence[i] = lp[c];  // NaN never wins
+      if (lp[c] > confidence[i]) confidence[i] = lp[c], best_class[i] = static_cast<int>(c);  // NaN never wins
   }
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), size_t{0});
@@ -125,6 +126,7 @@ int suppressOverlaps(FrameDetections* d, double max_iou) {
     const BoxDetection& a = d->boxes[i];
     if (std::none_of(kept.begin(), kept.end(), [&](size_t k) {
           const BoxDetection& b = d->boxes[k];
+          if (per_class && best_class[i] != best_class[k]) return false;
           return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > max_iou;
         }))
       kept.push_back(i);

@@ -21,6 +21,8 @@ struct RecognizerOptions {
   /// The node: of two classified boxes of a frame that overlap by more than this IoU, the less
   /// confident is not published (suppressOverlaps; >= 1: every box is published).
   double nms_iou = 0.5;
+  /// true: a box is suppressed only by a more confident box of the same most probable object class.
+  bool nms_per_class = true;
   /// Log-probability given to "background" when the model was trained without negatives (it has
   /// no background class); the object classes share the rest.
   double missing_background_log_prob = -13.8;
@@ -42,6 +44,8 @@ struct RecognizerOptions {
     v("max_boxes", max_boxes, "boxes per frame beyond this are rejected");
     v("nms_iou", nms_iou,
       "of two classified boxes overlapping by more than this IoU, the less confident is not published (>= 1: none)");
+    v("nms_per_class", nms_per_class,
+      "true: only boxes of the same most probable object class suppress each other");
     v("missing_background_log_prob", missing_background_log_prob,
       "log p(background) published when the model has no background class");
     v.section("cost", cost);
@@ -97,7 +101,7 @@ struct FrameDetections {
 /// crown) outranked and suppressed the whole object's box, while the classifier, trained with
 /// such parts as background, is the surer of the whole. Returns the number removed (also in
 /// `suppressed`); nothing is removed for max_iou >= 1.
-int suppressOverlaps(FrameDetections* detections, double max_iou);
+int suppressOverlaps(FrameDetections* detections, double max_iou, bool per_class = false);
 
 class Recognizer {
  public:

@@ -184,7 +184,7 @@ class RecognizerNode {
       publish(out);
       return;
     }
-    suppressOverlaps(&d, options_.nms_iou);
+    suppressOverlaps(&d, options_.nms_iou, options_.nms_per_class);
     status_.count("boxes_rejected", d.rejected());
     if (d.rejected_not_finite) status_.count("boxes_rejected.not_finite", d.rejected_not_finite);
     if (d.rejected_empty) status_.count("boxes_rejected.zero_size", d.rejected_empty);

@@ -239,6 +239,33 @@ TEST(Recognizer, SuppressionKeepsTheSurerOfTwoOverlappingBoxes) {
   EXPECT_EQ(kept, (std::vector<int32_t>{1, 3, 5, 6, 7}));
 }
 
+// Suppression per class: a box is suppressed only by a surer box of the same most probable object
+// class. A bowl behind a mug keeps its own box beside the pair's box that is surer of a mug; two
+// boxes both surer of a mug still suppress each other.
+TEST(Recognizer, SuppressionPerClassKeepsAnOverlappingBoxOfAnotherClass) {
+  auto box = [](float x, float w, float p_a, float p_b) {
+    BoxDetection b;
+    b.x = x, b.y = 0, b.w = w, b.h = 100;
+    b.log_prob = {std::log(p_a), std::log(p_b), std::log(1.f - p_a - p_b)};  // a, b, background
+    return b;
+  };
+  FrameDetections d;
+  d.classes = {"a", "b", "background"};
+  d.boxes = {box(0, 100, 0.2f, 0.7f),   // 0: the pair, surest of b: kept
+             box(0, 70, 0.6f, 0.1f),    // 1: IoU 0.7 with 0, surest of a: kept per class only
+             box(10, 100, 0.1f, 0.6f),  // 2: IoU 0.82 with 0, also b, less sure: suppressed
+             box(0, 65, 0.5f, 0.1f)};   // 3: IoU 0.93 with 1, also a, less sure: suppressed
+  for (size_t i = 0; i < d.boxes.size(); ++i) d.boxes[i].candidate_id = static_cast<int32_t>(i);
+  FrameDetections any_class = d;
+  EXPECT_EQ(suppressOverlaps(&any_class, 0.5), 3);
+  ASSERT_EQ(any_class.boxes.size(), 1u);
+  EXPECT_EQ(any_class.boxes[0].candidate_id, 0);
+  EXPECT_EQ(suppressOverlaps(&d, 0.5, /*per_class=*/true), 2);
+  std::vector<int32_t> kept;
+  for (const auto& b : d.boxes) kept.push_back(b.candidate_id);
+  EXPECT_EQ(kept, (std::vector<int32_t>{0, 1}));
+}
+
 TEST(ModelFile, ReloadsToIdenticalPredictions) {
   const Trained& t = synthetic();
   const RecognizerModel loaded = loadModel(t.model_path);
