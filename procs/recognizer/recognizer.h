@@ -95,7 +95,9 @@ struct FrameDetections {
 /// Non-maximum suppression of classified boxes (DESIGN.md §3: overlapping boxes, IoU > max_iou,
 /// are suppressed). The boxes are taken in order of their most probable object class's
 /// probability (the background excluded; ties: request order), and a box is removed when it
-/// overlaps one kept before it by IoU > max_iou. The others stay, in request order. Done after
+/// overlaps one kept before it by IoU > max_iou (with `per_class`, only one whose most probable
+/// object class is the same: a bowl's box beside the box of the bowl and a mug, surer of a mug,
+/// stays). The others stay, in request order. Done after
 /// classification rather than in the proposals stage, which can only rank the boxes by the
 /// geometry of their candidates: there a part of an object found at more density scales (a cap's
 /// crown) outranked and suppressed the whole object's box, while the classifier, trained with
