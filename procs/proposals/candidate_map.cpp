@@ -512,7 +512,10 @@ Clustering clusterMap(const ClusterInputRef& in) {
   ProposalOptions o = in.options;
   // A young map is sparse: its objects hold few points, yet they are to be proposed from the start.
   out.stats.young = out.stats.input_points < o.young_map_points;
-  if (out.stats.young) o.min_points = std::min(o.min_points, o.young_min_points);
+  if (out.stats.young) {
+    o.min_points = std::min(o.min_points, o.young_min_points);
+    o.radius *= o.young_radius_scale;
+  }
   bool has_support = false;
   if (all.size() >= static_cast<size_t>(std::max(3, o.min_points))) {
     out.stats.scene_scale = o.relative_lengths ? sceneScale(in, all) : 1.0;

@@ -226,6 +226,37 @@ TEST(ProposalClustering, AYoungMapsSparseObjectsAreCandidates) {
   }
 }
 
+// A young map's object is often in pieces with no converged seed between them yet (a plain bowl's
+// two rims): here two pieces 8 cm apart, more than the coarsest radius (8 x 0.008). A young map is
+// clustered at young_radius_scale times the radii: at 1.5 (12 cm) one candidate spans both pieces,
+// at 1 none does; the finer scales still give each piece alone.
+TEST(ProposalClustering, AYoungMapsPiecesOfOneObjectAreOneCandidate) {
+  const auto a = cylinder(-0.06f, 0, 0.02f, 0.1f, 0.02f), b = cylinder(0.06f, 0, 0.02f, 0.1f, 0.02f);
+  ASSERT_GE(a.size(), 15u);
+  ASSERT_LT(a.size(), 60u);
+  const auto points = join(table(0.8f, 0.02f), join(a, b));
+  for (const double scale : {1.0, 1.5}) {
+    ProposalOptions o = metricOptions();
+    ASSERT_EQ(o.scales, 4);
+    ASSERT_DOUBLE_EQ(o.radius, 0.008);
+    o.young_map_points = static_cast<int>(points.size()) + 1;
+    o.young_radius_scale = scale;
+    CandidateMap map(o);
+    map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
+    ASSERT_TRUE(reclusterFromAbove(map));
+    EXPECT_TRUE(map.stats().young);
+    int whole = 0;
+    std::set<int> alone;
+    for (const auto& c : map.candidates()) {
+      const std::set<int> s = sidesOf(c, 0.0f);
+      if (s.size() == 2) ++whole;
+      if (s.size() == 1) alone.insert(*s.begin());
+    }
+    EXPECT_EQ(whole, scale > 1 ? 1 : 0) << "young_radius_scale " << scale;
+    EXPECT_EQ(alone.size(), 2u) << "young_radius_scale " << scale;
+  }
+}
+
 // A cap: a dark crown and its brim, which lies flat in the support's band (as low as the table's
 // depth noise) and is removed with it. The brim is the crown's colour, which the table hardly
 // has: it is taken back by the crown's candidates. The table, and a flat towel of another colour
