@@ -514,7 +514,7 @@ Clustering clusterMap(const ClusterInputRef& in) {
   out.stats.young = out.stats.input_points < o.young_map_points;
   if (out.stats.young) {
     o.min_points = std::min(o.min_points, o.young_min_points);
-    o.radius *= o.young_radius_scale;
+    if (o.young_radius_scale > 0) o.radius *= o.young_radius_scale;
   }
   bool has_support = false;
   if (all.size() >= static_cast<size_t>(std::max(3, o.min_points))) {

@@ -80,7 +80,7 @@ struct ProposalOptions {
                                  ///< map's points: SLAM's depth.young_map_points counts converged seeds only
   int young_min_points = 15;     ///< ... and its smallest cluster is this (its objects hold few points yet)
   double young_radius_scale = 1.5; ///< ... and its clustering radii are this many times `radius` (its objects are
-                                 ///< pieces with no converged seed between them yet)
+                                 ///< pieces with no converged seed between them yet; <= 0: as radius)
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
   double same_cluster_overlap = 0.9; ///< clusters of two scales sharing this share of points are one
@@ -152,7 +152,7 @@ struct ProposalOptions {
     v("min_points", min_points, "smallest cluster");
     v("young_map_points", young_map_points, "a map of fewer points is young (0: never)");
     v("young_min_points", young_min_points, "smallest cluster of a young map");
-    v("young_radius_scale", young_radius_scale, "clustering radii of a young map, times radius");
+    v("young_radius_scale", young_radius_scale, "clustering radii of a young map, times radius (<= 0: as radius)");
     v("max_extent", max_extent, "map units, largest object along any axis");
     v("min_extent", min_extent, "map units, smallest object along its largest axis");
     v("same_cluster_overlap", same_cluster_overlap, "share of points for clusters of two scales to be one");
