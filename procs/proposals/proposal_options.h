@@ -79,8 +79,9 @@ struct ProposalOptions {
                                  ///< provisional and first converged seeds) is young ... (0: never). All of the
                                  ///< map's points: SLAM's depth.young_map_points counts converged seeds only
   int young_min_points = 15;     ///< ... and its smallest cluster is this (its objects hold few points yet)
-  double young_radius_scale = 1.5; ///< ... and its clustering radii are this many times `radius` (its objects are
-                                 ///< pieces with no converged seed between them yet; <= 0: as radius)
+  double young_radius_scale = 1.5; ///< ... and `radius` is this many times larger (its objects are pieces with
+                                 ///< no converged seed between them yet): the clustering radii, and with them
+                                 ///< the band points' connection step and the id voxel; <= 0: as radius
   double max_extent = 0.5;       ///< map units, clusters larger than this along any axis are not objects
   double min_extent = 0.02;      ///< map units, clusters smaller than this along every axis are noise
   double same_cluster_overlap = 0.9; ///< clusters of two scales sharing this share of points are one
