@@ -53,7 +53,7 @@ sample: deps build
 
 # Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set and
 # the training scenes of config/training with the boxes the proposals stage draws on them, full
-# training options of config/train-model.yaml; about 40 minutes here, 13.5 GB).
+# training options of config/train-model.yaml; about 45 minutes here, 19 GB).
 model: deps build
 	FORCE=1 TRAIN_CONFIG=config/train-model.yaml PROPOSALS=1 scripts/demo-model
 
