@@ -583,13 +583,13 @@ std::optional<ClusterInput> CandidateMap::takeClusterInput() {
   return ClusterInput{map_id_, options_, by_keyframe_, keyframe_centres_, views_};
 }
 
-bool CandidateMap::recluster() {
+bool CandidateMap::recluster(int64_t utime) {
   if (!dirty_) return false;
   dirty_ = false;
-  return adopt(clusterMap(ClusterInputRef{map_id_, options_, by_keyframe_, keyframe_centres_, views_}));
+  return adopt(clusterMap(ClusterInputRef{map_id_, options_, by_keyframe_, keyframe_centres_, views_}), utime);
 }
 
-bool CandidateMap::adopt(Clustering&& clustering) {
+bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
   if (clustering.map_id != map_id_) return false;
   std::vector<Candidate> found = std::move(clustering.found);
   // Stable ids: each new cluster takes the id of the old candidate it shares most voxels with
@@ -620,6 +620,26 @@ bool CandidateMap::adopt(Clustering&& clustering) {
   }
   for (auto& c : found)
     if (c.id < 0) c.id = (*ids_)++;
+  // A candidate no new cluster took over, whose region no new cluster holds either (its points
+  // left out of this clustering: outside the support's region as it was fitted this time, or too
+  // few for min_points after the filters), is kept for keep_lost_s of frame time.
+  if (options_.keep_lost_s > 0) {
+    std::vector<int64_t> held;
+    for (const auto& k : new_keys) held.insert(held.end(), k.begin(), k.end());
+    std::sort(held.begin(), held.end());
+    held.erase(std::unique(held.begin(), held.end()), held.end());
+    for (size_t o = 0; o < candidates_.size(); ++o) {
+      if (old_done[o] || old_keys[o].empty()) continue;
+      Candidate& c = candidates_[o];
+      const int64_t since = c.lost_since >= 0 ? c.lost_since : utime;
+      if (static_cast<double>(utime - since) > 1e6 * options_.keep_lost_s) continue;
+      size_t in = 0;
+      for (int64_t k : old_keys[o]) in += std::binary_search(held.begin(), held.end(), k) ? 1 : 0;
+      if (static_cast<double>(in) >= options_.lost_held * static_cast<double>(old_keys[o].size())) continue;
+      c.lost_since = since;
+      found.push_back(std::move(c));
+    }
+  }
   candidates_ = std::move(found);
   support_ = std::move(clustering.support);
   stats_ = clustering.stats;

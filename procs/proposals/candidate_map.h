@@ -28,6 +28,7 @@ struct Candidate {
   Eigen::Vector3f centroid;
   float height = 0;                    ///< map units, over the support (0 without one)
   bool on_support = false;             ///< stands on the map's support (its box is trimmed by box_trim_pct)
+  int64_t lost_since = -1;             ///< frame time of the clustering that lost it (-1: found by the last one)
 };
 
 struct ClusterStats {
@@ -101,13 +102,14 @@ class CandidateMap {
   void addView(int32_t map_id, const SE3& T_world_camera);
   /// Re-runs filtering and clustering when the map changed since the last call; true if it ran.
   /// The same as adopt(clusterMap(*takeClusterInput())), without the copy.
-  bool recluster();
+  bool recluster(int64_t utime = 0);
   /// A copy of what clustering needs when the map changed since the last call (it then counts as
   /// clustered), else nothing.
   std::optional<ClusterInput> takeClusterInput();
   /// Takes a clustering of this map as the candidates: each cluster keeps the id of the candidate
-  /// it shares most voxels with. False (nothing changes) when it is of another map id.
-  bool adopt(Clustering&& clustering);
+  /// it shares most voxels with. False (nothing changes) when it is of another map id. `utime`:
+  /// the frame time (for keep_lost_s).
+  bool adopt(Clustering&& clustering, int64_t utime = 0);
 
   int32_t mapId() const { return map_id_; }
   const std::vector<Candidate>& candidates() const { return candidates_; }

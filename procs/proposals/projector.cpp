@@ -139,10 +139,12 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     b.stability = c.stability;
     b.by_colour = c.by_colour;
     b.parts = c.parts;
+    b.lost = c.lost_since >= 0;
     b.points = static_cast<int>(p.pixels.size());
     boxes.push_back(b);
   }
-  // Ranking: the clusters on position first (those of the colour pass fill in where they leave
+  // Ranking: candidates the last clustering found before those it lost (keep_lost_s); among them,
+  // the clusters on position first (those of the colour pass fill in where they leave
   // an object uncovered), then those that do not split into two parts at the next finer scale
   // (two touching objects that a coarser threshold joins are often found alike at several scales,
   // and their box would suppress that of the larger one alone), then clusters found alike at
@@ -150,6 +152,7 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
   // same object also holds the smeared points around it and often a neighbour), then the ones
   // with more points.
   std::stable_sort(boxes.begin(), boxes.end(), [](const ProposalBox& a, const ProposalBox& b) {
+    if (a.lost != b.lost) return b.lost;
     if (a.by_colour != b.by_colour) return b.by_colour;
     if ((a.parts > 1) != (b.parts > 1)) return b.parts > 1;
     if (a.stability != b.stability) return a.stability > b.stability;

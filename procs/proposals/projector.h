@@ -20,6 +20,7 @@ struct ProposalBox {
   bool by_colour = false;            ///< the candidate was found only on position and colour
   int parts = 1;                     ///< the candidate's parts: 2 or more are touching objects
   int points = 0;                    ///< projected points inside the image
+  bool lost = false;                 ///< the candidate is kept after a re-clustering lost it (keep_lost_s)
 };
 
 struct ProjectionStats {

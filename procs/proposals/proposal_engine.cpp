@@ -78,7 +78,7 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
                    (options_.recluster_growth > 1 &&
                     static_cast<double>(points) >= options_.recluster_growth * static_cast<double>(last->second.points));
   if (!background_) {
-    if (!due || !map.recluster()) return false;
+    if (!due || !map.recluster(pose.utime)) return false;
     reclustered_[pose.map_id] = {pose.utime, points};
     return true;
   }
@@ -87,7 +87,7 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
     Clustering done = job_.get();
     // Its map may have been dropped or started over (another map id) meanwhile.
     const auto it = maps_.find(done.map_id);
-    taken = it != maps_.end() && it->second.adopt(std::move(done));
+    taken = it != maps_.end() && it->second.adopt(std::move(done), pose.utime);
   }
   if (!job_.valid() && due) {
     if (std::optional<ClusterInput> input = map.takeClusterInput()) {

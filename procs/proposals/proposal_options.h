@@ -109,6 +109,11 @@ struct ProposalOptions {
   /// (config/recognizer.yaml nms_iou), which keeps whole objects whose parts this ranking put first.
   double nms_iou = 1.0;
   int max_boxes = 100;           ///< boxes per frame at most
+  /// A candidate that a re-clustering does not find again, and whose voxels the new clusters do
+  /// not hold (at least `lost_held` of them), is kept for this many seconds of frame time (0:
+  /// dropped at once). Ranked after every candidate found.
+  double keep_lost_s = 0;
+  double lost_held = 0.8;  ///< share of a lost candidate's voxels that new clusters hold when it is represented
 
   template <class V>
   void visit(V& v) {
@@ -170,6 +175,8 @@ struct ProposalOptions {
     v("min_box_px", min_box_px, "px, smallest box side");
     v("nms_iou", nms_iou, "IoU above which boxes are suppressed here (>= 1: none; the recognizer suppresses by confidence)");
     v("max_boxes", max_boxes, "boxes per frame at most");
+    v("keep_lost_s", keep_lost_s, "s of frame time a candidate that a re-clustering lost (its region in no new cluster) is kept (0: off)");
+    v("lost_held", lost_held, "share of a lost candidate's voxels in new clusters at which it counts as found in them");
   }
 };
 

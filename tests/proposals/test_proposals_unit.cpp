@@ -7,6 +7,7 @@
 #include <thread>
 
 #include <cmath>
+#include <map>
 #include <set>
 
 #include "common/config.h"
@@ -476,6 +477,72 @@ TEST(ProposalIds, StableAcrossIncrementalUpdatesOfAGrowingMap) {
   map.update(2, false, 0, {}, tab);
   ASSERT_TRUE(reclusterFromAbove(map));
   EXPECT_TRUE(map.candidates().empty());
+}
+
+// keep_lost_s: a candidate that a re-clustering does not find again, and whose place no new
+// cluster holds (its points were left out of that clustering), stays a candidate with its id for
+// keep_lost_s of frame time, ranked after the candidates found; one whose voxels a new cluster
+// holds (merged into it) is dropped at once, and so is every lost one with keep_lost_s 0.
+TEST(ProposalIds, ALostCandidateIsKeptForKeepLostSeconds) {
+  auto candidate = [](const std::vector<MapPoint>& pts) {
+    Candidate c;
+    for (const auto& p : pts) c.points.push_back(p.p);
+    c.min = c.max = c.points.front();
+    for (const auto& q : c.points) {
+      c.min = c.min.cwiseMin(q);
+      c.max = c.max.cwiseMax(q);
+    }
+    return c;
+  };
+  const auto a = cylinder(-0.15f, 0, 0.04f, 0.1f, 0.004f), b = cylinder(0.15f, 0, 0.04f, 0.1f, 0.004f);
+  auto clustering = [&](std::vector<Candidate> found) {
+    Clustering c;
+    c.map_id = 1;
+    c.found = std::move(found);
+    c.key_voxel = 0.01;
+    return c;
+  };
+  auto ids = [](const CandidateMap& m) {
+    std::map<int32_t, int64_t> out;  // id -> lost_since
+    for (const auto& c : m.candidates()) out[c.id] = c.lost_since;
+    return out;
+  };
+  ProposalOptions o = metricOptions();
+  o.keep_lost_s = 1.0;
+  CandidateMap map(o);
+  map.update(1, false, 0, {}, join(a, b));
+  Candidate stable_b = candidate(b);
+  stable_b.stability = 2;  // found at two scales: it would rank first
+  ASSERT_TRUE(map.adopt(clustering({candidate(a), stable_b}), 0));
+  const auto first = ids(map);
+  ASSERT_EQ(first.size(), 2u);
+  const int32_t id_a = first.begin()->first, id_b = std::next(first.begin())->first;
+  // b left out of the next clusterings: kept, lost since the first of them, until 1 s later.
+  ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 500000));
+  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}, {id_b, 500000}}));
+  ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 1500000));
+  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}, {id_b, 500000}})) << "lost 1 s ago: still kept";
+  // Ranked after the candidate found, though found at more scales.
+  const auto boxes = projectCandidates(map.candidates(), vga(), lookAt({0, -0.5, 0.3}, {0, 0, 0.05}), o);
+  ASSERT_EQ(boxes.size(), 2u);
+  EXPECT_EQ(boxes[0].candidate_id, id_a);
+  EXPECT_EQ(boxes[1].candidate_id, id_b);
+  EXPECT_TRUE(boxes[1].lost);
+  ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 1500001));
+  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}})) << "lost more than 1 s ago: dropped";
+  // Found again: a new candidate in its place.
+  ASSERT_TRUE(map.adopt(clustering({candidate(a), candidate(b)}), 1600000));
+  ASSERT_EQ(map.candidates().size(), 2u);
+  // a merged into a cluster with b: the new cluster holds a's voxels, a is not kept beside it.
+  ASSERT_TRUE(map.adopt(clustering({candidate(join(a, b))}), 1700000));
+  ASSERT_EQ(map.candidates().size(), 1u);
+  EXPECT_EQ(map.candidates()[0].lost_since, -1);
+  // keep_lost_s 0: a candidate not found again is dropped at once.
+  CandidateMap plain(metricOptions());
+  plain.update(1, false, 0, {}, join(a, b));
+  ASSERT_TRUE(plain.adopt(clustering({candidate(a), candidate(b)}), 0));
+  ASSERT_TRUE(plain.adopt(clustering({candidate(a)}), 500000));
+  EXPECT_EQ(plain.candidates().size(), 1u);
 }
 
 // A map of objects on a table seen from above gives boxes; degenerate input gives none and no
