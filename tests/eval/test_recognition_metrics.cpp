@@ -327,13 +327,14 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
     EXPECT_NEAR(b.fused.log_p[0], cap - norm, 1e-5);
     EXPECT_NEAR(b.fused.log_p[1], mug - norm, 1e-5);
     EXPECT_NEAR(b.fused.log_p[2], bg - norm, 1e-5);
-    // Labelled by the fused evidence, scored with the objectness of the box's view and of its
-    // candidate's three views (0.9, 0.9, 0.95), which are also all of its object's.
+    // Labelled by the fused evidence, scored with the box's own view's p(mug) and the objectness
+    // of its candidate's three views (0.9, 0.9, 0.95), which are also all of its object's.
     EXPECT_EQ(b.multi.label, 1);
     ASSERT_EQ(b.multi.log_p.size(), 3u);
     const double views = (0.9 + 0.9 + 0.95) / 3;
-    const double objectness = std::cbrt((f == 10 ? 0.95 : 0.9) * views * views);
-    EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(objectness), 1e-5);
+    EXPECT_NEAR(b.log_objectness, std::log(std::cbrt((f == 10 ? 0.95 : 0.9) * views * views)), 1e-5);
+    const double box_class = std::cbrt((f == 10 ? 0.9 : 0.4) * views * views);
+    EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(box_class), 1e-5);
     EXPECT_NEAR(b.single.log_p[1], std::log(f == 10 ? 0.9 : 0.4), 1e-6);
   }
   // The other candidate keeps its own (background) evidence.
@@ -425,18 +426,47 @@ TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesAndItsObjectsViews
   EXPECT_NEAR(frames[2][1].log_objectness, mean3(0.6, 0.7, 0.48), 1e-9);
   EXPECT_NEAR(frames[0][2].log_objectness, mean3(0.9, 0.2625, 0.2625), 1e-9);
   EXPECT_NEAR(frames[2][3].log_objectness, std::log(0.5), 1e-9);
-  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::cbrt(0.8 * 0.7 * 0.48), 1e-9);
+  // Scored with the box's own view's p(mug | box), 0.4, in place of its 1 - p(background), 0.8.
+  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::cbrt(0.4 * 0.7 * 0.48), 1e-9);
+  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[0]), 0.1 * std::cbrt(0.4 * 0.7 * 0.48), 1e-9);
   EXPECT_LT(frames[0][0].multi.log_p[1], frames[0][1].multi.log_p[1])
       << "the same view, but the candidate's other views say it is not a whole object";
   EXPECT_LT(frames[0][2].multi.log_p[1], frames[0][1].multi.log_p[1])
       << "a surer view and the same fused class, but the object's other views call it background";
 }
 
+// Two boxes of one candidate in one frame, both sure they frame an object (p(background) 0.1): the
+// one whose own view gives the object's fused class 0.85 ranks above the one whose view gives it
+// 0.3 (a box on the mug and its neighbour, which the view takes partly for a cap). Labels stay.
+TEST(MultiViewLabels, ABoxsOwnViewOfTheFusedClassRanksItAmongTheObjectsBoxes) {
+  auto box = [](std::vector<double> p) {
+    RecognitionRecording::Box b;
+    b.map_id = 1;
+    b.candidate = 3;
+    b.object = 7;
+    for (double& v : p) v = std::log(v);
+    b.single.log_p = p;
+    b.fused.log_p = {std::log(0.05), std::log(0.9), std::log(0.05)};
+    return b;
+  };
+  std::map<int32_t, std::vector<RecognitionRecording::Box>> frames;
+  frames[0] = {box({0.05, 0.85, 0.1}), box({0.6, 0.3, 0.1})};
+  scoreMultiView(&frames);
+  const auto& framed = frames[0][0].multi.log_p;
+  const auto& joined = frames[0][1].multi.log_p;
+  EXPECT_DOUBLE_EQ(frames[0][0].log_objectness, frames[0][1].log_objectness) << "both equally sure of an object";
+  EXPECT_NEAR(std::exp(framed[1]), 0.9 * std::cbrt(0.85 * 0.9 * 0.9), 1e-9);
+  EXPECT_NEAR(std::exp(joined[1]), 0.9 * std::cbrt(0.3 * 0.9 * 0.9), 1e-9);
+  EXPECT_GT(framed[1], joined[1]);
+  EXPECT_NEAR(std::exp(framed[0]) + std::exp(framed[1]) + std::exp(framed[2]), 1.0, 1e-9);
+}
+
 // One object, one detection per frame: of the boxes of one object in a frame, the one its own view
-// finds most object-like keeps its scores; the others are demoted by a Gaussian of their overlap
-// with it (Soft-NMS): a box framing the object as the kept one does ranks below the detections, a
-// box on another part of the object that hardly overlaps the kept one keeps most of its score. Their
-// label stays the object's, and a box of another object (or of none) is untouched.
+// finds most object-like keeps its scores; the others are demoted by a Gaussian of the share of
+// them inside it (Soft-NMS): a box framing the object as the kept one does, or a part of it inside
+// the kept box (a sliver with an IoU of only 0.2), ranks below the detections; a box on another
+// part of the object beside the kept one keeps its score. Their label stays the object's, and a box
+// of another object (or of none) is untouched.
 TEST(MultiViewLabels, DuplicatesOfAnObjectInAFrameAreDemotedByTheirOverlap) {
   auto box = [](int32_t object, double log_bg, std::vector<double> multi, Box2 where) {
     RecognitionRecording::Box b;
@@ -448,35 +478,38 @@ TEST(MultiViewLabels, DuplicatesOfAnObjectInAFrameAreDemotedByTheirOverlap) {
     return b;
   };
   const std::vector<double> mug{std::log(0.02), std::log(0.9), std::log(0.08)};
-  const Box2 whole{100, 100, 50, 50}, shifted{105, 100, 50, 50}, beside{150, 100, 20, 50};
+  const Box2 whole{100, 100, 50, 50}, shifted{105, 100, 50, 50}, beside{150, 100, 20, 50}, side{110, 100, 10, 50};
   std::vector<RecognitionRecording::Box> boxes{box(4, std::log(0.6), mug, shifted), box(4, std::log(0.1), mug, whole),
                                                box(4, std::log(0.7), mug, beside), box(7, std::log(0.9), mug, whole),
-                                               box(-1, std::log(0.9), mug, whole)};
-  EXPECT_EQ(demoteDuplicateBoxes(&boxes), 1);
+                                               box(-1, std::log(0.9), mug, whole),  box(4, std::log(0.3), mug, side)};
+  EXPECT_EQ(demoteDuplicateBoxes(&boxes), 2);
   EXPECT_EQ(boxes[1].multi.log_p, mug) << "the most object-like box of object 4 keeps its scores";
   EXPECT_EQ(boxes[3].multi.log_p, mug);
   EXPECT_EQ(boxes[4].multi.log_p, mug);
-  const double overlap = 45.0 * 50 / (2 * 2500 - 45.0 * 50);  // shifted against whole: IoU 9/11
+  const double overlap = 45.0 * 50 / 2500;  // 90 % of the shifted box inside the whole (IoU 9/11)
   const double demoted = -overlap * overlap / kDuplicateSigma;
+  EXPECT_NEAR(boxes[5].multi.log_p[1], std::log(0.9) - 1 / kDuplicateSigma, 1e-9)
+      << "the side of the object, wholly inside the kept box: demoted as a duplicate, not by its IoU (0.2)";
   EXPECT_NEAR(boxes[0].multi.log_p[1], std::log(0.9) + demoted, 1e-9);
   EXPECT_NEAR(boxes[0].multi.log_p[0], std::log(0.02) + demoted, 1e-9);
   EXPECT_NEAR(std::exp(boxes[0].multi.log_p[2]), 1 - (0.92 * std::exp(demoted)), 1e-9);
   EXPECT_EQ(boxes[2].multi.log_p, mug) << "no overlap with the kept box: another part, its score stays";
   EXPECT_EQ(boxes[0].multi.label, 1) << "a duplicate keeps its object's label";
 
-  // Scored: the kept box matches the mug; the shifted duplicate is a false positive ranked after
-  // every other box.
+  // Scored: the kept box matches the mug; the shifted duplicate and the side are false positives
+  // ranked after every other box.
   RecognitionScores s = emptyScores({"cap", "coffee_mug"});
   std::vector<LabelledBox> frame;
   for (auto& b : boxes) frame.push_back(b.multi);
   scoreFrame(kModel, frame, {truth(0, 100, 100, 50, 50, "coffee_mug")}, 0.5, &s);
   const ClassTally& t = s.classes.at("coffee_mug");
-  ASSERT_EQ(t.ranked.size(), 5u);
+  ASSERT_EQ(t.ranked.size(), 6u);
   EXPECT_EQ(std::count_if(t.ranked.begin(), t.ranked.end(), [](const ScoredDetection& d) { return d.true_positive; }), 1);
   std::vector<ScoredDetection> ranked = t.ranked;
   std::sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& y) { return x.score < y.score; });
-  EXPECT_FALSE(ranked.front().true_positive);
-  EXPECT_LT(ranked.front().score, ranked[1].score - 5) << "the shifted duplicate ranks last, far below";
+  EXPECT_FALSE(ranked[0].true_positive);
+  EXPECT_FALSE(ranked[1].true_positive);
+  EXPECT_LT(ranked[1].score, ranked[2].score - 5) << "the shifted duplicate and the side rank last, far below";
 }
 
 // Two candidates of one object (the proposals stage over-segments; here two clusters of the same

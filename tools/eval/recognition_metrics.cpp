@@ -380,17 +380,29 @@ double logObjectness(const std::vector<double>& log_p) {
 
 namespace {
 
-// Adds `log_factor` to the object classes of `log_p` (background last) and gives the background the
-// rest of the probability.
-void scaleObjectClasses(std::vector<double>* log_p, double log_factor) {
+// Adds `log_factors[c]` to each object class c of `log_p` (background last) and gives the
+// background the rest of the probability.
+void scaleObjectClasses(std::vector<double>* log_p, const std::vector<double>& log_factors) {
   if (log_p->empty()) return;
   const size_t bg = log_p->size() - 1;
   double object_sum = 0;
   for (size_t c = 0; c < bg; ++c) {
-    (*log_p)[c] += log_factor;
+    (*log_p)[c] += log_factors[c];
     object_sum += std::exp((*log_p)[c]);
   }
   (*log_p)[bg] = std::log(std::max(1e-300, 1.0 - std::min(1.0, object_sum)));
+}
+
+void scaleObjectClasses(std::vector<double>* log_p, double log_factor) {
+  scaleObjectClasses(log_p, std::vector<double>(log_p->size(), log_factor));
+}
+
+// The share of box a's area that lies inside box b (0 for an empty a).
+double shareInside(const Box2& a, const Box2& b) {
+  const double w = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
+  const double h = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
+  const double area = a.w * a.h;
+  return w > 0 && h > 0 && area > 0 ? w * h / area : 0.0;
 }
 
 }  // namespace
@@ -398,6 +410,12 @@ void scaleObjectClasses(std::vector<double>* log_p, double log_factor) {
 std::vector<double> multiViewScores(const std::vector<double>& fused, double log_objectness) {
   std::vector<double> out = fused;
   scaleObjectClasses(&out, log_objectness);
+  return out;
+}
+
+std::vector<double> multiViewScores(const std::vector<double>& fused, const std::vector<double>& log_box) {
+  std::vector<double> out = fused;
+  if (log_box.size() == out.size()) scaleObjectClasses(&out, log_box);
   return out;
 }
 
@@ -422,8 +440,13 @@ void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* f
     }
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
-      b.log_objectness = (b.log_objectness + candidates.at({b.map_id, b.candidate}).log() + objectMean(b).log()) / 3;
-      b.multi.log_p = multiViewScores(b.fused.log_p, b.log_objectness);
+      const double views = candidates.at({b.map_id, b.candidate}).log() + objectMean(b).log();
+      b.log_objectness = (b.log_objectness + views) / 3;
+      // Per class c, the box's own view's p(c | box) in place of its 1 - p(background | box).
+      std::vector<double> log_box(b.fused.log_p.size(), b.log_objectness);
+      if (b.single.log_p.size() == log_box.size())
+        for (size_t c = 0; c + 1 < log_box.size(); ++c) log_box[c] = (std::min(0.0, b.single.log_p[c]) + views) / 3;
+      b.multi.log_p = multiViewScores(b.fused.log_p, log_box);
     }
 }
 
@@ -444,7 +467,7 @@ int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
   for (size_t i = 0; i < boxes->size(); ++i) {
     RecognitionRecording::Box& b = (*boxes)[i];
     if (b.object < 0 || best.at(b.object) == i || b.multi.log_p.empty()) continue;
-    const double overlap = iou(b.multi.box, (*boxes)[best.at(b.object)].multi.box);  // with the kept box
+    const double overlap = shareInside(b.multi.box, (*boxes)[best.at(b.object)].multi.box);
     if (!(overlap > 0)) continue;  // another part of the object, beside the kept box
     scaleObjectClasses(&b.multi.log_p, std::max(kMinLogProb, -overlap * overlap / kDuplicateSigma));
     ++duplicates;

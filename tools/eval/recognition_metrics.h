@@ -149,7 +149,7 @@ struct RecognitionRecording {
     LabelledBox multi;   ///< label of `fused`, scored by scoreMultiView()
     int32_t map_id = -1, candidate = -1;
     int32_t object = -1;  ///< id of its object in the replayed map (-1: fallback)
-    double log_objectness = 0;  ///< log p(object | box) of its multi-view score (scoreMultiView)
+    double log_objectness = 0;  ///< log p(object | box): its own view's, its candidate's, its object's (scoreMultiView)
     bool multi_from_object = true;
   };
   std::vector<std::string> classes;  ///< the model's, background last
@@ -182,32 +182,40 @@ double logObjectness(const std::vector<double>& log_p);
 /// or on the mug and half the table, is a view of the mug's object but not a mug detection). The
 /// reported label stays the fused posterior's argmax.
 std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, double log_objectness);
+/// The same with a factor per class: p(c) = p(c | object's views) x exp(log_box[c]) for each
+/// object class c (log_box as long as fused_log_p; otherwise the fused posterior unchanged).
+std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, const std::vector<double>& log_box);
 
 /// Scores every box of a recording (`frames`, their single and fused log p set) as a multi-view
-/// detection: multiViewScores() with p(object | box) the geometric mean of three: the box's own
-/// view's 1 - p(background | box), the mean of that over every box of its candidate in the
-/// recording (a candidate that is a part of an object, or an object with a stretch of table, is
+/// detection: for each object class c, p(c | object's views) x the geometric mean of three: the
+/// box's own view's p(c | box), the mean of 1 - p(background) over every box of its candidate in
+/// the recording (a candidate that is a part of an object, or an object with a stretch of table, is
 /// boxed alike in most of its views, and most of them say so; one view alone is noisy), and the
-/// mean over every box of its object (all its candidates; a box without an object: its candidate's
-/// again). The last is what the object's views say of whether it is an object at all: the fused
-/// class posterior weights each view by its objectness, so a distractor that most of its views
-/// call background gets the class its few other views give it (lab_marble's mushroom: 242 of its
-/// 309 boxes called background, fused bowl 0.71).
+/// mean of that over every box of its object (all its candidates; a box without an object: its
+/// candidate's again). The last is what the object's views say of whether it is an object at all:
+/// the fused class posterior weights each view by its objectness, so a distractor that most of its
+/// views call background gets the class its few other views give it (lab_marble's mushroom: 242 of
+/// its 309 boxes called background, fused bowl 0.71). The box's own view says how well *this box*
+/// shows an object of class c: a box on a part of the object or on it and its neighbour is less
+/// sure of the object's class than one that frames it, even where both are sure they frame an
+/// object. `log_objectness` keeps the mean with the box's own 1 - p(background | box).
 void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames);
 
-/// The width of demoteDuplicateBoxes()'s Gaussian, in squared IoU.
+/// The width of demoteDuplicateBoxes()'s Gaussian, in the squared share of a box inside the kept one.
 constexpr double kDuplicateSigma = 0.1;
 
 /// An object is one detection per frame. Of the boxes of one frame (`boxes`) whose candidates
 /// belong to the same object of the map, the one its own view finds most object-like (lowest
 /// p(background | box); ties: the earlier box) keeps its multi-view scores; the others are
-/// duplicates of it, demoted as by Soft-NMS (Bodla et al. 2017) with a Gaussian of their IoU with
-/// the kept box: their object classes are scaled by exp(-IoU^2 / kDuplicateSigma), at least by
-/// e^-100. A box that frames the object much as the kept one does ranks below every detection; a
-/// box of the same object that hardly overlaps the kept one (another of its parts, which may frame
-/// the object better than the kept sliver) keeps most of its score. Their label, the object's,
-/// stays. Boxes without an object (-1), and boxes that do not overlap the kept one, are left
-/// alone. Returns the number of duplicates demoted.
+/// duplicates of it, demoted as by Soft-NMS (Bodla et al. 2017) with a Gaussian of the share s of
+/// their area that lies inside the kept box: their object classes are scaled by
+/// exp(-s^2 / kDuplicateSigma), at least by e^-100. A box that frames the object much as the kept
+/// one does, or a part of it inside the kept box (a cereal box's side face, which the fused
+/// evidence calls a cereal box as well), ranks below every detection; a box of the same object
+/// that lies mostly outside the kept one (another of its parts, or the whole object around a
+/// kept sliver of it) keeps most of its score. Their label, the object's, stays. Boxes without an
+/// object (-1), and boxes that do not overlap the kept one, are left alone. Returns the number of
+/// duplicates demoted.
 int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes);
 
 /// Reads DETECTIONS of a recorded log and replays it through MultiViewLabeller (`options`: the
