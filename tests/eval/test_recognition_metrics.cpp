@@ -372,16 +372,17 @@ TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
     return p;
   };
   const std::vector<double> fused = lg({0.02, 0.97, 0.01});  // the object is a mug
-  const std::vector<double> framed = multiViewScores(fused, logObjectness(lg({0.1, 0.8, 0.1})));
-  const std::vector<double> part = multiViewScores(fused, logObjectness(lg({0.05, 0.05, 0.9})));
+  const auto every = [](double log_factor) { return std::vector<double>(3, log_factor); };
+  const std::vector<double> framed = multiViewScores(fused, every(logObjectness(lg({0.1, 0.8, 0.1}))));
+  const std::vector<double> part = multiViewScores(fused, every(logObjectness(lg({0.05, 0.05, 0.9}))));
   ASSERT_EQ(framed.size(), 3u);
   EXPECT_NEAR(std::exp(framed[1]), 0.97 * 0.9, 1e-9);
   EXPECT_NEAR(std::exp(framed[0]), 0.02 * 0.9, 1e-9);
   EXPECT_NEAR(std::exp(framed[0]) + std::exp(framed[1]) + std::exp(framed[2]), 1.0, 1e-9);
   EXPECT_NEAR(std::exp(part[1]), 0.97 * 0.1, 1e-9);
   // A box whose view is sure it frames an object (log p(background) = -800) scores as the object.
-  EXPECT_NEAR(multiViewScores(fused, logObjectness({-1, -0.5, -800}))[1], std::log(0.97), 1e-9);
-  EXPECT_EQ(multiViewScores({}, 0.0), std::vector<double>{});
+  EXPECT_NEAR(multiViewScores(fused, every(logObjectness({-1, -0.5, -800})))[1], std::log(0.97), 1e-9);
+  EXPECT_EQ(multiViewScores({}, std::vector<double>{}), std::vector<double>{});
   EXPECT_EQ(logObjectness({}), 0.0);
 
   // Both boxes over a mug in one frame: the framing one is ranked first and matched; the part

@@ -407,12 +407,6 @@ double shareInside(const Box2& a, const Box2& b) {
 
 }  // namespace
 
-std::vector<double> multiViewScores(const std::vector<double>& fused, double log_objectness) {
-  std::vector<double> out = fused;
-  scaleObjectClasses(&out, log_objectness);
-  return out;
-}
-
 std::vector<double> multiViewScores(const std::vector<double>& fused, const std::vector<double>& log_box) {
   std::vector<double> out = fused;
   if (log_box.size() == out.size()) scaleObjectClasses(&out, log_box);

@@ -176,14 +176,12 @@ nlohmann::json objectMapSummary(const ObjectMapEngine& engine);
 double logObjectness(const std::vector<double>& log_p);
 
 /// The multi-view detection scores of a box (log, in the model's class order, background last)
-/// from its object's fused posterior and p(object | box): p(c) = p(c | object's views) x p(object |
-/// box) for each object class, p(background) the rest. The object's views say which object it is;
-/// only the box's views can say whether this box frames the whole object (a box on a part of a mug,
-/// or on the mug and half the table, is a view of the mug's object but not a mug detection). The
-/// reported label stays the fused posterior's argmax.
-std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, double log_objectness);
-/// The same with a factor per class: p(c) = p(c | object's views) x exp(log_box[c]) for each
-/// object class c (log_box as long as fused_log_p; otherwise the fused posterior unchanged).
+/// from its object's fused posterior and p(c, object | box) per class (log_box, as long as
+/// fused_log_p; otherwise the fused posterior unchanged): p(c) = p(c | object's views) x
+/// exp(log_box[c]) for each object class, p(background) the rest. The object's views say which
+/// object it is; only the box's views can say whether this box frames the whole object (a box on a
+/// part of a mug, or on the mug and half the table, is a view of the mug's object but not a mug
+/// detection). The reported label stays the fused posterior's argmax.
 std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, const std::vector<double>& log_box);
 
 /// Scores every box of a recording (`frames`, their single and fused log p set) as a multi-view
