@@ -47,6 +47,10 @@ struct Sim3 {
 Sim3 alignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
                   bool with_scale);
 
+/// The area two axis-aligned boxes, given by their top-left corner and size, have in common (0 when
+/// they do not overlap).
+double rectIntersection(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh);
+
 /// Intersection over union of two axis-aligned boxes given by their top-left corner and size
 /// (px); 0 when neither has an area.
 double rectIou(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh);

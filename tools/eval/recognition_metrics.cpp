@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/bus/log_reader.h"
+#include "common/geometry.h"
 #include "common/image_codec.h"
 #include "procs/objectmap/fusion.h"
 #include "tools/eval/plot.h"
@@ -399,10 +400,8 @@ void scaleObjectClasses(std::vector<double>* log_p, double log_factor) {
 
 // The share of box a's area that lies inside box b (0 for an empty a).
 double shareInside(const Box2& a, const Box2& b) {
-  const double w = std::min(a.x + a.w, b.x + b.w) - std::max(a.x, b.x);
-  const double h = std::min(a.y + a.h, b.y + b.h) - std::max(a.y, b.y);
   const double area = a.w * a.h;
-  return w > 0 && h > 0 && area > 0 ? w * h / area : 0.0;
+  return area > 0 ? rectIntersection(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) / area : 0.0;
 }
 
 }  // namespace
