@@ -101,26 +101,13 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
   return taken;
 }
 
-proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* reclustered) {
+proposals_t ProposalEngine::project(const CandidateMap& map, int64_t utime, int32_t seq, int32_t map_id,
+                                    const SE3& T_wc, ProjectionStats* stats) const {
   proposals_t m{};
-  m.utime = pose.utime;
-  m.seq = pose.seq;
-  m.map_id = pose.map_id;
-  m.num_boxes = 0;
-  last_ = ProjectionStats{};
-  if (reclustered) *reclustered = false;
-  const bool located = pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
-  const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
-  if (!T_wc.matrix().allFinite()) {
-    *why = "SLAM_POSE seq " + std::to_string(pose.seq) + ": pose is not finite";
-    return m;
-  }
-  if (!located || !have_camera_) return m;
-  if (!maps_.count(pose.map_id)) return m;  // no point of that map yet
-  CandidateMap& map = mapOf(pose.map_id);
-  map.addView(pose.map_id, T_wc);
-  if (recluster(map, pose) && reclustered) *reclustered = true;
-  for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, &last_)) {
+  m.utime = utime;
+  m.seq = seq;
+  m.map_id = map_id;
+  for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, stats)) {
     box_t bx{};
     bx.x = b.x;
     bx.y = b.y;
@@ -132,6 +119,72 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
   }
   m.num_boxes = static_cast<int32_t>(m.boxes.size());
   return m;
+}
+
+void ProposalEngine::onKeyframe(const keyframe_t& k) {
+  if (k.culled) {
+    late_.erase(k.seq);
+    return;
+  }
+  const auto it = unproposed_.find(k.seq);
+  if (options_.late_keyframe_delay_s < 0 || it == unproposed_.end() || it->second != k.utime) return;
+  const SE3 T_wc = se3FromArrays(k.position, k.orientation);
+  if (!T_wc.matrix().allFinite()) return;
+  late_[k.seq] = LateKeyframe{k.utime, k.map_id, T_wc};
+}
+
+std::vector<proposals_t> ProposalEngine::takeLateProposals() {
+  std::vector<proposals_t> out;
+  out.swap(late_out_);
+  return out;
+}
+
+void ProposalEngine::projectLateKeyframes(const CandidateMap& map, int32_t map_id, int64_t utime) {
+  const double delay_us = 1e6 * options_.late_keyframe_delay_s;
+  for (auto it = late_.begin(); it != late_.end();) {
+    const double age_us = static_cast<double>(utime - it->second.utime);
+    if (it->second.map_id == map_id && age_us >= delay_us) {
+      late_out_.push_back(project(map, it->second.utime, it->first, map_id, it->second.T_wc, nullptr));
+      it = late_.erase(it);
+    } else if (age_us > delay_us + 2e6) {
+      it = late_.erase(it);  // its map did not come back in time: its frame is gone from the recognizer
+    } else {
+      ++it;
+    }
+  }
+}
+
+proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* reclustered) {
+  proposals_t m{};
+  m.utime = pose.utime;
+  m.seq = pose.seq;
+  m.map_id = pose.map_id;
+  m.num_boxes = 0;
+  last_ = ProjectionStats{};
+  late_out_.clear();
+  if (reclustered) *reclustered = false;
+  if (pose.utime < last_pose_utime_) {  // a replay started again: earlier frames are other frames
+    unproposed_.clear();
+    late_.clear();
+  }
+  last_pose_utime_ = pose.utime;
+  // Until it is projected below, the frame has no proposals (a keyframe of it may get them late).
+  unproposed_[pose.seq] = pose.utime;
+  while (unproposed_.size() > 64) unproposed_.erase(unproposed_.begin());
+  const bool located = pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
+  const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
+  if (!T_wc.matrix().allFinite()) {
+    *why = "SLAM_POSE seq " + std::to_string(pose.seq) + ": pose is not finite";
+    return m;
+  }
+  if (!located || !have_camera_) return m;
+  if (!maps_.count(pose.map_id)) return m;  // no point of that map yet
+  unproposed_.erase(pose.seq);
+  CandidateMap& map = mapOf(pose.map_id);
+  map.addView(pose.map_id, T_wc);
+  if (recluster(map, pose) && reclustered) *reclustered = true;
+  projectLateKeyframes(map, pose.map_id, pose.utime);
+  return project(map, pose.utime, pose.seq, pose.map_id, T_wc, &last_);
 }
 
 }  // namespace slamaware

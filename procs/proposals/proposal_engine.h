@@ -16,6 +16,7 @@
 #include "procs/proposals/candidate_map.h"
 #include "procs/proposals/projector.h"
 #include "slamaware/camera_info_t.hpp"
+#include "slamaware/keyframe_t.hpp"
 #include "slamaware/point_cloud_t.hpp"
 #include "slamaware/pose_t.hpp"
 #include "slamaware/proposals_t.hpp"
@@ -39,6 +40,15 @@ class ProposalEngine {
   /// map changed (*reclustered = true; with background clustering: a clustering finished and was
   /// taken).
   proposals_t onPose(const pose_t& pose, std::string* why, bool* reclustered = nullptr);
+  /// A SLAM_KEYFRAME. A keyframe whose frame got no proposals when its pose came (not located
+  /// yet: the reference frame a map is initialised from; or its map had no points yet) is kept
+  /// with its pose (the latest, bundle adjustment moves it); once a pose of its map is
+  /// `late_keyframe_delay_s` of frame time later, that onPose projects the candidates into it as
+  /// well (takeLateProposals). A culled keyframe is forgotten.
+  void onKeyframe(const keyframe_t& keyframe);
+  /// The late proposals of keyframes (onKeyframe) that the last onPose projected, oldest first;
+  /// empty when none came due. Their utime and seq are their own frame's, older than the pose's.
+  std::vector<proposals_t> takeLateProposals();
 
   /// The candidates of the map the last pose was in (SLAM may go back to an older map: the
   /// `max_maps` most recently used maps are kept).
@@ -53,6 +63,12 @@ class ProposalEngine {
   /// Clusters `map` when due: at once, or (background) takes a finished clustering and starts the
   /// next one. True when new candidates were taken.
   bool recluster(CandidateMap& map, const pose_t& pose);
+  /// The message of the candidates of `map` projected with T_wc into frame (utime, seq).
+  proposals_t project(const CandidateMap& map, int64_t utime, int32_t seq, int32_t map_id, const SE3& T_wc,
+                      ProjectionStats* stats) const;
+  /// Projects the keyframes waiting for late proposals in map_id that are due at `utime`; forgets
+  /// those too old to be due.
+  void projectLateKeyframes(const CandidateMap& map, int32_t map_id, int64_t utime);
 
   std::map<int32_t, CandidateMap> maps_;
   std::vector<int32_t> recent_;  ///< map ids, most recently used last
@@ -68,6 +84,15 @@ class ProposalEngine {
   ProjectionStats last_;
   bool background_ = false;
   std::future<Clustering> job_;  ///< the clustering running on the worker thread (background)
+  std::map<int32_t, int64_t> unproposed_;  ///< seq -> utime of the latest frames that got no proposals
+  int64_t last_pose_utime_ = 0;
+  struct LateKeyframe {
+    int64_t utime = 0;
+    int32_t map_id = -1;
+    SE3 T_wc;
+  };
+  std::map<int32_t, LateKeyframe> late_;  ///< seq -> keyframe waiting for its proposals
+  std::vector<proposals_t> late_out_;
 };
 
 }  // namespace slamaware

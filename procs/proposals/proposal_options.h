@@ -114,6 +114,11 @@ struct ProposalOptions {
   /// dropped at once). Ranked after every candidate found.
   double keep_lost_s = 0;
   double lost_held = 0.8;  ///< share of a lost candidate's voxels that new clusters hold when it is represented
+  /// A keyframe whose frame was not located when its pose came (the reference frame a map is
+  /// initialised from) gets its PROPOSALS once the map is this many seconds of frame time older
+  /// than it: the objects seen before SLAM initialised are proposed too, from a map grown for
+  /// that long (< 0: never). The recognizer keeps `frame_buffer` frames to join them with.
+  double late_keyframe_delay_s = 0.5;
 
   template <class V>
   void visit(V& v) {
@@ -177,6 +182,7 @@ struct ProposalOptions {
     v("max_boxes", max_boxes, "boxes per frame at most");
     v("keep_lost_s", keep_lost_s, "s of frame time a candidate that a re-clustering lost (its region in no new cluster) is kept (0: off)");
     v("lost_held", lost_held, "share of a lost candidate's voxels in new clusters at which it counts as found in them");
+    v("late_keyframe_delay_s", late_keyframe_delay_s, "s of frame time after which a keyframe whose frame was not located (a map's reference frame) gets its proposals (< 0: never)");
   }
 };
 

@@ -1,6 +1,7 @@
 // slamaware-proposals: object candidates from the semi-dense map, projected into every frame.
-// Reads CAMERA_INFO, SLAM_MAP (clusters again when the map changed) and SLAM_POSE; publishes one
-// PROPOSALS per SLAM_POSE (empty when the frame is not localised or nothing is in view).
+// Reads CAMERA_INFO, SLAM_MAP (clusters again when the map changed), SLAM_POSE and SLAM_KEYFRAME;
+// publishes one PROPOSALS per SLAM_POSE (empty when the frame is not localised or nothing is in
+// view), and one more, later, for a keyframe whose frame got none (a map's reference frame).
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -17,7 +18,7 @@
 using namespace slamaware;
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE -> PROPOSALS)"};
+  CLI::App app{"slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE, SLAM_KEYFRAME -> PROPOSALS)"};
   NodeArgs node;
   addNodeOptions(app, node);
   CLI11_PARSE(app, argc, argv);
@@ -46,6 +47,8 @@ int main(int argc, char** argv) {
           if (!engine.onMap(c, &why)) bus.reject(ch.slam_map, why);
         },
         sys.bus.max_map_bytes);
+    bus.subscribe<keyframe_t>(ch.slam_keyframe, [&](const keyframe_t& k) { engine.onKeyframe(k); },
+                              sys.bus.max_message_bytes);
     std::deque<pose_t> pending;
     bus.subscribe<pose_t>(ch.slam_pose, [&](const pose_t& p) { pending.push_back(p); }, sys.bus.max_message_bytes);
 
@@ -65,6 +68,11 @@ int main(int argc, char** argv) {
         spdlog::debug("map {}: {} points, {} single-view, {} seen through, planes {}, {} clustered -> {} candidates in {:.0f} ms",
                       engine.map().mapId(), s.input_points, s.single_view, s.seen_through, s.plane_points, s.clustered_points,
                       s.clusters, s.ms);
+      }
+      // A keyframe's late proposals first: in lockstep the frame's answer then comes after theirs.
+      for (const proposals_t& late : engine.takeLateProposals()) {
+        bus.publish(ch.proposals, late);
+        status.count("late_keyframe_proposals");
       }
       bus.publish(ch.proposals, out);
       status.setCounter("boxes_last_frame", out.num_boxes);

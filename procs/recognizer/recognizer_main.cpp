@@ -4,7 +4,8 @@
 // Lockstep (bus.lockstep or --lockstep): every PROPOSALS message is answered by exactly one
 // DETECTIONS message, in order, empty when it has no usable boxes or no frame. Real time: after
 // draining the bus, only the newest joined frame is classified; older joined ones are dropped and
-// counted (frames_dropped). Bad input (a proposal for a frame never seen, boxes outside the image
+// counted (frames_dropped). Proposals for a frame older than those already taken (the late
+// proposals of a map's reference keyframe, procs/proposals) are classified, never dropped. Bad input (a proposal for a frame never seen, boxes outside the image
 // or of zero size, a corrupt JPEG, an unreadable model, classes the config names but the model
 // lacks) is counted in RECOGNIZER_STATUS and never stops the process.
 #include <fmt/format.h>
@@ -113,15 +114,13 @@ class RecognizerNode {
     joiner_.expire(nowS());
     auto& ready = joiner_.ready();
     // Real time: of the joined frames waiting, only the newest is classified; the others are
-    // dropped (and counted). Proposals without a frame are still answered (cheaply).
-    size_t newest = ready.size();
-    if (!lockstep_)
-      for (size_t i = 0; i < ready.size(); ++i)
-        if (ready[i].frame) newest = i;
-    for (size_t i = 0; !ready.empty() && !shutdownRequested(); ++i) {
+    // dropped (and counted). Proposals without a frame are still answered (cheaply), and so are
+    // late ones (for an older frame, sent late on purpose: rare).
+    if (!lockstep_) joiner_.markRealTimeDrops();
+    while (!ready.empty() && !shutdownRequested()) {
       Joiner::Job job = std::move(ready.front());
       ready.pop_front();
-      if (!lockstep_ && job.frame && i != newest) {
+      if (job.drop) {
         status_.noteInput(job.proposals.utime, job.proposals.seq);
         status_.addDropped();
         continue;

@@ -8,6 +8,7 @@
 // stream, can never be joined and comes out as a job without a frame (the node answers it with
 // empty detections and counts it); one for a frame not yet received waits, up to `max_pending`
 // messages and `timeout_s` seconds.
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -25,6 +26,7 @@ class SeqJoiner {
     Proposals proposals;
     std::optional<Frame> frame;  ///< set when joined
     Outcome outcome = Outcome::kJoined;
+    bool drop = false;  ///< real time: a newer joined frame is waiting (markRealTimeDrops)
   };
 
   SeqJoiner(size_t max_frames, size_t max_pending, double timeout_s)
@@ -35,7 +37,10 @@ class SeqJoiner {
   /// A camera frame. A seq lower than the newest one seen means the stream restarted: the frame
   /// buffer is cleared.
   void addFrame(int32_t seq, Frame frame) {
-    if (newest_frame_ && seq < *newest_frame_) frames_.clear();
+    if (newest_frame_ && seq < *newest_frame_) {
+      frames_.clear();
+      taken_seq_.reset();
+    }
     newest_frame_ = seq;
     frames_[seq] = std::move(frame);
     while (frames_.size() > max_frames_) frames_.erase(frames_.begin());
@@ -88,6 +93,19 @@ class SeqJoiner {
     }
   }
 
+  /// Real time: of the joined jobs ready, only the newest is to be handled; the others get `drop`.
+  /// Late ones never do: a seq below the newest of the jobs ready at an earlier call is proposals
+  /// sent late on purpose for a frame still buffered (a map's reference keyframe, procs/proposals).
+  void markRealTimeDrops() {
+    const auto late = [this](const Job& j) { return taken_seq_ && j.seq < *taken_seq_; };
+    size_t newest = ready_.size();
+    for (size_t i = 0; i < ready_.size(); ++i)
+      if (ready_[i].frame && !late(ready_[i])) newest = i;
+    for (size_t i = 0; i < ready_.size(); ++i)
+      ready_[i].drop = ready_[i].frame && i != newest && !late(ready_[i]);
+    for (const Job& j : ready_) taken_seq_ = std::max(taken_seq_.value_or(j.seq), j.seq);
+  }
+
   /// Jobs to handle, in the order they became ready.
   std::deque<Job>& ready() { return ready_; }
   size_t pending() const { return pending_.size(); }
@@ -102,6 +120,7 @@ class SeqJoiner {
   double timeout_s_;
   std::map<int32_t, Frame> frames_;
   std::optional<int32_t> newest_frame_;
+  std::optional<int32_t> taken_seq_;  ///< the newest seq of the jobs ready at markRealTimeDrops
   std::deque<Pending> pending_;
   std::deque<Job> ready_;
 };

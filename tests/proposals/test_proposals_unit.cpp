@@ -596,6 +596,77 @@ TEST(ProposalEngineInput, DegenerateInputGivesNoBoxes) {
   EXPECT_FALSE(blind.onCameraInfo(zero, &why));
 }
 
+// The frame a map is initialised from was INITIALIZING when its pose came, so it got no boxes;
+// once the map is late_keyframe_delay_s older than the keyframe of that frame, the candidates are
+// projected into it with the keyframe's pose (the latest, bundle adjustment moves it): the
+// boxes a tracked pose there gives. Only once, only for a keyframe whose frame had no boxes, and
+// not for a culled one.
+TEST(ProposalEngineInput, TheReferenceKeyframeGetsItsProposalsLate) {
+  ProposalOptions o = metricOptions();
+  o.late_keyframe_delay_s = 0.005;  // 5 poses (1 ms apart)
+  const SE3 T0 = makeSE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.05, 0, 0)) * lookingDown(1.0);
+  const SE3 T = lookingDown(1.0);
+  const auto scene = join(join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f)),
+                          cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f));
+  const auto keyframe = [](int seq, const SE3& pose, bool culled = false) {
+    keyframe_t k{};
+    k.seq = seq;
+    k.utime = 1000 * seq;
+    k.id = seq;
+    k.map_id = 1;
+    se3ToArrays(pose, k.position, k.orientation);
+    k.culled = culled;
+    return k;
+  };
+  ProposalEngine engine(o);
+  std::string why;
+  ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
+  EXPECT_EQ(engine.onPose(poseMessage(0, pose_t::STATE_INITIALIZING, T), &why).num_boxes, 0);
+  EXPECT_EQ(engine.onPose(poseMessage(1, pose_t::STATE_INITIALIZING, T), &why).num_boxes, 0);
+  EXPECT_EQ(engine.onPose(poseMessage(2, pose_t::STATE_INITIALIZING, T), &why).num_boxes, 0);
+  // Initialised at seq 3 from seq 0: keyframes 0 (first at T, then moved to T0) and 3.
+  ASSERT_TRUE(engine.onMap(cloudMessage(1, scene), &why)) << why;
+  engine.onKeyframe(keyframe(0, T));
+  engine.onKeyframe(keyframe(1, T, /*culled=*/true));  // a keyframe of seq 1, culled at once
+  ASSERT_EQ(engine.onPose(poseMessage(3, pose_t::STATE_TRACKING, T), &why).num_boxes, 2);
+  engine.onKeyframe(keyframe(0, T0));
+  engine.onKeyframe(keyframe(3, T));  // its frame has boxes: nothing late
+  EXPECT_EQ(engine.onPose(poseMessage(4, pose_t::STATE_TRACKING, T), &why).num_boxes, 2);
+  EXPECT_TRUE(engine.takeLateProposals().empty()) << "4 ms after seq 0: not yet";
+  EXPECT_EQ(engine.onPose(poseMessage(5, pose_t::STATE_TRACKING, T), &why).num_boxes, 2);
+  const std::vector<proposals_t> late = engine.takeLateProposals();
+  ASSERT_EQ(late.size(), 1u) << "seq 0 only: seq 1's keyframe was culled, seq 3 had its boxes";
+  EXPECT_EQ(late[0].seq, 0);
+  EXPECT_EQ(late[0].utime, 0);
+  EXPECT_EQ(late[0].map_id, 1);
+  // The boxes a tracked pose at the keyframe's latest pose gives.
+  const proposals_t there = engine.onPose(poseMessage(6, pose_t::STATE_TRACKING, T0), &why);
+  ASSERT_EQ(late[0].num_boxes, 2);
+  ASSERT_EQ(there.num_boxes, 2);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(late[0].candidate_ids[i], there.candidate_ids[i]);
+    EXPECT_FLOAT_EQ(late[0].boxes[i].x, there.boxes[i].x);
+    EXPECT_FLOAT_EQ(late[0].boxes[i].w, there.boxes[i].w);
+  }
+  const proposals_t at_T = engine.onPose(poseMessage(7, pose_t::STATE_TRACKING, T), &why);
+  EXPECT_NE(late[0].boxes[0].x, at_T.boxes[0].x) << "the keyframe's moved pose is used, not its first one";
+  EXPECT_TRUE(engine.takeLateProposals().empty()) << "once only";
+  for (int seq = 8; seq < 30; ++seq) engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why);
+  EXPECT_TRUE(engine.takeLateProposals().empty());
+
+  // Off (< 0): never.
+  o.late_keyframe_delay_s = -1;
+  ProposalEngine off(o);
+  ASSERT_TRUE(off.onCameraInfo(vgaInfo(), &why)) << why;
+  off.onPose(poseMessage(0, pose_t::STATE_INITIALIZING, T), &why);
+  ASSERT_TRUE(off.onMap(cloudMessage(1, scene), &why)) << why;
+  off.onKeyframe(keyframe(0, T0));
+  for (int seq = 1; seq < 30; ++seq) {
+    off.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why);
+    EXPECT_TRUE(off.takeLateProposals().empty());
+  }
+}
+
 // A growing map is clustered again at most every recluster_interval_s of frame time (poses are
 // 1 ms apart here); the first points of a map at once.
 TEST(ProposalEngineInput, AGrowingMapIsReclusteredAtMostOncePerInterval) {

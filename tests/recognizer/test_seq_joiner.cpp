@@ -89,6 +89,41 @@ TEST(SeqJoiner, CameraRestartClearsOldFrames) {
   EXPECT_EQ(*j.ready()[0].frame, "new0");
 }
 
+// Real time: of the joined jobs ready together only the newest is handled, the others are
+// dropped; proposals without a frame are answered. Proposals for a frame older than the jobs taken
+// before (a map's reference keyframe, sent late on purpose) are never dropped, even with newer
+// ones beside them; after a camera restart the seqs count from the new stream.
+TEST(SeqJoiner, RealTimeDropsAllButTheNewestExceptLateProposals) {
+  Joiner j(30, 30, 1.0);
+  for (int32_t s = 0; s < 6; ++s) j.addFrame(s, "f" + std::to_string(s));
+  j.addProposals(2, 2, 0.0);
+  j.addProposals(3, 3, 0.0);
+  j.addProposals(4, 4, 0.0);
+  j.markRealTimeDrops();
+  ASSERT_EQ(j.ready().size(), 3u);
+  EXPECT_TRUE(j.ready()[0].drop);
+  EXPECT_TRUE(j.ready()[1].drop);
+  EXPECT_FALSE(j.ready()[2].drop) << "the newest";
+  j.ready().clear();
+  // Seq 0's late proposals come just before seq 5's: both are handled.
+  j.addProposals(0, 0, 0.0);
+  j.addProposals(5, 5, 0.0);
+  j.markRealTimeDrops();
+  ASSERT_EQ(j.ready().size(), 2u);
+  EXPECT_EQ(j.ready()[0].seq, 0);
+  EXPECT_FALSE(j.ready()[0].drop) << "late: older than seq 4, taken before";
+  EXPECT_FALSE(j.ready()[1].drop);
+  j.ready().clear();
+  // The camera restarts at seq 0: its frames 0-2 are new, and 1 is dropped for 2.
+  for (int32_t s = 0; s < 3; ++s) j.addFrame(s, "g" + std::to_string(s));
+  j.addProposals(1, 1, 0.0);
+  j.addProposals(2, 2, 0.0);
+  j.markRealTimeDrops();
+  ASSERT_EQ(j.ready().size(), 2u);
+  EXPECT_TRUE(j.ready()[0].drop) << "not late: the seqs before the restart do not count";
+  EXPECT_FALSE(j.ready()[1].drop);
+}
+
 TEST(ShippedConfig, RecognizerYamlEqualsDefaults) {
   RecognizerOptions file = loadConfig<RecognizerOptions>(test::sourcePath("config/recognizer.yaml"),
                                                          "recognizer", false);

@@ -1,6 +1,7 @@
 // The whole pipeline (camera -> slam -> proposals -> recognizer -> objectmap, every stage its own
 // process) replayed lockstep on the bundled recording logs/sample.lcm, twice, in a private network
-// namespace: every frame gets its DETECTIONS and OBJECT_MAP, the two runs publish byte-identical
+// namespace: every frame gets its DETECTIONS and OBJECT_MAP (and the frame the SLAM map was
+// initialised from, not located when it came, gets a second, late pair with its boxes), the two runs publish byte-identical
 // payloads on both channels, and the recognised objects are there (not only empty messages); no
 // two published boxes of a frame that are surest of the same object class overlap by IoU > 0.5
 // (DESIGN.md §3, suppressed per class), though the proposals did.
@@ -28,6 +29,8 @@ struct Recording {
   std::vector<std::vector<uint8_t>> detections, object_maps;
   int camera_frames = 0;
   int64_t proposal_boxes = 0, overlapping_proposal_pairs = 0;
+  std::vector<int32_t> proposal_seqs;  ///< in the order published
+  std::vector<int32_t> late_seqs;      ///< proposals for a frame older than one proposed before
 };
 
 Recording record(const std::string& log_path, const Channels& ch) {
@@ -38,6 +41,11 @@ Recording record(const std::string& log_path, const Channels& ch) {
     if (m->channel == ch.object_map) r.object_maps.push_back(m->data);
     proposals_t p;
     if (m->channel == ch.proposals && p.decode(m->data.data(), 0, static_cast<int>(m->data.size())) > 0) {
+      if (!r.proposal_seqs.empty() && p.seq < *std::max_element(r.proposal_seqs.begin(), r.proposal_seqs.end())) {
+        r.late_seqs.push_back(p.seq);
+        EXPECT_GT(p.num_boxes, 0) << "late proposals for seq " << p.seq << " without boxes";
+      }
+      r.proposal_seqs.push_back(p.seq);
       r.proposal_boxes += p.num_boxes;
       for (size_t i = 0; i < p.boxes.size(); ++i)
         for (size_t j = i + 1; j < p.boxes.size(); ++j) {
@@ -74,8 +82,11 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
   ASSERT_GT(frames, 100);
   for (const Recording& r : runs) {
     EXPECT_EQ(r.camera_frames, frames);
-    EXPECT_EQ(static_cast<int>(r.detections.size()), frames) << "one DETECTIONS per frame";
-    EXPECT_EQ(static_cast<int>(r.object_maps.size()), frames) << "one OBJECT_MAP per DETECTIONS";
+    EXPECT_EQ(r.late_seqs, std::vector<int32_t>{0}) << "the first map is initialised from frame 0";
+    EXPECT_EQ(static_cast<int>(r.proposal_seqs.size()), frames + static_cast<int>(r.late_seqs.size()))
+        << "one PROPOSALS per frame, and the late ones";
+    EXPECT_EQ(r.detections.size(), r.proposal_seqs.size()) << "one DETECTIONS per PROPOSALS";
+    EXPECT_EQ(r.object_maps.size(), r.detections.size()) << "one OBJECT_MAP per DETECTIONS";
   }
   ASSERT_EQ(runs[0].detections.size(), runs[1].detections.size());
   for (size_t i = 0; i < runs[0].detections.size(); ++i)

@@ -167,6 +167,7 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
   std::map<int, std::vector<Box2>> truth;
   if (sequence && misses) truth = truthByFrame(*sequence, stride);
   bool any_proposals = false;  // a frame so far had proposals
+  std::map<int, bool> unlocated_before_first;  // frame not located -> it came before any proposals
   ProposalRecording run;
   ProposalEngine engine(options);
   LogReader reader(log_path);
@@ -178,17 +179,25 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
     } else if (r->channel == ch.slam_map) {
       point_cloud_t m;
       if (decodeRecord(*r, &m) && !engine.onMap(m, &why)) spdlog::warn("{}", why);
+    } else if (r->channel == ch.slam_keyframe) {
+      keyframe_t m;
+      if (decodeRecord(*r, &m)) engine.onKeyframe(m);
     } else if (r->channel == ch.slam_pose) {
       pose_t m;
       if (!decodeRecord(*r, &m)) continue;
       run.localized[m.seq] = isLocalized(m);
       bool reclustered = false;
       const proposals_t p = engine.onPose(m, &why, &reclustered);
+      for (const proposals_t& late : engine.takeLateProposals()) addProposals(&run, late);
       addProposals(&run, p);
       any_proposals = any_proposals || p.num_boxes > 0;
-      if (const auto t = truth.find(m.seq); t != truth.end()) {
+      // A frame not located may still get proposals late (a map's reference keyframe): counted
+      // at the end.
+      if (const auto t = truth.find(m.seq); t != truth.end() && isLocalized(m)) {
         countMisses(engine, options, m, run.boxes[m.seq], any_proposals, t->second, misses);
         truth.erase(t);
+      } else if (t != truth.end()) {
+        unlocated_before_first[m.seq] = !any_proposals;
       }
       if (reclustered) {
         const ClusterStats& s = engine.map().stats();
@@ -199,12 +208,18 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       }
     }
   }
-  // Frames SLAM never gave a pose for.
+  // Frames not located or SLAM never gave a pose for: covered only by late proposals.
   for (const auto& [frame, boxes] : truth) {
     if (frame < 0 || static_cast<size_t>(frame) >= sequence->size()) continue;
-    for (size_t i = 0; i < boxes.size(); ++i) {
+    const auto posed = unlocated_before_first.find(frame);
+    const bool before_first = posed != unlocated_before_first.end() ? posed->second : !any_proposals;
+    const auto late = run.boxes.find(frame);
+    for (const auto& t : boxes) {
       ++misses->boxes;
-      ++(any_proposals ? misses->not_localized : misses->before_first);
+      if (late != run.boxes.end() && bestIou(late->second, t) >= 0.5)
+        ++misses->covered;
+      else
+        ++(before_first ? misses->before_first : misses->not_localized);
     }
   }
   return run;
