@@ -145,8 +145,9 @@ void ProposalEngine::projectLateKeyframes(const CandidateMap& map, int32_t map_i
     const double age_us = static_cast<double>(utime - it->second.utime);
     if (it->second.map_id == map_id && age_us >= delay_us) {
       late_out_.push_back(project(map, it->second.utime, it->first, map_id, it->second.T_wc, nullptr));
+      unproposed_.erase(it->first);  // it has its proposals now: later messages of the keyframe are moves
       it = late_.erase(it);
-    } else if (age_us > delay_us + 2e6) {
+    } else if (age_us > delay_us + 1e6 * kLateGiveUpS) {
       it = late_.erase(it);  // its map did not come back in time: its frame is gone from the recognizer
     } else {
       ++it;
@@ -170,7 +171,7 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
   last_pose_utime_ = pose.utime;
   // Until it is projected below, the frame has no proposals (a keyframe of it may get them late).
   unproposed_[pose.seq] = pose.utime;
-  while (unproposed_.size() > 64) unproposed_.erase(unproposed_.begin());
+  while (unproposed_.size() > kUnproposedKept) unproposed_.erase(unproposed_.begin());
   const bool located = pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
   const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
   if (!T_wc.matrix().allFinite()) {

@@ -84,6 +84,10 @@ class ProposalEngine {
   ProjectionStats last_;
   bool background_ = false;
   std::future<Clustering> job_;  ///< the clustering running on the worker thread (background)
+  static constexpr size_t kUnproposedKept = 64;  ///< frames without proposals remembered (the newest)
+  static constexpr double kLateGiveUpS = 2;      ///< s past the delay after which a keyframe whose map
+                                                 ///< did not come back is forgotten (its frame is long
+                                                 ///< gone from the recognizer's buffer)
   std::map<int32_t, int64_t> unproposed_;  ///< seq -> utime of the latest frames that got no proposals
   int64_t last_pose_utime_ = 0;
   struct LateKeyframe {
