@@ -4,6 +4,7 @@
 #include <chrono>
 #include <optional>
 
+#include "common/bus/box_msg.h"
 #include "common/bus/image_msg.h"
 #include "common/thread_priority.h"
 
@@ -108,12 +109,7 @@ proposals_t ProposalEngine::project(const CandidateMap& map, int64_t utime, int3
   m.seq = seq;
   m.map_id = map_id;
   for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, stats)) {
-    box_t bx{};
-    bx.x = b.x;
-    bx.y = b.y;
-    bx.w = b.w;
-    bx.h = b.h;
-    m.boxes.push_back(bx);
+    m.boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
     m.candidate_ids.push_back(b.candidate_id);
     m.median_depth.push_back(b.median_depth);
   }

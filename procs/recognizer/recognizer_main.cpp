@@ -16,6 +16,7 @@
 #include <memory>
 #include <sstream>
 
+#include "common/bus/box_msg.h"
 #include "common/bus/bus.h"
 #include "common/bus/image_msg.h"
 #include "common/bus/node.h"
@@ -199,12 +200,7 @@ class RecognizerNode {
     out.encode_ms = lockstep_ ? 0.f : static_cast<float>(ms);
     out.num_boxes = static_cast<int32_t>(d.boxes.size());
     for (const auto& b : d.boxes) {
-      box_t box;
-      box.x = b.x;
-      box.y = b.y;
-      box.w = b.w;
-      box.h = b.h;
-      out.boxes.push_back(box);
+      out.boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
       out.candidate_ids.push_back(b.candidate_id);
       out.log_prob.push_back(b.log_prob);
     }
