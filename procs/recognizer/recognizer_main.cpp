@@ -5,9 +5,10 @@
 // DETECTIONS message, in order, empty when it has no usable boxes or no frame. Real time: after
 // draining the bus, only the newest joined frame is classified; older joined ones are dropped and
 // counted (frames_dropped). Proposals for a frame older than those already taken (the late
-// proposals of a map's reference keyframe, procs/proposals) are classified, never dropped. Bad input (a proposal for a frame never seen, boxes outside the image
-// or of zero size, a corrupt JPEG, an unreadable model, classes the config names but the model
-// lacks) is counted in RECOGNIZER_STATUS and never stops the process.
+// proposals of a map's reference keyframe, procs/proposals) are classified, never dropped. Bad
+// input (a proposal for a frame never seen, boxes outside the image or of zero size, a corrupt
+// JPEG, an unreadable model, classes the config names but the model lacks) is counted in
+// RECOGNIZER_STATUS and never stops the process.
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
