@@ -165,18 +165,20 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
     late_.clear();
   }
   last_pose_utime_ = pose.utime;
-  // Until it is projected below, the frame has no proposals (a keyframe of it may get them late).
-  unproposed_[pose.seq] = pose.utime;
-  while (unproposed_.size() > kUnproposedKept) unproposed_.erase(unproposed_.begin());
+  // A frame that gets no proposals here is remembered: a keyframe of it may get them late.
+  const auto unproposed = [&] {
+    unproposed_[pose.seq] = pose.utime;
+    while (unproposed_.size() > kUnproposedKept) unproposed_.erase(unproposed_.begin());
+    return m;
+  };
   const bool located = pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
   const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
   if (!T_wc.matrix().allFinite()) {
     *why = "SLAM_POSE seq " + std::to_string(pose.seq) + ": pose is not finite";
-    return m;
+    return unproposed();
   }
-  if (!located || !have_camera_) return m;
-  if (!maps_.count(pose.map_id)) return m;  // no point of that map yet
-  unproposed_.erase(pose.seq);
+  if (!located || !have_camera_) return unproposed();
+  if (!maps_.count(pose.map_id)) return unproposed();  // no point of that map yet
   CandidateMap& map = mapOf(pose.map_id);
   map.addView(pose.map_id, T_wc);
   if (recluster(map, pose) && reclustered) *reclustered = true;
