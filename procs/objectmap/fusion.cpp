@@ -44,6 +44,13 @@ std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evid
   return p;
 }
 
+bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a, const std::vector<float>& log_p_b,
+                        double area_b) {
+  const float background_a = log_p_a.empty() ? 0.f : log_p_a.back();
+  const float background_b = log_p_b.empty() ? 0.f : log_p_b.back();
+  return background_a != background_b ? background_a < background_b : area_a > area_b;
+}
+
 int argmaxClass(const std::vector<double>& values) {
   int best = -1;
   for (size_t c = 0; c < values.size(); ++c)

@@ -425,8 +425,8 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   std::vector<std::vector<int32_t>> groups;
   for (auto& [root, members] : by_root) groups.push_back(std::move(members));
 
-  // The views of a group (one per frame: the larger box) and their evidence, computed once per
-  // group (the label of the groups below, and the objects of step 4).
+  // The views of a group (one per frame: its most object-like box) and their evidence, computed
+  // once per group (the label of the groups below, and the objects of step 4).
   struct Fused {
     std::map<ViewKey, const View*> views;
     std::vector<double> evidence;
@@ -440,7 +440,8 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     for (int32_t cid : members)
       for (const auto& [key, v] : candidates_.at(cid).views) {
         auto [view, added] = f.views.emplace(key, &v);
-        if (!added && v.area > view->second->area) view->second = &v;
+        if (!added && moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
+          view->second = &v;
       }
     std::vector<const std::vector<float>*> evidence;
     for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);

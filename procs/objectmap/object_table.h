@@ -12,9 +12,9 @@
 // candidates with).
 //
 // An object's class evidence is the sum of log p(class | view) over the union of its candidates'
-// views (fusion.h); a frame in which two candidates of one object have a box counts once (the
-// larger box), so merging never counts a view twice and splitting gives each part exactly its
-// own candidates' views.
+// views (fusion.h); a frame in which two candidates of one object have a box counts once (the box
+// its view finds most object-like: the lowest p(background | box), then the larger), so merging
+// never counts a view twice and splitting gives each part exactly its own candidates' views.
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>

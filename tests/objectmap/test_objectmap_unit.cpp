@@ -421,6 +421,29 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   EXPECT_NEAR(t.objects().begin()->second.log_evidence[1], want_c1, 1e-5);
 }
 
+// One object, two candidates: the object alone and the object with its neighbour (the can and the
+// mug beside it). In a frame that boxed both, the view that counts is the one that takes its box
+// for an object most surely, not the larger box; on a tie, the larger.
+TEST(ObjectTable, AFrameBoxedByTwoCandidatesCountsTheMostObjectLikeBox) {
+  VotingOptions vo;
+  ObjectTable t(0.01);
+  for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(0, 20), vo);
+  // Classes: can, mug, background.
+  t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});   // the can alone
+  t.addView(2, View{100, 1, 120, logs({0.3, 0.3, 0.4})});  // the can and the mug: larger, less sure
+  t.addView(1, View{200, 2, 50, logs({0.6, 0.2, 0.2})});
+  t.addView(2, View{200, 2, 60, logs({0.5, 0.3, 0.2})});  // the same p(background): the larger
+  int32_t next = 1;
+  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
+  ASSERT_EQ(t.objects().size(), 1u);
+  const Object& o = t.objects().begin()->second;
+  EXPECT_EQ(o.candidates, (std::vector<int32_t>{1, 2}));
+  EXPECT_EQ(o.num_views, 2);
+  EXPECT_NEAR(o.log_evidence[0], std::log(0.8) + std::log(0.5), 1e-5);
+  EXPECT_NEAR(o.log_evidence[2], std::log(0.1) + std::log(0.2), 1e-5);
+  EXPECT_EQ(o.label, 0);
+}
+
 // A coarse candidate (a cluster of the table top, or one seen in few views that kept much of its
 // boxes' background) contains the voxels of two small objects: each small one overlaps it fully,
 // but a part is not merged into the whole it lies in, so three objects stay three.

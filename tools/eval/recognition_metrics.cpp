@@ -317,7 +317,7 @@ void MultiViewLabeller::onProposals(const proposals_t& m) {
 void MultiViewLabeller::onDetections(const detections_t& d) {
   std::string why;
   countRefusal(engine_.onDetections(d, &why), "DETECTIONS", why);
-  // The candidate's own evidence, for the fallback: one box per frame (the larger), as the map.
+  // The candidate's own evidence, for the fallback: one box per frame (the most object-like), as the map.
   if (own_classes_.empty()) own_classes_ = d.class_names;
   std::vector<int> index(own_classes_.size(), -1);
   for (size_t k = 0; k < own_classes_.size(); ++k)
@@ -335,7 +335,8 @@ void MultiViewLabeller::onDetections(const detections_t& d) {
     for (int n : index) v.log_p.push_back(n >= 0 && static_cast<size_t>(n) < row.size() ? row[n] : floor);
     auto& views = own_[{d.map_id, d.candidate_ids[i]}];
     auto it = views.find(d.seq);
-    if (it == views.end() || v.area > it->second.area) views[d.seq] = std::move(v);
+    if (it == views.end() || moreObjectLikeView(v.log_p, v.area, it->second.log_p, it->second.area))
+      views[d.seq] = std::move(v);
   }
 }
 
