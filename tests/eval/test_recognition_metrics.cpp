@@ -328,12 +328,13 @@ TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
     EXPECT_NEAR(b.fused.log_p[1], mug - norm, 1e-5);
     EXPECT_NEAR(b.fused.log_p[2], bg - norm, 1e-5);
     // Labelled by the fused evidence, scored with the box's own view's p(mug) and the objectness
-    // of its candidate's three views (0.9, 0.9, 0.95), which are also all of its object's.
+    // of its candidate's three views (0.9, 0.9, 0.95: mean 0.9167), which are also all of its
+    // object's (median 0.9).
     EXPECT_EQ(b.multi.label, 1);
     ASSERT_EQ(b.multi.log_p.size(), 3u);
-    const double views = (0.9 + 0.9 + 0.95) / 3;
-    EXPECT_NEAR(b.log_objectness, std::log(std::cbrt((f == 10 ? 0.95 : 0.9) * views * views)), 1e-5);
-    const double box_class = std::cbrt((f == 10 ? 0.9 : 0.4) * views * views);
+    const double views = (0.9 + 0.9 + 0.95) / 3 * 0.9;
+    EXPECT_NEAR(b.log_objectness, std::log(std::cbrt((f == 10 ? 0.95 : 0.9) * views)), 1e-5);
+    const double box_class = std::cbrt((f == 10 ? 0.9 : 0.4) * views);
     EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(box_class), 1e-5);
     EXPECT_NEAR(b.single.log_p[1], std::log(f == 10 ? 0.9 : 0.4), 1e-6);
   }
@@ -399,9 +400,10 @@ TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
 }
 
 // A box's p(object | box) is the geometric mean of its own view's, its candidate's mean over every
-// box of the candidate, and its object's mean over every box of the object: a part that one view
+// box of the candidate, and its object's median over every box of the object: a part that one view
 // takes for a whole object is held back by the candidate's other views, and a distractor whose views
-// mostly call it background by the object's views, however well one box frames it.
+// mostly call it background by the object's views, however well one box frames it (the median: its
+// one sure view of four does not lift it, as it would lift a mean).
 TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesAndItsObjectsViews) {
   auto box = [](int32_t candidate, int32_t object, double p_background) {
     RecognitionRecording::Box b;
@@ -419,17 +421,18 @@ TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesAndItsObjectsViews
   frames[3] = {box(9, 8, 0.95)};
   scoreMultiView(&frames);
   // Candidate 3: views 0.8, 0.1, 0.1 -> mean 1/3; candidate 5: 0.8, 0.6 -> 0.7; their object 7:
-  // 2.4 / 5 = 0.48. Candidate 9, alone in object 8: 0.9, 0.05, 0.05, 0.05 -> 0.2625. Candidate 11
-  // has no object: its own mean stands in.
+  // 0.1, 0.1, 0.6, 0.8, 0.8 -> median 0.6. Candidate 9, alone in object 8: 0.9, 0.05, 0.05, 0.05 ->
+  // mean 0.2625, median 0.05 (the mean of the middle two). Candidate 11 has no object: its own
+  // median stands in.
   const auto mean3 = [](double a, double b, double c) { return (std::log(a) + std::log(b) + std::log(c)) / 3; };
-  EXPECT_NEAR(frames[0][0].log_objectness, mean3(0.8, 1.0 / 3, 0.48), 1e-9);
-  EXPECT_NEAR(frames[0][1].log_objectness, mean3(0.8, 0.7, 0.48), 1e-9);
-  EXPECT_NEAR(frames[2][1].log_objectness, mean3(0.6, 0.7, 0.48), 1e-9);
-  EXPECT_NEAR(frames[0][2].log_objectness, mean3(0.9, 0.2625, 0.2625), 1e-9);
+  EXPECT_NEAR(frames[0][0].log_objectness, mean3(0.8, 1.0 / 3, 0.6), 1e-9);
+  EXPECT_NEAR(frames[0][1].log_objectness, mean3(0.8, 0.7, 0.6), 1e-9);
+  EXPECT_NEAR(frames[2][1].log_objectness, mean3(0.6, 0.7, 0.6), 1e-9);
+  EXPECT_NEAR(frames[0][2].log_objectness, mean3(0.9, 0.2625, 0.05), 1e-9);
   EXPECT_NEAR(frames[2][3].log_objectness, std::log(0.5), 1e-9);
   // Scored with the box's own view's p(mug | box), 0.4, in place of its 1 - p(background), 0.8.
-  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::cbrt(0.4 * 0.7 * 0.48), 1e-9);
-  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[0]), 0.1 * std::cbrt(0.4 * 0.7 * 0.48), 1e-9);
+  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::cbrt(0.4 * 0.7 * 0.6), 1e-9);
+  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[0]), 0.1 * std::cbrt(0.4 * 0.7 * 0.6), 1e-9);
   EXPECT_LT(frames[0][0].multi.log_p[1], frames[0][1].multi.log_p[1])
       << "the same view, but the candidate's other views say it is not a whole object";
   EXPECT_LT(frames[0][2].multi.log_p[1], frames[0][1].multi.log_p[1])

@@ -414,27 +414,40 @@ std::vector<double> multiViewScores(const std::vector<double>& fused, const std:
 }
 
 void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames) {
-  // Mean p(object | box) over the boxes of each candidate and of each object.
+  // p(object | box) over the boxes of each candidate (their mean) and of each object (their median).
   using Key = std::pair<int32_t, int32_t>;  // (map, candidate) or (map, object)
-  struct Mean {
-    double sum = 0;
-    int n = 0;
-    void add(double x) { sum += x, ++n; }
-    double log() const { return std::log(std::max(1e-300, sum / n)); }
+  struct Views {
+    std::vector<double> p;
+    double logMean() const { return std::log(std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / p.size())); }
+    double logMedian() {
+      const size_t n = p.size(), m = n / 2;
+      std::nth_element(p.begin(), p.begin() + m, p.end());
+      const double upper = p[m];
+      const double median = n % 2 ? upper : (*std::max_element(p.begin(), p.begin() + m) + upper) / 2;
+      return std::log(std::max(1e-300, median));
+    }
   };
-  std::map<Key, Mean> candidates, objects;  // a box without an object: its candidate stands in
-  const auto objectMean = [&](const RecognitionRecording::Box& b) -> Mean& {
-    return b.object >= 0 ? objects[{b.map_id, b.object}] : candidates[{b.map_id, b.candidate}];
-  };
+  std::map<Key, Views> candidates, objects;
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
       b.log_objectness = logObjectness(b.single.log_p);
-      candidates[{b.map_id, b.candidate}].add(std::exp(b.log_objectness));
-      if (b.object >= 0) objects[{b.map_id, b.object}].add(std::exp(b.log_objectness));
+      candidates[{b.map_id, b.candidate}].p.push_back(std::exp(b.log_objectness));
+      if (b.object >= 0) objects[{b.map_id, b.object}].p.push_back(std::exp(b.log_objectness));
     }
+  std::map<Key, double> candidate_log, object_log;  // a box without an object: its candidate's median
+  for (auto& [key, views] : candidates) candidate_log[key] = views.logMean();
+  for (auto& [key, views] : objects) object_log[key] = views.logMedian();
+  std::map<Key, double> candidate_median;
+  const auto objectTerm = [&](const RecognitionRecording::Box& b) {
+    if (b.object >= 0) return object_log.at({b.map_id, b.object});
+    const Key key{b.map_id, b.candidate};
+    auto it = candidate_median.find(key);
+    if (it == candidate_median.end()) it = candidate_median.emplace(key, candidates.at(key).logMedian()).first;
+    return it->second;
+  };
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
-      const double views = candidates.at({b.map_id, b.candidate}).log() + objectMean(b).log();
+      const double views = candidate_log.at({b.map_id, b.candidate}) + objectTerm(b);
       b.log_objectness = (b.log_objectness + views) / 3;
       // Per class c, the box's own view's p(c | box) in place of its 1 - p(background | box).
       std::vector<double> log_box(b.fused.log_p.size(), b.log_objectness);

@@ -189,11 +189,13 @@ std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, cons
 /// box's own view's p(c | box), the mean of 1 - p(background) over every box of its candidate in
 /// the recording (a candidate that is a part of an object, or an object with a stretch of table, is
 /// boxed alike in most of its views, and most of them say so; one view alone is noisy), and the
-/// mean of that over every box of its object (all its candidates; a box without an object: its
-/// candidate's again). The last is what the object's views say of whether it is an object at all:
-/// the fused class posterior weights each view by its objectness, so a distractor that most of its
-/// views call background gets the class its few other views give it (lab_marble's mushroom: 242 of
-/// its 309 boxes called background, fused bowl 0.71). The box's own view says how well *this box*
+/// median of that over every box of its object (all its candidates; a box without an object: its
+/// candidate's median). The last is what the object's typical view says of whether it is an object
+/// at all: the fused class posterior weights each view by its objectness, so a distractor that most
+/// of its views call background gets the class its few other views give it (lab_marble's mushroom:
+/// 242 of its 309 boxes called background, fused bowl 0.71). The median, not the mean: an object's
+/// boxes are of several candidates (the object, a part, the object with its neighbour), and a
+/// minority of sure views does not make it an object. The box's own view says how well *this box*
 /// shows an object of class c: a box on a part of the object or on it and its neighbour is less
 /// sure of the object's class than one that frames it, even where both are sure they frame an
 /// object. `log_objectness` keeps the mean with the box's own 1 - p(background | box).
