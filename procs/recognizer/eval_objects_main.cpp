@@ -166,12 +166,21 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "loio", "holdout"}));
   app.add_option("--loio-max-instances", loio_max, "auto: leave-one-instance-out up to this many instances");
   std::vector<std::string> extra, held_out;
+  // One value per occurrence (repeat the option for more): a list would swallow the sequence
+  // folders that follow it on the command line (make eval passes them last).
   app.add_option("--hold-out", held_out,
-                 "leave-one-instance-out: only these instances' folds (e.g. ball_1; default: every instance)");
+                 "leave-one-instance-out: only this instance's folds (e.g. ball_1; repeat for more; default: "
+                 "every instance)")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   app.add_option("--extra-training", extra,
                  "[SET=]DIR: an object set (e.g. rendered by slamaware-synth objects) whose crops of the "
                  "categories of the evaluated set SET (default: of every set but itself) are added to the "
-                 "training data of every fold; never tested");
+                 "training data of every fold; never tested; repeat for more")
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   app.add_option("--max-views", max_views, "views per instance (overrides train.max_views_per_instance)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   app.add_option("sequences", sequences,

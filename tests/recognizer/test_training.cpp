@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 
 #include "common/dataset.h"
 #include "common/image_codec.h"
@@ -451,4 +453,25 @@ TEST(Training, RenderedApplesAndBallsTeachTheUwBallCategory) {
   EXPECT_GE(with.instance_accuracy.at("ball_1"), 61.0) << "without the rendered ones: " << plain.accuracy() << " %";
   EXPECT_GE(with.instance_accuracy.at("ball_1"), plain.instance_accuracy.at("ball_1") + 20.0);
   EXPECT_THROW(leaveOneInstanceOut(uw, o, {}, {}, {"ball_9"}), DatasetError);
+}
+
+// make eval's command line: `slamaware-eval-objects ... --extra-training SET=DIR <sequences>`. Each
+// of the repeatable options takes one value, so the sequence folders after them stay sequences
+// (a list option swallowed them, and make eval read the suite's scenes as object sets).
+TEST(EvalObjectsCommandLine, SequenceFoldersAfterARepeatableOptionAreSequences) {
+  const std::string dir = test::tempDir("eval_objects_cli");
+  const std::string scene = dir + "/kitchen";
+  const std::string synth = test::binPath("slamaware-synth") + " scene --quiet --config " +
+                            test::sourcePath("config/scenes/kitchen_wood.yaml") + " --frames 5 --out " + scene +
+                            " > " + dir + "/synth.log 2>&1";
+  ASSERT_EQ(std::system(synth.c_str()), 0);
+  const std::string out = dir + "/objects.json";
+  const std::string cmd = test::binPath("slamaware-eval-objects") + " --out " + out + " --no-object-sets --model " +
+                          test::sourcePath("models/recognizer.model") + " --hold-out ball_1 --hold-out cap_1" +
+                          " --extra-training " + dir + "/extra " + scene + " > " + dir + "/eval.log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << "see " << dir << "/eval.log";
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"kitchen\""), std::string::npos) << "the scene was not evaluated as a sequence: " << text;
+  EXPECT_NE(text.find("\"gt_boxes\""), std::string::npos) << text;
 }
