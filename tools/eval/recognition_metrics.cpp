@@ -419,11 +419,12 @@ void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* f
   struct Views {
     std::vector<double> p;
     double logMean() const { return std::log(std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / p.size())); }
-    double logMedian() {
-      const size_t n = p.size(), m = n / 2;
-      std::nth_element(p.begin(), p.begin() + m, p.end());
-      const double upper = p[m];
-      const double median = n % 2 ? upper : (*std::max_element(p.begin(), p.begin() + m) + upper) / 2;
+    double logMedian() const {
+      std::vector<double> q = p;
+      const size_t n = q.size(), m = n / 2;
+      std::nth_element(q.begin(), q.begin() + m, q.end());
+      const double upper = q[m];
+      const double median = n % 2 ? upper : (*std::max_element(q.begin(), q.begin() + m) + upper) / 2;
       return std::log(std::max(1e-300, median));
     }
   };
@@ -434,20 +435,18 @@ void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* f
       candidates[{b.map_id, b.candidate}].p.push_back(std::exp(b.log_objectness));
       if (b.object >= 0) objects[{b.map_id, b.object}].p.push_back(std::exp(b.log_objectness));
     }
-  std::map<Key, double> candidate_log, object_log;  // a box without an object: its candidate's median
-  for (auto& [key, views] : candidates) candidate_log[key] = views.logMean();
-  for (auto& [key, views] : objects) object_log[key] = views.logMedian();
-  std::map<Key, double> candidate_median;
-  const auto objectTerm = [&](const RecognitionRecording::Box& b) {
-    if (b.object >= 0) return object_log.at({b.map_id, b.object});
-    const Key key{b.map_id, b.candidate};
-    auto it = candidate_median.find(key);
-    if (it == candidate_median.end()) it = candidate_median.emplace(key, candidates.at(key).logMedian()).first;
-    return it->second;
-  };
+  // A box without an object: its candidate's median stands in for the object's.
+  std::map<Key, double> candidate_mean, candidate_median, object_median;
+  for (const auto& [key, views] : candidates) {
+    candidate_mean[key] = views.logMean();
+    candidate_median[key] = views.logMedian();
+  }
+  for (const auto& [key, views] : objects) object_median[key] = views.logMedian();
   for (auto& [seq, boxes] : *frames)
     for (auto& b : boxes) {
-      const double views = candidate_log.at({b.map_id, b.candidate}) + objectTerm(b);
+      const double views = candidate_mean.at({b.map_id, b.candidate}) +
+                           (b.object >= 0 ? object_median.at({b.map_id, b.object})
+                                          : candidate_median.at({b.map_id, b.candidate}));
       b.log_objectness = (b.log_objectness + views) / 3;
       // Per class c, the box's own view's p(c | box) in place of its 1 - p(background | box).
       std::vector<double> log_box(b.fused.log_p.size(), b.log_objectness);
