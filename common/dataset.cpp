@@ -310,6 +310,11 @@ ObjectSet ObjectSet::open(const std::string& dir) {
     return std::tie(a.category, a.instance, a.video, a.frame) < std::tie(b.category, b.instance, b.video, b.frame);
   });
   set.categories_.assign(categories.begin(), categories.end());
+  // set.yaml is read line by line: the generator's own notes were not valid YAML before it quoted them.
+  std::ifstream yaml(fs::path(dir) / "set.yaml");
+  for (std::string line; std::getline(yaml, line);)
+    if (line.rfind("source: synth", 0) == 0 || line.find("rendered by slamaware-synth") != std::string::npos)
+      set.rendered_ = true;
   return set;
 }
 

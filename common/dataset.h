@@ -113,9 +113,13 @@ class ObjectSet {
   const std::vector<ObjectView>& views() const { return views_; }
   /// Instance names per category, sorted.
   std::map<std::string, std::vector<std::string>> instances() const;
+  /// True for a set rendered by the synthetic generator (its set.yaml says `source: synth`, or, as
+  /// written before that key, notes "rendered by slamaware-synth"); false for photographs.
+  bool rendered() const { return rendered_; }
 
  private:
   std::string dir_;
+  bool rendered_ = false;
   std::vector<std::string> categories_;
   std::vector<ObjectView> views_;
 };

@@ -37,8 +37,12 @@ void ProgressBar::draw(bool final) {
     const int pct = static_cast<int>(frac * 4) * 25;
     if (!final && pct == last_pct_logged_) return;
     last_pct_logged_ = pct;
-    std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s %.1f s\n", label_.c_str(), (long long)done_,
-                 (long long)total_, frac * 100, rate, elapsed);
+    if (final)
+      std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s, done in %.1f s\n", label_.c_str(), (long long)done_,
+                   (long long)total_, frac * 100, rate, elapsed);
+    else
+      std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s %.1f s, eta %.0f s\n", label_.c_str(), (long long)done_,
+                   (long long)total_, frac * 100, rate, elapsed, eta);
     return;
   }
   const int width = 30;

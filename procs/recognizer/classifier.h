@@ -15,55 +15,9 @@
 #include <vector>
 
 #include "procs/recognizer/encoding_params.h"
+#include "procs/recognizer/example_set.h"
 
 namespace slamaware {
-
-/// Encoded examples (rows of vladDims floats) stored in half precision (IEEE binary16), with a
-/// class label and a group (e.g. the object instance) each. The rows are held in blocks of
-/// kRowsPerBlock, each allocated once at its full size: a growing set never copies itself into a
-/// buffer twice its size (a 100k-D row is 210 kB; a trainer's tens of thousands of rows fill most of
-/// the memory, and one doubling of a single buffer was what ran out of it).
-class ExampleSet {
- public:
-  static constexpr int64_t kRowsPerBlock = 128;
-  explicit ExampleSet(int64_t dims = 0) : dims_(dims) {}
-  int64_t dims() const { return dims_; }
-  int64_t size() const { return static_cast<int64_t>(labels_.size()); }
-  /// Appends a row (rounded to half precision).
-  void add(const float* x, int label, int group = -1);
-  /// Appends every example of `other` (same dims).
-  void append(const ExampleSet& other);
-  int label(int64_t i) const { return labels_[static_cast<size_t>(i)]; }
-  int group(int64_t i) const { return groups_[static_cast<size_t>(i)]; }
-  /// Row i converted to float.
-  void get(int64_t i, float* out) const;
-  /// Keeps the examples for which keep(i) is true.
-  void filter(const std::function<bool(int64_t)>& keep);
-  /// A copy of the examples for which keep(i) is true.
-  ExampleSet select(const std::function<bool(int64_t)>& keep) const;
-  /// Bytes of the rows held.
-  size_t bytes() const { return static_cast<size_t>(size()) * rowBytes(dims_); }
-  /// Bytes of one row of `dims` values.
-  static size_t rowBytes(int64_t dims) { return static_cast<size_t>(dims) * sizeof(uint16_t); }
-  /// Bytes allocated for rows: at most one block more than bytes().
-  size_t allocatedBytes() const;
-
- private:
-  uint16_t* row(int64_t i);
-  const uint16_t* row(int64_t i) const;
-  /// Room for one more row at the end, with its label and group (a new block when the last is full).
-  uint16_t* newRow(int label, int group);
-  /// Keeps the first n rows and releases the blocks past them.
-  void truncate(int64_t n);
-
-  int64_t dims_;
-  std::vector<std::vector<uint16_t>> blocks_;
-  std::vector<int> labels_, groups_;
-};
-
-/// Round-trip of floats through half precision (exposed for tests).
-void floatsToHalf(const float* in, int64_t n, uint16_t* out);
-void halfToFloats(const uint16_t* in, int64_t n, float* out);
 
 struct SgdOptions {
   double lambda = 1e-4;    ///< L2 regularisation weight

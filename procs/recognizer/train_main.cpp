@@ -23,8 +23,10 @@ int main(int argc, char** argv) {
   std::vector<std::string> objects, scenes, background_objects;
   std::string out, config, report_path, proposals_dir, log_level = "info";
   int64_t seed = -1;
-  app.add_option("--objects", objects, "object set folders (category/category_N/..._crop.png)")
-      ->required();
+  std::string show;
+  app.add_option("--report", show,
+                 "prints what the model file was trained on (object sets, scenes, options, validation) and exits");
+  app.add_option("--objects", objects, "object set folders (category/category_N/..._crop.png)");
   app.add_option("--scenes,--negatives", scenes,
                  "sequence folders with boxes.csv: their objects (jittered boxes) and background boxes");
   app.add_option("--background-objects", background_objects,
@@ -34,18 +36,31 @@ int main(int argc, char** argv) {
                  "folder of <scene>.csv proposal boxes (slamaware-eval --dump-proposals on the scenes): "
                  "also trained on, labelled by their overlap with the ground truth")
       ->check(CLI::ExistingDirectory);
-  app.add_option("--out", out, "model file to write")->required();
+  app.add_option("--out", out, "model file to write");
   app.add_option("--config", config, "YAML file with a 'train' section (default: built-in options)")
       ->check(CLI::ExistingFile);
   app.add_option("--seed", seed, "overrides train.seed");
-  app.add_option("--report", report_path, "also write the training report (JSON) here");
+  app.add_option("--write-report", report_path, "also write the training report (JSON) here");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
+  if (!show.empty()) {
+    try {
+      std::cout << provenanceText(loadModel(show));
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 1;
+    }
+    return 0;
+  }
+  if (objects.empty() || out.empty()) {
+    std::cerr << "slamaware-train: --objects and --out are required to train (or --report MODEL to describe one)\n";
+    return 2;
+  }
   size_t example_kb = 0;
   try {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
-    example_kb = ExampleSet::rowBytes(options.encoding.vladDims()) / 1000;
+    example_kb = ExampleSet(options.encoding.vladDims(), options.encoding.pca_dims).maxRowBytes() / 1000;
     if (seed >= 0) options.seed = static_cast<int>(seed);
     TrainReport report;
     const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
@@ -59,7 +74,7 @@ int main(int argc, char** argv) {
     }
   } catch (const std::bad_alloc&) {
     // Every encoded example is held in memory (ExampleSet).
-    spdlog::error("out of memory: the training examples ({} kB each) did not fit; train on fewer: lower "
+    spdlog::error("out of memory: the training examples (up to {} kB each) did not fit; train on fewer: lower "
                   "train.max_views_per_instance, train.negatives_per_frame or train.context_copies, or raise "
                   "train.proposal_every (--config)",
                   example_kb);

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,10 +13,12 @@
 #include <set>
 #include <sstream>
 
+#include "common/config.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
 #include "common/progress.h"
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace slamaware {
 
@@ -71,20 +74,24 @@ double backgroundProbability(const float* s, int C) {
 struct Split {
   std::vector<bool> crop_val, frame_val;
   std::vector<std::string> held_out_instances;
-  std::string held_out_sequence;  ///< "" when frames are held out one in n
+  std::vector<std::string> held_out_sequences;  ///< empty for a domain whose frames are held out one in n
 };
 
+// Held out, separately for rendered and photographed data (so that both are validated, and a lone
+// photographed sequence is not all held out): one instance of each category with two or more (a
+// single instance: every 5th view), one sequence when there are several, else every
+// holdout_frame_every-th frame.
 Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFrame>& frames,
                 const TrainOptions& options) {
   Split s;
   s.crop_val.assign(crops.size(), false);
   s.frame_val.assign(frames.size(), false);
   if (!options.validation) return s;
-  std::map<std::string, std::set<std::string>> instances;
-  for (const auto& c : crops) instances[c.category].insert(c.instance);
+  std::map<std::pair<std::string, bool>, std::set<std::string>> instances;
+  for (const auto& c : crops) instances[{c.category, c.real}].insert(c.instance);
   std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 1, 0));
   std::set<std::string> held;
-  for (const auto& [category, names] : instances) {
+  for (const auto& [key, names] : instances) {
     if (names.size() < 2) continue;
     auto it = names.begin();
     std::advance(it, static_cast<long>(rng() % names.size()));
@@ -96,28 +103,36 @@ Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFr
     const auto& c = crops[i];
     if (held.count(c.instance)) {
       s.crop_val[i] = true;
-    } else if (instances[c.category].size() < 2) {
-      s.crop_val[i] =
-          (view_counter[c.instance]++ % 5) == 4;  // single instance: hold out every 5th view
+    } else if (instances[{c.category, c.real}].size() < 2) {
+      s.crop_val[i] = (view_counter[c.instance]++ % 5) == 4;  // single instance: hold out every 5th view
     }
   }
-  std::vector<std::string> sequences;
-  for (const auto& f : frames)
-    if (std::find(sequences.begin(), sequences.end(), f.sequence) == sequences.end()) sequences.push_back(f.sequence);
-  if (sequences.size() >= 2) {
-    const std::string& held_scene = sequences[rng() % sequences.size()];
-    for (size_t f = 0; f < frames.size(); ++f) s.frame_val[f] = frames[f].sequence == held_scene;
-    s.held_out_sequence = held_scene;
-  } else if (frames.size() >= 2) {
-    const int every = std::max(2, options.holdout_frame_every);
-    for (size_t f = 0; f < frames.size(); ++f) s.frame_val[f] = static_cast<int>(f) % every == every / 2;
+  for (const bool real : {false, true}) {
+    std::vector<std::string> sequences;
+    std::vector<size_t> domain_frames;
+    for (size_t f = 0; f < frames.size(); ++f) {
+      if (frames[f].real != real) continue;
+      domain_frames.push_back(f);
+      if (std::find(sequences.begin(), sequences.end(), frames[f].sequence) == sequences.end())
+        sequences.push_back(frames[f].sequence);
+    }
+    if (sequences.size() >= 2) {
+      const std::string& held_scene = sequences[rng() % sequences.size()];
+      for (size_t f : domain_frames) s.frame_val[f] = frames[f].sequence == held_scene;
+      s.held_out_sequences.push_back(held_scene);
+    } else if (domain_frames.size() >= 2) {
+      const int every = std::max(2, options.holdout_frame_every);
+      for (size_t k = 0; k < domain_frames.size(); ++k)
+        s.frame_val[domain_frames[k]] = static_cast<int>(k) % every == every / 2;
+    }
   }
   return s;
 }
 
+
 // Encodes `boxes` of one scene frame as background examples (group = -1 - frame index).
 void addBackground(FrameEncoder& encoder, const cv::Mat& image,
-                   const std::vector<cv::Rect2d>& boxes, int label, int group,
+                   const std::vector<cv::Rect2d>& boxes, int label, int group, int domain,
                    ReusableMatrix* buffer, ExampleSet* out) {
   std::vector<PyramidBox> snapped;
   for (const auto& r : boxes) {
@@ -126,7 +141,133 @@ void addBackground(FrameEncoder& encoder, const cv::Mat& image,
   }
   if (snapped.empty()) return;
   encoder.encode(image, snapped, EncoderKind::kAuto, buffer);
-  for (int64_t i = 0; i < buffer->rows(); ++i) out->add(buffer->row(i), label, group);
+  for (int64_t i = 0; i < buffer->rows(); ++i) out->add(buffer->row(i), label, group, domain);
+}
+
+// A crop and its object mask (8-bit, object > 0) cut to the mask's bounding box; a mask without
+// object pixels, or of another size, leaves the crop whole and *mask empty.
+void cutToMask(cv::Mat* crop, cv::Mat* mask, const cv::Mat& object) {
+  mask->release();
+  if (object.size() != crop->size()) return;
+  const cv::Rect box = cv::boundingRect(object > 0);
+  if (box.area() == 0) return;
+  *crop = (*crop)(box).clone();
+  *mask = object(box) > 0;
+}
+
+// A photographed crop as a camera on a robot would see it, pasted into `scene`: scaled so that its
+// longer side is 32-160 px (log-uniform; at most 1.25 times its own size), mirrored half the time,
+// its brightness (x 0.78-1.28) and white balance (each channel x 0.9-1.1) changed, sometimes
+// blurred (sigma up to 1 px), and pasted at a random place, through its mask when it has one (else
+// the whole crop). Returns the pasted rectangle (empty when it does not fit).
+cv::Rect pasteVaried(const cv::Mat& crop, const cv::Mat& mask, cv::Mat* scene, std::mt19937& rng) {
+  const int side = std::max(crop.cols, crop.rows);
+  const double hi = std::max(32.0, std::min(160.0, 1.25 * side));
+  const double target = std::exp(std::log(32.0) + uniform01(rng) * (std::log(hi) - std::log(32.0)));
+  const double s = target / side;
+  const cv::Size size(std::max(8, static_cast<int>(std::lround(crop.cols * s))),
+                      std::max(8, static_cast<int>(std::lround(crop.rows * s))));
+  if (size.width > scene->cols || size.height > scene->rows) return {};
+  cv::Mat obj, m;
+  cv::resize(crop, obj, size, 0, 0, s < 1 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  if (!mask.empty()) cv::resize(mask, m, size, 0, 0, cv::INTER_NEAREST);
+  if (rng() % 2) {
+    cv::flip(obj, obj, 1);
+    if (!m.empty()) cv::flip(m, m, 1);
+  }
+  const double brightness = std::exp((uniform01(rng) * 2 - 1) * 0.25);
+  cv::Scalar gain;
+  for (int c = 0; c < 3; ++c) gain[c] = brightness * std::exp((uniform01(rng) * 2 - 1) * 0.1);
+  cv::Mat f;
+  obj.convertTo(f, CV_32FC3);
+  cv::multiply(f, gain, f);
+  // Saturation x 0.75-1.33 about each pixel's grey.
+  const double saturation = std::exp((uniform01(rng) * 2 - 1) * std::log(4.0 / 3.0));
+  cv::Mat grey, grey3;
+  cv::cvtColor(f, grey, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(grey, grey3, cv::COLOR_GRAY2BGR);
+  f = grey3 + (f - grey3) * saturation;
+  f.convertTo(obj, CV_8UC3);
+  const double sigma = uniform01(rng) * 1.0;
+  if (sigma > 0.3) cv::GaussianBlur(obj, obj, cv::Size(0, 0), sigma);
+  const cv::Rect r(static_cast<int>(rng() % static_cast<uint32_t>(scene->cols - size.width + 1)),
+                   static_cast<int>(rng() % static_cast<uint32_t>(scene->rows - size.height + 1)), size.width,
+                   size.height);
+  if (m.empty())
+    obj.copyTo((*scene)(r));
+  else
+    obj.copyTo((*scene)(r), m);
+  return r;
+}
+
+using Clock = std::chrono::steady_clock;
+
+// Peak resident memory of this process (MB; 0 where /proc does not tell).
+double peakRssMb() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+  return 0;
+}
+
+// Every line of `text` indented by `n` spaces.
+std::string indentLines(const std::string& text, int n) {
+  std::string out, line;
+  std::istringstream in(text);
+  while (std::getline(in, line)) out += std::string(static_cast<size_t>(n), ' ') + line + "\n";
+  return out;
+}
+
+// What a model was trained on and how (RecognizerModel::provenance; slamaware-train --report).
+nlohmann::json provenance(const std::vector<std::string>& object_dirs, const std::vector<std::string>& background_dirs,
+                          const std::vector<LabeledCrop>& crops, const std::vector<std::string>& scene_dirs,
+                          const std::string& proposals_dir,
+                          const TrainOptions& options, const TrainReport& report, double seconds) {
+  nlohmann::json j;
+  j["format"] = "slamaware training provenance 2";
+  j["classes"] = report.classes;
+  auto objectSets = [&](const std::vector<std::string>& dirs, bool background) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& dir : dirs) {
+      const ObjectSet set = ObjectSet::open(dir);
+      std::set<std::string> categories, instances;
+      int64_t used = 0;
+      const std::string named = folderName(dir) + "/";
+      for (const auto& c : crops) {
+        // A crop belongs to this set by its path (instances may carry the set's name).
+        if (c.path.rfind(set.dir(), 0) != 0) continue;
+        ++used;
+        categories.insert(c.category);
+        instances.insert(c.instance.rfind(named, 0) == 0 ? c.instance.substr(named.size()) : c.instance);
+      }
+      list.push_back({{"path", dir},
+                      {"kind", set.rendered() ? "rendered" : "photographed"},
+                      {"role", background ? "background" : "objects"},
+                      {"views", set.views().size()},
+                      {"crops_used", used},
+                      {"instances_used", instances.size()},
+                      {"categories_used", categories}});
+    }
+    return list;
+  };
+  j["object_sets"] = objectSets(object_dirs, false);
+  for (auto& e : objectSets(background_dirs, true)) j["object_sets"].push_back(e);
+  nlohmann::json scenes = nlohmann::json::array();
+  for (const auto& dir : scene_dirs) {
+    const SequenceFolder seq = SequenceFolder::open(dir);
+    scenes.push_back({{"path", dir},
+                      {"kind", isSyntheticSequence(seq) ? "rendered" : "photographed"},
+                      {"frames", seq.size()},
+                      {"boxes", seq.boxes().size()}});
+  }
+  j["scenes"] = scenes;
+  if (!proposals_dir.empty()) j["proposals"] = proposals_dir;
+  TrainOptions copy = options;
+  j["config"] = "train:\n" + indentLines(describeOptions(optionListOf(copy)), 2);
+  j["report"] = nlohmann::json::parse(report.toJson());
+  j["training_s"] = seconds;
+  j["peak_rss_mb"] = peakRssMb();
+  return j;
 }
 
 ValidationSummary summarize(const LinearClassifier& clf, const ExampleSet& val, bool has_background,
@@ -139,7 +280,7 @@ ValidationSummary summarize(const LinearClassifier& clf, const ExampleSet& val, 
   const int objects = has_background ? C - 1 : C;
   v.confusion.assign(static_cast<size_t>(C), std::vector<int64_t>(static_cast<size_t>(C), 0));
   MatrixRM x(1, val.dims()), s, lp;
-  int64_t obj_right = 0, right = 0, bg_right = 0;
+  int64_t obj_right = 0, right = 0, bg_right = 0, real_right = 0, real_bg_right = 0;
   double nll = 0;
   for (int64_t i = 0; i < val.size(); ++i) {
     val.get(i, x.data());
@@ -153,23 +294,48 @@ ValidationSummary summarize(const LinearClassifier& clf, const ExampleSet& val, 
       if (lp(0, c) > lp(0, best_obj)) best_obj = c;
     ++v.confusion[static_cast<size_t>(label)][static_cast<size_t>(best)];
     nll -= lp(0, label);
+    const bool real = val.domain(i) != 0;
     if (has_background && label == C - 1) {
       ++v.negatives;
       bg_right += best == label;
+      v.real_negatives += real;
+      real_bg_right += real && best == label;
     } else {
       ++v.crops;
       obj_right += best_obj == label;
       right += best == label;
+      v.real_crops += real;
+      real_right += real && best == label;
     }
   }
   v.object_accuracy = v.crops ? 100.0 * obj_right / v.crops : 0;
   v.accuracy = v.crops ? 100.0 * right / v.crops : 0;
   v.background_accuracy = v.negatives ? 100.0 * bg_right / v.negatives : 0;
+  v.real_accuracy = v.real_crops ? 100.0 * real_right / v.real_crops : 0;
+  v.real_background_accuracy = v.real_negatives ? 100.0 * real_bg_right / v.real_negatives : 0;
   v.nll = nll / static_cast<double>(val.size());
   return v;
 }
 
 }  // namespace
+
+void balanceDomains(ExampleSet* set, int classes, double real_share) {
+  if (real_share <= 0 || real_share >= 1) return;
+  std::vector<double> count[2];
+  count[0].assign(static_cast<size_t>(classes), 0);
+  count[1].assign(static_cast<size_t>(classes), 0);
+  for (int64_t i = 0; i < set->size(); ++i) count[set->domain(i) ? 1 : 0][static_cast<size_t>(set->label(i))] += 1;
+  for (int64_t i = 0; i < set->size(); ++i) {
+    const size_t c = static_cast<size_t>(set->label(i));
+    const double rendered = count[0][c], real = count[1][c];
+    if (rendered == 0 || real == 0) {
+      set->setWeight(i, 1.f);
+      continue;
+    }
+    const double share = set->domain(i) ? real_share : 1 - real_share;
+    set->setWeight(i, static_cast<float>(share * (rendered + real) / (set->domain(i) ? real : rendered)));
+  }
+}
 
 std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
                                       int max_views_per_instance) {
@@ -184,7 +350,7 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
           max_views_per_instance > 0 ? std::min(n, static_cast<size_t>(max_views_per_instance)) : n;
       for (size_t k = 0; k < keep; ++k) {
         const ObjectView* v = views[k * n / keep];
-        crops.push_back(LabeledCrop{v->crop_path, v->category, v->instance});
+        crops.push_back(LabeledCrop{v->crop_path, v->category, v->instance, v->mask_path, !set.rendered()});
       }
     }
   }
@@ -276,6 +442,7 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
       f.path = seq.framePath(i);
       f.sequence = seq.info().name.empty() ? dir : seq.info().name;
       f.index = static_cast<int>(i);
+      f.real = !isSyntheticSequence(seq);
       frames.push_back(std::move(f));
     }
   }
@@ -360,16 +527,21 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
   DenseFeatureExtractor extractor(p.features);
   FeatureGrid grid;
   const int64_t target = std::max<int64_t>(options.vocabulary_descriptors, p.vocabulary_size * 4);
-  // Half of the sample from scene frames when there are any (the background needs codewords too).
-  const int64_t from_frames = frames.empty() ? 0 : target / 2;
-  const int64_t from_crops = crops.empty() ? 0 : target - from_frames;
-  const int64_t per_crop = crops.empty() ? 0
-                                         : (from_crops + static_cast<int64_t>(crops.size()) - 1) /
-                                               static_cast<int64_t>(crops.size());
-  const int64_t per_frame = frames.empty()
-                                ? 0
-                                : (from_frames + static_cast<int64_t>(frames.size()) - 1) /
-                                      static_cast<int64_t>(frames.size());
+  // Half of the sample from photographs when there are any, half from renderings (codewords fitted
+  // to rendered images alone describe photographs poorly); within each, half from scene frames
+  // when there are any (the background needs codewords too).
+  int64_t count[2][2] = {{0, 0}, {0, 0}};  // [photographed][frame]
+  for (const auto& c : crops) ++count[c.real ? 1 : 0][0];
+  for (const auto& f : frames) ++count[f.real ? 1 : 0][1];
+  const int domains = (count[0][0] + count[0][1] > 0) + (count[1][0] + count[1][1] > 0);
+  int64_t quota[2][2] = {{0, 0}, {0, 0}};  // per image
+  for (int d = 0; d < 2; ++d) {
+    const int kinds = (count[d][0] > 0) + (count[d][1] > 0);
+    for (int k = 0; k < 2; ++k)
+      if (count[d][k] > 0) quota[d][k] = (target / domains / kinds + count[d][k] - 1) / count[d][k];
+  }
+  const int64_t per_crop_rendered = quota[0][0], per_crop_real = quota[1][0];
+  const int64_t per_frame_rendered = quota[0][1], per_frame_real = quota[1][1];
   std::vector<float> rows;
   const int64_t total = static_cast<int64_t>(crops.size() + frames.size());
   int64_t done = 0;
@@ -391,10 +563,10 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
     if (progress) progress(++done, total);
   };
   for (size_t i = 0; i < crops.size(); ++i)
-    sample(crops[i].path, per_crop,
+    sample(crops[i].path, crops[i].real ? per_crop_real : per_crop_rendered,
            subSeed(static_cast<uint32_t>(options.seed), 2, static_cast<uint32_t>(i)));
   for (size_t i = 0; i < frames.size(); ++i)
-    sample(frames[i].path, per_frame,
+    sample(frames[i].path, frames[i].real ? per_frame_real : per_frame_rendered,
            subSeed(static_cast<uint32_t>(options.seed), 3, static_cast<uint32_t>(i)));
   int64_t n = static_cast<int64_t>(rows.size()) / kFeatureDims;
   if (n < p.vocabulary_size)
@@ -424,18 +596,19 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
 ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
                        const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror,
                        const std::function<void(int64_t, int64_t)>& progress, int other_label) {
-  ExampleSet set(encoder.params().vladDims());
+  ExampleSet set(encoder.params().vladDims(), encoder.params().pca_dims);
   ReusableMatrix buffer;
   for (size_t i = 0; i < crops.size(); ++i) {
     cv::Mat image = readImage(crops[i].path);
     const int label = labelOf(classes, crops[i].category, other_label);
     const int group = indexOf(instances, crops[i].instance);
+    const int domain = crops[i].real ? 1 : 0;
     encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
-    set.add(buffer.row(0), label, group);
+    set.add(buffer.row(0), label, group, domain);
     if (mirror) {
       cv::flip(image, image, 1);
       encoder.encode(image, {wholeImage(encoder, image)}, EncoderKind::kDirect, &buffer);
-      set.add(buffer.row(0), label, group);
+      set.add(buffer.row(0), label, group, domain);
     }
     if (progress) progress(static_cast<int64_t>(i + 1), static_cast<int64_t>(crops.size()));
   }
@@ -456,6 +629,10 @@ std::string TrainReport::toJson() const {
     v["accuracy"] = validation.accuracy;
     v["negatives"] = validation.negatives;
     v["background_accuracy"] = validation.background_accuracy;
+    v["real_crops"] = validation.real_crops;
+    v["real_accuracy"] = validation.real_accuracy;
+    v["real_negatives"] = validation.real_negatives;
+    v["real_background_accuracy"] = validation.real_background_accuracy;
     v["nll"] = validation.nll;
     v["confusion"] = validation.confusion;
     j["validation"] = v;
@@ -491,7 +668,16 @@ std::string TrainReport::toText() const {
                 "  %lld background boxes: classified background %.1f%%\n  calibrated NLL %.3f\n",
                 static_cast<long long>(v.crops), v.object_accuracy, v.accuracy,
                 static_cast<long long>(v.negatives), v.background_accuracy, v.nll);
-  o << buf << "  confusion (rows: true, columns: predicted):\n";
+  o << buf;
+  if (v.real_crops + v.real_negatives > 0) {
+    std::snprintf(buf, sizeof(buf),
+                  "  of them photographed: %lld crops, best class overall right %.1f%%; %lld background "
+                  "boxes, classified background %.1f%%\n",
+                  static_cast<long long>(v.real_crops), v.real_accuracy, static_cast<long long>(v.real_negatives),
+                  v.real_background_accuracy);
+    o << buf;
+  }
+  o << "  confusion (rows: true, columns: predicted):\n";
   for (size_t r = 0; r < v.confusion.size(); ++r) {
     std::snprintf(buf, sizeof(buf), "    %-14s", classes[r].c_str());
     o << buf;
@@ -509,16 +695,36 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                            const TrainOptions& options, TrainReport* report,
                            const std::string& proposals_dir,
                            const std::vector<std::string>& background_object_dirs) {
+  const auto started = Clock::now();
   options.encoding.validate();
-  std::vector<LabeledCrop> crops = collectCrops(object_dirs, options.max_views_per_instance);
+  std::vector<LabeledCrop> crops;
+  for (const auto& dir : object_dirs) {
+    // A rendered set's instances are named after the set: its "coffee_mug_1" is not the UW RGB-D
+    // dataset's coffee_mug_1, which photographed sets share.
+    const bool rendered = ObjectSet::open(dir).rendered();
+    // Photographed views are scarce: every one of them is used.
+    for (auto& c : rendered ? collectNamedCrops(dir, options.max_views_per_instance) : collectCrops({dir}, 0))
+      crops.push_back(std::move(c));
+  }
   const std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs, proposals_dir);
   if (crops.empty()) throw DatasetError("no training crops");
   std::set<std::string> category_set, instance_set;
   for (const auto& c : crops) category_set.insert(c.category);
-  // Objects of other categories: background, as the scenes' other objects are. Their instances
-  // are named after their set (two sets may both hold a "kleenex_1").
+  // Objects of other categories: background, as the scenes' other objects are: those of the object
+  // sets outside train.classes, and those of the background sets (their instances named after
+  // their set: two sets may both hold a "kleenex_1").
   int64_t background_crops = 0;
   std::set<std::string> background_categories;
+  if (!options.classes.empty()) {
+    for (const auto& c : options.classes)
+      if (!category_set.count(c)) throw DatasetError("train.classes: no crops of '" + c + "' in the object sets");
+    category_set = std::set<std::string>(options.classes.begin(), options.classes.end());
+    for (const auto& c : crops)
+      if (!category_set.count(c.category)) {
+        background_categories.insert(c.category);
+        ++background_crops;
+      }
+  }
   for (const auto& dir : background_object_dirs) {
     for (auto& c : collectNamedCrops(dir, options.background_views_per_instance)) {
       if (category_set.count(c.category)) continue;
@@ -537,13 +743,13 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   const std::vector<std::string> instances(instance_set.begin(), instance_set.end());
   const Split split = makeSplit(crops, frames, options);
   spdlog::info(
-      "{} crops of {} instances in {} categories ({} of them of {} other categories: background), {} scene "
-      "frames; held out: {} instances, {} frames{}",
+      "{} crops of {} instances in {} categories ({} of them of {} other categories: background; {} "
+      "photographed), {} scene frames ({} photographed); held out: {} instances, {} frames{}",
       crops.size(), instances.size(), category_set.size(), background_crops, background_categories.size(),
-      frames.size(),
-      split.held_out_instances.size(),
-      std::count(split.frame_val.begin(), split.frame_val.end(), true),
-      split.held_out_sequence.empty() ? "" : " (scene " + split.held_out_sequence + ")");
+      std::count_if(crops.begin(), crops.end(), [](const LabeledCrop& c) { return c.real; }), frames.size(),
+      std::count_if(frames.begin(), frames.end(), [](const SceneFrame& f) { return f.real; }),
+      split.held_out_instances.size(), std::count(split.frame_val.begin(), split.frame_val.end(), true),
+      split.held_out_sequences.empty() ? "" : fmt::format(" (scenes {})", fmt::join(split.held_out_sequences, ", ")));
 
   RecognizerModel model;
   model.params = options.encoding;
@@ -562,7 +768,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   }
   FrameEncoder encoder(model.params, model.pca, model.vocabulary);
 
-  ExampleSet all(model.params.vladDims());
+  ExampleSet all(model.params.vladDims(), model.params.pca_dims);
   {
     ProgressBar bar("encode crops", static_cast<int64_t>(crops.size()));
     all = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
@@ -573,7 +779,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   // join the training set only for the final retraining on everything.
   const size_t per_crop = options.mirror_crops ? 2 : 1;
   std::vector<bool> is_val(static_cast<size_t>(all.size()));
-  ExampleSet held_out_mirrors(all.dims());
+  ExampleSet held_out_mirrors(all.dims(), all.blockDims());
   for (size_t i = 0; i < crops.size(); ++i)
     for (size_t k = 0; k < per_crop; ++k) is_val[i * per_crop + k] = split.crop_val[i];
   if (per_crop > 1) {
@@ -587,35 +793,58 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     is_val = v;
   }
   ReusableMatrix buffer;
-  if (!frames.empty() && options.context_copies > 0) {
+  if (!frames.empty() && (options.context_copies > 0 || options.real_copies > 0)) {
     // Crops in context: pasted into scene frames of the same split (any frame if that split has
-    // none), at the crop's own size, anywhere it fits.
-    std::vector<size_t> frames_of[2];
-    for (size_t f = 0; f < frames.size(); ++f) frames_of[split.frame_val[f] ? 1 : 0].push_back(f);
+    // none), a photographed frame half the time when there are any: rendered objects in
+    // photographs and photographed objects in renderings, so that neither look tells a class.
+    // Each crop `context_copies` times at its own size, anywhere it fits; each photographed crop
+    // `real_copies` times more, varied as a camera would see it (pasteVaried).
+    std::vector<size_t> frames_of[2][2];  // [held out][photographed]
+    for (size_t f = 0; f < frames.size(); ++f) frames_of[split.frame_val[f] ? 1 : 0][frames[f].real ? 1 : 0].push_back(f);
     std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 7, 0));
     ProgressBar bar("encode crops in scene context", static_cast<int64_t>(crops.size()));
     std::map<size_t, cv::Mat> frame_cache;
+    auto pickFrame = [&](bool held_out) -> const cv::Mat& {
+      int s = held_out ? 1 : 0;
+      if (frames_of[s][0].empty() && frames_of[s][1].empty()) s = 1 - s;
+      const auto& rendered = frames_of[s][0];
+      const auto& real = frames_of[s][1];
+      const bool use_real = !real.empty() && (rendered.empty() || rng() % 2 == 0);
+      const std::vector<size_t>& pool = use_real ? real : rendered;
+      const size_t f = pool[rng() % pool.size()];
+      auto it = frame_cache.find(f);
+      if (it == frame_cache.end()) {
+        if (frame_cache.size() > 64) frame_cache.clear();
+        it = frame_cache.emplace(f, readImage(frames[f].path)).first;
+      }
+      return it->second;
+    };
     for (size_t i = 0; i < crops.size(); ++i) {
-      const cv::Mat crop = readImage(crops[i].path);
-      const std::vector<size_t>& pool = frames_of[split.crop_val[i] ? 1 : 0].empty()
-                                            ? frames_of[split.crop_val[i] ? 0 : 1]
-                                            : frames_of[split.crop_val[i] ? 1 : 0];
-      for (int k = 0; k < options.context_copies; ++k) {
-        const size_t f = pool[rng() % pool.size()];
-        auto it = frame_cache.find(f);
-        if (it == frame_cache.end()) {
-          if (frame_cache.size() > 64) frame_cache.clear();
-          it = frame_cache.emplace(f, readImage(frames[f].path)).first;
+      // A crop with a mask is pasted as its object alone, boxed tightly (what is around it in the
+      // box is the frame's); one without is pasted whole.
+      cv::Mat crop = readImage(crops[i].path), mask;
+      if (!crops[i].mask_path.empty()) cutToMask(&crop, &mask, readImage(crops[i].mask_path, true));
+      const int copies = options.context_copies + (crops[i].real ? options.real_copies : 0);
+      for (int k = 0; k < copies; ++k) {
+        cv::Mat scene = pickFrame(split.crop_val[i]).clone();
+        cv::Rect r;
+        if (k < options.context_copies) {
+          if (crop.cols > scene.cols || crop.rows > scene.rows) continue;
+          r = cv::Rect(static_cast<int>(rng() % static_cast<uint32_t>(scene.cols - crop.cols + 1)),
+                       static_cast<int>(rng() % static_cast<uint32_t>(scene.rows - crop.rows + 1)), crop.cols, crop.rows);
+          if (mask.empty())
+            crop.copyTo(scene(r));
+          else
+            crop.copyTo(scene(r), mask);
+        } else {
+          r = pasteVaried(crop, mask, &scene, rng);
+          if (r.empty()) continue;
         }
-        if (crop.cols > it->second.cols || crop.rows > it->second.rows) continue;
-        cv::Mat scene = it->second.clone();
-        const int x = static_cast<int>(rng() % static_cast<uint32_t>(scene.cols - crop.cols + 1));
-        const int y = static_cast<int>(rng() % static_cast<uint32_t>(scene.rows - crop.rows + 1));
-        crop.copyTo(scene(cv::Rect(x, y, crop.cols, crop.rows)));
         PyramidBox b;
-        if (!encoder.snap(x, y, crop.cols, crop.rows, scene.cols, scene.rows, &b)) continue;
+        if (!encoder.snap(r.x, r.y, r.width, r.height, scene.cols, scene.rows, &b)) continue;
         encoder.encode(scene, {b}, EncoderKind::kDirect, &buffer);
-        all.add(buffer.row(0), labelOf(classes, crops[i].category, bg), indexOf(instances, crops[i].instance));
+        all.add(buffer.row(0), labelOf(classes, crops[i].category, bg), indexOf(instances, crops[i].instance),
+                crops[i].real ? 1 : 0);
         is_val.push_back(split.crop_val[i]);
       }
       bar.update(static_cast<int64_t>(i + 1));
@@ -629,7 +858,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       const auto boxes = randomBackgroundBoxes(
           image.cols, image.rows, frames[f].objects, options.negatives_per_frame, options,
           subSeed(static_cast<uint32_t>(options.seed), 6, static_cast<uint32_t>(f)));
-      addBackground(encoder, image, boxes, bg, -1 - static_cast<int>(f), &buffer, &all);
+      addBackground(encoder, image, boxes, bg, -1 - static_cast<int>(f), frames[f].real ? 1 : 0, &buffer, &all);
       is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
       bar.update(static_cast<int64_t>(f + 1));
     }
@@ -688,7 +917,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       if (snapped.empty()) continue;
       encoder.encode(image, snapped, EncoderKind::kAuto, &buffer);
       for (int64_t i = 0; i < buffer.rows(); ++i) {
-        all.add(buffer.row(i), labels[static_cast<size_t>(i)], -1 - static_cast<int>(f));
+        all.add(buffer.row(i), labels[static_cast<size_t>(i)], -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
         (labels[static_cast<size_t>(i)] == bg ? others : positives) += 1;
       }
       is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
@@ -704,7 +933,8 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   ExampleSet train = std::move(all);
   train.filter([&](int64_t i) { return !is_val[static_cast<size_t>(i)]; });
 
-  auto trainStage = [&](const ExampleSet& set, const std::string& label) {
+  auto trainStage = [&](ExampleSet& set, const std::string& label) {
+    balanceDomains(&set, static_cast<int>(classes.size()), options.real_share);
     ProgressBar bar(label, options.sgd.epochs);
     LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); });
     bar.finish();
@@ -716,7 +946,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   if (!frames.empty()) {  // mining searches scene frames
     const int C = static_cast<int>(classes.size());
     for (int round = 1; round <= options.mining_rounds; ++round) {
-      ExampleSet hard(model.params.vladDims());
+      ExampleSet hard(model.params.vladDims(), model.params.pca_dims);
       std::vector<double> hardness;
       MatrixRM s;
       ProgressBar bar("hard negatives, round " + std::to_string(round),
@@ -749,7 +979,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
         for (int64_t i = 0; i < s.rows(); ++i) {
           const double p_bg = backgroundProbability(s.row(i).data(), C);
           if (p_bg >= 0.5) continue;
-          hard.add(buffer.row(i), bg, -1 - static_cast<int>(f));
+          hard.add(buffer.row(i), bg, -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
           hardness.push_back(-p_bg);
         }
         // Keep the memory bounded: only the hardest mining_max_per_round survive.
@@ -828,13 +1058,9 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     (train.label(i) == bg ? r.train_negatives : r.train_crops) += 1;
   r.mined = mined;
   r.validation = summary;
-  nlohmann::json prov;
-  prov["objects"] = object_dirs;
-  prov["scenes"] = scene_dirs;
-  if (!background_object_dirs.empty()) prov["background_objects"] = background_object_dirs;
-  if (!proposals_dir.empty()) prov["proposals"] = proposals_dir;
-  prov["report"] = nlohmann::json::parse(r.toJson());
-  model.provenance = prov.dump();
+  model.provenance = provenance(object_dirs, background_object_dirs, crops, scene_dirs, proposals_dir,
+                                 options, r, std::chrono::duration<double>(Clock::now() - started).count())
+                         .dump();
   model.check("trained model");
   return model;
 }
@@ -951,6 +1177,50 @@ HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const Tra
   return evaluateFolds(crops, extra,
                        {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
                        options, progress, r);
+}
+
+std::string provenanceText(const RecognizerModel& model) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(model.provenance);
+  } catch (const nlohmann::json::exception&) {
+    return "provenance (not JSON):\n" + model.provenance + "\n";
+  }
+  std::ostringstream o;
+  o << "classes: " << fmt::format("{}", fmt::join(model.classifier.classes, ", ")) << "\n";
+  if (!j.contains("format")) {  // a model trained before the provenance named sets and options
+    o << "provenance (older format):\n" << j.dump(2) << "\n";
+    return o.str();
+  }
+  o << fmt::format("trained in {:.1f} min, peak memory {:.0f} MB\n", j.value("training_s", 0.0) / 60,
+                   j.value("peak_rss_mb", 0.0));
+  o << "object sets:\n";
+  for (const auto& s : j["object_sets"])
+    o << fmt::format("  {:<12} {:<13} {:<48} {:>5} of {:>5} views, {:>3} instances ({})\n", s["role"].get<std::string>(),
+                     s["kind"].get<std::string>(), s["path"].get<std::string>(), s["crops_used"].get<int64_t>(),
+                     s["views"].get<int64_t>(), s["instances_used"].get<int64_t>(),
+                     fmt::join(s["categories_used"].get<std::vector<std::string>>(), ", "));
+  o << "scenes:\n";
+  for (const auto& s : j["scenes"])
+    o << fmt::format("  {:<13} {:<48} {:>5} frames, {:>6} boxes\n", s["kind"].get<std::string>(),
+                     s["path"].get<std::string>(), s["frames"].get<int64_t>(), s["boxes"].get<int64_t>());
+  if (j.contains("proposals")) o << "proposal boxes: " << j["proposals"].get<std::string>() << "\n";
+  const auto& r = j["report"];
+  o << fmt::format("examples: {} of objects, {} background", r.value("train_crops", int64_t{0}),
+                   r.value("train_negatives", int64_t{0}));
+  if (r.contains("mined_per_round")) o << fmt::format(" (hard negatives mined: {})", fmt::join(r["mined_per_round"].get<std::vector<int64_t>>(), ", "));
+  o << "\n";
+  if (r.contains("validation")) {
+    const auto& v = r["validation"];
+    o << fmt::format(
+        "validation on held-out instances and frames: {} crops, best class right {:.1f}% (photographed: {} crops, "
+        "{:.1f}%); {} background boxes, {:.1f}% called background (photographed: {}, {:.1f}%); NLL {:.3f}\n",
+        v.value("crops", int64_t{0}), v.value("accuracy", 0.0), v.value("real_crops", int64_t{0}),
+        v.value("real_accuracy", 0.0), v.value("negatives", int64_t{0}), v.value("background_accuracy", 0.0),
+        v.value("real_negatives", int64_t{0}), v.value("real_background_accuracy", 0.0), v.value("nll", 0.0));
+  }
+  o << "options (a config that trains it again with slamaware-train --config):\n" << j.value("config", std::string()) ;
+  return o.str();
 }
 
 }  // namespace slamaware

@@ -47,12 +47,20 @@ namespace slamaware {
 
 struct TrainOptions {
   EncodingParams encoding;
+  /// The model's categories; crops of the object sets' other categories are background examples
+  /// (a real object set of many categories). Empty: every category of the object sets.
+  std::vector<std::string> classes;
+  /// Within a class that has both rendered and photographed examples, the photographed ones carry
+  /// this share of the class's weight (the same share in every class, background included, so that
+  /// looking like a photograph is no evidence for any class); <= 0: every example weighs 1.
+  double real_share = 0.5;
   int seed = 7;                         ///< every random choice of the trainer
   int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
   int kmeans_iterations = 100;
   int max_views_per_instance = 72;  ///< 0 = every view (72: every 3rd of a 216-view turntable)
   int background_views_per_instance = 16;  ///< views per instance of a background object set
   int context_copies = 1;          ///< crops also encoded pasted into scene frames
+  int real_copies = 0;             ///< photographed crops also pasted varied (scale, colour, blur)
   bool mirror_crops = true;        ///< crops also encoded mirrored left-right
   SgdOptions sgd;
   int negatives_per_frame = 4;
@@ -82,6 +90,11 @@ struct TrainOptions {
   template <class V>
   void visit(V& v) {
     v.section("encoding", encoding);
+    v("classes", classes,
+      "the model's categories; the object sets' other categories are background (empty: all of them)");
+    v("real_share", real_share,
+      "share of each class's weight carried by its photographed examples when it also has rendered ones "
+      "(<= 0: all examples weigh the same)");
     v("seed", seed, "seed of every random choice of the trainer");
     v("vocabulary_descriptors", vocabulary_descriptors, "features sampled for PCA and k-means");
     v("kmeans_iterations", kmeans_iterations, "maximum k-means iterations");
@@ -89,6 +102,8 @@ struct TrainOptions {
     v("background_views_per_instance", background_views_per_instance,
       "views used per instance of the --background-objects sets (0 = all)");
     v("context_copies", context_copies, "copies of each crop pasted into random scene frames");
+    v("real_copies", real_copies,
+      "copies of each photographed crop pasted into scene frames scaled, mirrored, recoloured and blurred");
     v("mirror_crops", mirror_crops, "training crops also encoded mirrored left-right");
     v.section("sgd", sgd);
     v("negatives_per_frame", negatives_per_frame, "initial background boxes per scene frame");
@@ -125,6 +140,8 @@ struct LabeledCrop {
   std::string path;
   std::string category;
   std::string instance;
+  std::string mask_path;  ///< the object's pixels ("" if the set has no mask)
+  bool real = false;      ///< photographed (false: rendered by the generator)
 };
 
 /// A scene frame with its ground-truth object boxes (anything else in it is background).
@@ -135,6 +152,7 @@ struct SceneFrame {
   std::vector<cv::Rect2d> objects;
   std::vector<std::string> object_classes;  ///< category of each of `objects`
   std::vector<cv::Rect2d> proposals;        ///< boxes the proposals stage drew in this frame (if known)
+  bool real = false;                        ///< photographed (false: rendered by the generator)
 };
 
 /// The crops of the object sets (categories merged by name across sets), at most
@@ -161,6 +179,15 @@ std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path
 /// of it (proposal_nms_iou).
 std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
                                 const TrainOptions& options);
+
+/// Sets the weights of `set`'s examples (ExampleSet::weight, ExampleSet::domain: 1 photographed) so
+/// that in every class holding both domains the photographed examples carry `real_share` of the
+/// class's weight and the rendered ones the rest, the class's total weight staying its number of
+/// examples; the examples of a class with one domain weigh 1. The domain then carries no evidence
+/// for a class: without it, a training set of many rendered objects and few photographed ones,
+/// most of them background, teaches that looking like a photograph means background. No change
+/// for real_share outside (0, 1).
+void balanceDomains(ExampleSet* set, int classes, double real_share);
 
 /// `count` boxes around `object` (scaled and shifted at random) that overlap it by IoU >= min_iou
 /// and lie in the image.
@@ -195,6 +222,10 @@ struct ValidationSummary {
   double accuracy = 0;             ///< % of held-out crops whose best class overall is right
   int64_t negatives = 0;           ///< held-out background boxes
   double background_accuracy = 0;  ///< % of them classified background
+  int64_t real_crops = 0;          ///< held-out crops of photographed instances
+  double real_accuracy = 0;        ///< % of them whose best class overall is right
+  int64_t real_negatives = 0;      ///< held-out background boxes of photographed frames and objects
+  double real_background_accuracy = 0;  ///< % of them classified background
   double nll = 0;                  ///< mean negative log-likelihood after calibration
   std::vector<std::vector<int64_t>> confusion;  ///< [true class][predicted class]
 };
@@ -207,6 +238,11 @@ struct TrainReport {
   std::string toJson() const;
   std::string toText() const;
 };
+
+/// What a trained model was trained on, from its provenance (slamaware-train --report MODEL): its
+/// classes, the object sets and scenes with what was used of them, the validation on held-out data,
+/// the training time and peak memory, and the options as a config file that trains it again.
+std::string provenanceText(const RecognizerModel& model);
 
 /// Category accuracy of an object set on instances unseen in training. Each fold holds out a set of
 /// instances: PCA, vocabulary and classifiers are trained on the other instances only (no

@@ -348,17 +348,18 @@ WriteStats writeObjectSet(const ObjectSetOptions& o, const std::string& dir_s, i
     e_list += (i ? ", " : "") + std::to_string(static_cast<int>(std::lround(o.elevations_deg[i])));
     v_list += (i ? ", " : "") + std::to_string(o.video_ids[i]);
   }
-  std::string yaml = "name: " + o.name + "\nseed: " + std::to_string(set_seed) +
+  std::string yaml = "name: " + o.name + "\nsource: synth (slamaware-synth objects)\nseed: " +
+                     std::to_string(set_seed) +
                      "\ncategories: " + yamlList(cats) +
                      "\ninstances_per_category: " + std::to_string(o.instances) +
                      "\nelevations_deg: " + e_list + "]\nvideo_ids: " + v_list +
                      "]\nazimuth_step_deg: " + std::to_string(o.azimuth_step_deg) +
                      "\nviews_per_instance: " + std::to_string(views_per_instance) +
-                     "\nnotes: turntable views rendered by slamaware-synth; "
+                     "\nnotes: \"turntable views rendered by slamaware-synth; "
                      "<instance>_<video>_<frame>: video = elevation, frame = "
                      "azimuth step from 1; crop = object box plus margin; maskcrop = object "
                      "pixels; loc = crop corner in the "
-                     "640x480 frame\n";
+                     "640x480 frame\"\n";
   writeText(dir / "set.yaml", yaml, &st);
   st.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return st;

@@ -7,7 +7,9 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 
+#include "common/config.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
 #include "procs/recognizer/recognizer.h"
@@ -348,7 +350,7 @@ TEST(Training, ObjectsOfOtherCategoriesAreBackground) {
   ASSERT_EQ(model.classifier.classes, (std::vector<std::string>{"disc", "background"}));
   EXPECT_EQ(report.train_crops, 3 * 10 * 2);      // the discs of --objects, mirrored
   EXPECT_EQ(report.train_negatives, 3 * 6 * 2);   // the bars: 6 views per instance, mirrored
-  EXPECT_NE(model.provenance.find("background_objects"), std::string::npos);
+  EXPECT_NE(model.provenance.find("\"role\":\"background\""), std::string::npos) << model.provenance;
 
   // Instances neither set holds.
   const std::string unseen = test::makeSyntheticObjectSet(dir + "/unseen", 5, 10);
@@ -371,6 +373,80 @@ TEST(Training, ObjectsOfOtherCategoriesAreBackground) {
 
   // One category and nothing else: no background to tell it from.
   EXPECT_THROW(trainModel({objects}, {}, o, nullptr), DatasetError);
+}
+
+// train.classes: the model learns those categories; the object sets' others are background.
+TEST(Training, CategoriesOutsideTheClassesOptionAreBackground) {
+  const std::string dir = test::tempDir("recognizer_classes_option");
+  const std::string objects = test::makeSyntheticObjectSet(dir + "/objects", 3, 10);
+  TrainOptions o = testOptions();
+  o.validation = false;
+  o.classes = {"disc"};
+  TrainReport report;
+  const RecognizerModel model = trainModel({objects}, {}, o, &report);
+  ASSERT_EQ(model.classifier.classes, (std::vector<std::string>{"disc", "background"}));
+  EXPECT_EQ(report.train_crops, 3 * 10 * 2);     // the discs, mirrored
+  EXPECT_EQ(report.train_negatives, 3 * 10 * 2);  // the bars, mirrored
+  o.classes = {"disc", "cap"};
+  EXPECT_THROW(trainModel({objects}, {}, o, nullptr), DatasetError) << "no crops of cap";
+}
+
+// The provenance names every set and scene with what was used of it and whether it is rendered
+// or photographed, and its options are a config that trains the same model again.
+TEST(Training, ProvenanceNamesTheDataAndItsOptionsTrainAgain) {
+  const std::string dir = test::tempDir("recognizer_provenance");
+  const std::string photographed = test::makeSyntheticObjectSet(dir + "/photographed", 2, 6);
+  const std::string rendered = test::makeSyntheticObjectSet(dir + "/rendered", 2, 6);
+  std::ofstream(rendered + "/set.yaml") << "name: rendered\nsource: synth (written by a test)\n";
+  EXPECT_TRUE(ObjectSet::open(rendered).rendered());
+  EXPECT_FALSE(ObjectSet::open(photographed).rendered());
+  const std::string scenes = test::makeSyntheticScenes(dir + "/scenes", 6);
+  TrainOptions o = testOptions();
+  o.real_share = 0.4;
+  o.real_copies = 1;
+  const RecognizerModel model = trainModel({rendered, photographed}, {scenes}, o, nullptr);
+  const nlohmann::json j = nlohmann::json::parse(model.provenance);
+  ASSERT_EQ(j["object_sets"].size(), 2u);
+  EXPECT_EQ(j["object_sets"][0]["kind"], "rendered");
+  EXPECT_EQ(j["object_sets"][1]["kind"], "photographed");
+  EXPECT_EQ(j["object_sets"][1]["crops_used"].get<int>(), 2 * 2 * 6);
+  EXPECT_EQ(j["scenes"][0]["frames"].get<int>(), 6);
+  EXPECT_GT(j["peak_rss_mb"].get<double>(), 0);
+  // The printed report, and its config read back as the options it was trained with.
+  const std::string text = provenanceText(model);
+  EXPECT_NE(text.find(photographed), std::string::npos) << text;
+  EXPECT_NE(text.find("validation"), std::string::npos) << text;
+  const std::string config = dir + "/again.yaml";
+  std::ofstream(config) << j["config"].get<std::string>();
+  TrainOptions again = loadConfig<TrainOptions>(config, "train", false);
+  EXPECT_TRUE(optionsEqual(again, o)) << j["config"].get<std::string>();
+}
+
+// Photographed and rendered examples of a class weigh real_share and 1 - real_share of it.
+TEST(Training, PhotographsWeighTheSameShareOfEveryClass) {
+  ExampleSet set(4, 2);
+  const float x[4] = {1, 0, 0, 1};
+  // class 0: 8 rendered, 2 photographed; class 1: 3 rendered only; class 2: 1 of each.
+  for (int i = 0; i < 8; ++i) set.add(x, 0, -1, 0);
+  for (int i = 0; i < 2; ++i) set.add(x, 0, -1, 1);
+  for (int i = 0; i < 3; ++i) set.add(x, 1, -1, 0);
+  set.add(x, 2, -1, 0);
+  set.add(x, 2, -1, 1);
+  balanceDomains(&set, 3, 0.25);
+  EXPECT_FLOAT_EQ(set.weight(0), 0.75f * 10 / 8);
+  EXPECT_FLOAT_EQ(set.weight(8), 0.25f * 10 / 2);
+  EXPECT_FLOAT_EQ(set.weight(10), 1.f);
+  EXPECT_FLOAT_EQ(set.weight(13), 0.75f * 2);
+  EXPECT_FLOAT_EQ(set.weight(14), 0.25f * 2);
+  double photographed = 0, all = 0;
+  for (int64_t i = 0; i < 10; ++i) {
+    all += set.weight(i);
+    photographed += set.domain(i) ? set.weight(i) : 0;
+  }
+  EXPECT_NEAR(all, 10, 1e-5);
+  EXPECT_NEAR(photographed / all, 0.25, 1e-6);
+  balanceDomains(&set, 3, 0);  // off: unchanged
+  EXPECT_FLOAT_EQ(set.weight(8), 0.25f * 10 / 2);
 }
 
 // Held-out evaluation with extra training sets (slamaware-eval-objects --extra-training): their
@@ -474,4 +550,41 @@ TEST(EvalObjectsCommandLine, SequenceFoldersAfterARepeatableOptionAreSequences) 
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"kitchen\""), std::string::npos) << "the scene was not evaluated as a sequence: " << text;
   EXPECT_NE(text.find("\"gt_boxes\""), std::string::npos) << text;
+}
+
+// A sequence of separate views (boxes, no ground-truth poses, as uw_scenes_v2_public) has every
+// boxed frame's boxes classified; the same frames as a video (with poses) only every 5th frame's.
+TEST(EvalObjectsCommandLine, EveryBoxedFrameOfASequenceOfSeparateViewsIsClassified) {
+  const std::string dir = test::tempDir("eval_objects_views");
+  const std::string video = dir + "/kitchen", views = dir + "/kitchen_views";
+  const std::string synth = test::binPath("slamaware-synth") + " scene --quiet --config " +
+                            test::sourcePath("config/scenes/kitchen_wood.yaml") + " --frames 7 --out " + video +
+                            " > " + dir + "/synth.log 2>&1";
+  ASSERT_EQ(std::system(synth.c_str()), 0);
+  fs::copy(video, views, fs::copy_options::recursive);
+  fs::remove(views + "/groundtruth.txt");
+  // Taken for a photographed sequence (no depth, another source), so selective search runs on it too.
+  fs::remove_all(views + "/depth");
+  SequenceInfo info = readSequenceInfo(views + "/sequence.yaml");
+  info.source = "frames copied by a test";
+  writeSequenceInfo(views + "/sequence.yaml", info);
+  const std::vector<GroundTruthBox> boxes = readBoxes(video + "/boxes.csv");
+  const int64_t all = static_cast<int64_t>(boxes.size());
+  const int64_t first = std::count_if(boxes.begin(), boxes.end(), [](const GroundTruthBox& b) { return b.frame % 5 == 0; });
+  ASSERT_GT(all, first) << "the test needs boxes on frames other than 0 and 5";
+  const std::string out = dir + "/objects.json";
+  const std::string cmd = test::binPath("slamaware-eval-objects") + " --out " + out + " --no-object-sets --model " +
+                          test::sourcePath("models/recognizer.model") + " --ss-boxes 50 " + video + " " + views +
+                          " > " + dir + "/eval.log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << "see " << dir << "/eval.log";
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(out));
+  EXPECT_EQ(j["sequences"]["kitchen"]["gt_boxes"]["boxes"].get<int64_t>(), first);
+  EXPECT_EQ(j["sequences"]["kitchen_views"]["gt_boxes"]["boxes"].get<int64_t>(), all);
+  int64_t per_class = 0;
+  for (const auto& [c, v] : j["sequences"]["kitchen_views"]["gt_boxes"]["per_class"].items())
+    per_class += v["boxes"].get<int64_t>();
+  EXPECT_EQ(per_class, all);
+  EXPECT_FALSE(j["sequences"]["kitchen"].contains("single_view_ss")) << "a rendered video has the pipeline's mAP";
+  ASSERT_TRUE(j["sequences"]["kitchen_views"].contains("single_view_ss"));
+  EXPECT_EQ(j["sequences"]["kitchen_views"]["single_view_ss"]["frames_evaluated"].get<int>(), 7);
 }
