@@ -15,7 +15,7 @@ std::string Channels::statusOf(const std::string& process) const {
 Channels Channels::resolved() const {
   Channels c = *this;
   for (std::string* s : {&c.camera, &c.camera_info, &c.slam_pose, &c.slam_keyframe, &c.slam_map, &c.proposals,
-                         &c.detections, &c.object_map, &c.object_query, &c.object_query_reply, &c.proc_status,
+                         &c.detections, &c.object_detections, &c.object_map, &c.object_query, &c.object_query_reply, &c.proc_status,
                          &c.proc_command})
     *s = prefix + *s;
   return c;

@@ -55,6 +55,7 @@ struct Channels {
   std::string slam_map = "SLAM_MAP";
   std::string proposals = "PROPOSALS";
   std::string detections = "DETECTIONS";
+  std::string object_detections = "OBJECT_DETECTIONS";
   std::string object_map = "OBJECT_MAP";
   std::string object_query = "OBJECT_QUERY";
   std::string object_query_reply = "OBJECT_QUERY_REPLY";
@@ -77,6 +78,7 @@ struct Channels {
     v("slam_map", slam_map, "point_cloud_t semi-dense map");
     v("proposals", proposals, "proposals_t per tracked frame");
     v("detections", detections, "detections_t per frame");
+    v("object_detections", object_detections, "object_detections_t per DETECTIONS: boxes with fused labels");
     v("object_map", object_map, "object_map_t");
     v("object_query", object_query, "object_query_t");
     v("object_query_reply", object_query_reply, "object_query_reply_t");

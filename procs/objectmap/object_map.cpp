@@ -12,6 +12,7 @@
 #include "common/bus/image_msg.h"
 #include "common/geometry.h"
 #include "procs/objectmap/candidate_voxels.h"
+#include "procs/objectmap/frame_labels.h"
 
 namespace slamaware {
 
@@ -438,7 +439,8 @@ size_t ObjectMapEngine::numOccupiedVoxels() const {
 
 namespace {
 
-object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::string>& classes) {
+object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::string>& classes,
+                       double views_exponent) {
   object_t m;
   m.id = o.id;
   m.map_id = segment;
@@ -446,9 +448,12 @@ object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::
   m.num_classes = static_cast<int32_t>(classes.size());
   m.posterior.resize(classes.size(), 0.f);
   m.log_evidence.resize(classes.size(), 0.f);
+  m.log_posterior.resize(classes.size(), 0.f);
+  const std::vector<double> log_posterior = logPosteriorFromLogEvidence(o.log_evidence, o.evidence_weight, views_exponent);
   for (size_t c = 0; c < classes.size() && c < o.posterior.size(); ++c) {
     m.posterior[c] = static_cast<float>(o.posterior[c]);
     m.log_evidence[c] = static_cast<float>(o.log_evidence[c]);
+    if (c < log_posterior.size()) m.log_posterior[c] = static_cast<float>(log_posterior[c]);
   }
   m.num_views = o.num_views;
   for (int i = 0; i < 3; ++i) {
@@ -459,10 +464,59 @@ object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::
   m.num_voxels = o.num_voxels;
   m.first_seen_utime = o.first_seen_utime;
   m.last_seen_utime = o.last_seen_utime;
+  m.candidate_ids = o.candidates;
+  m.num_candidates = static_cast<int32_t>(o.candidates.size());
   return m;
 }
 
 }  // namespace
+
+object_detections_t ObjectMapEngine::frameDetections(const detections_t& d) const {
+  object_detections_t m;
+  m.utime = d.utime;
+  m.seq = d.seq;
+  m.map_id = d.map_id;
+  m.class_names = classes_;
+  m.num_classes = static_cast<int32_t>(classes_.size());
+  const size_t nc = classes_.size();
+  const size_t nb = std::min({d.boxes.size(), d.candidate_ids.size(), d.log_prob.size()});
+  // The message's classes in the map's order (a message the map refused may name others: those
+  // are left at the floor).
+  std::vector<int> to_map(d.class_names.size(), -1);
+  for (size_t k = 0; k < d.class_names.size(); ++k)
+    for (size_t c = 0; c < nc; ++c)
+      if (d.class_names[k] == classes_[c]) to_map[k] = static_cast<int>(c);
+  std::vector<FrameBox> boxes(nb);
+  for (size_t i = 0; i < nb; ++i) {
+    const box_t& b = d.boxes[i];
+    FrameBox& f = boxes[i];
+    f.x = b.x, f.y = b.y, f.w = b.w, f.h = b.h;
+    f.candidate = d.candidate_ids[i];
+    f.log_p.assign(nc, kMinLogProb);
+    for (size_t k = 0; k < d.log_prob[i].size() && k < to_map.size(); ++k) {
+      const float v = d.log_prob[i][k];
+      if (to_map[k] >= 0 && !std::isnan(v)) f.log_p[static_cast<size_t>(to_map[k])] = std::clamp(v, kMinLogProb, 0.f);
+    }
+  }
+  const ObjectTable* table = nullptr;
+  if (auto it = session_maps_.find(d.map_id); it != session_maps_.end()) table = &segments_.at(it->second)->table;
+  const ObjectTable empty(1.0);
+  const std::vector<FrameBoxLabel> labels = labelFrameBoxes(boxes, table ? *table : empty, nc, options_.fusion());
+  m.num_boxes = static_cast<int32_t>(nb);
+  for (size_t i = 0; i < nb; ++i) {
+    const FrameBoxLabel& l = labels[i];
+    m.boxes.push_back(d.boxes[i]);
+    m.candidate_ids.push_back(d.candidate_ids[i]);
+    m.object_ids.push_back(l.object);
+    m.roles.push_back(static_cast<int8_t>(l.role));
+    m.labels.push_back(l.label >= 0 ? classes_[static_cast<size_t>(l.label)] : "");
+    auto floats = [](const std::vector<double>& v) { return std::vector<float>(v.begin(), v.end()); };
+    m.log_posterior.push_back(floats(l.log_posterior));
+    m.log_weight.push_back(floats(l.log_weight));
+    m.log_score.push_back(floats(l.log_score));
+  }
+  return m;
+}
 
 object_map_t ObjectMapEngine::objectMap() const {
   object_map_t m;
@@ -476,7 +530,7 @@ object_map_t ObjectMapEngine::objectMap() const {
   std::map<int32_t, object_t> by_id;
   for (const auto& [sid, seg] : segments_)
     for (const auto& [oid, o] : seg->table.objects())
-      by_id.emplace(oid, objectMessage(o, sid, classes_));
+      by_id.emplace(oid, objectMessage(o, sid, classes_, options_.fusion().views_exponent));
   for (auto& [id, o] : by_id) m.objects.push_back(std::move(o));
   m.num_objects = static_cast<int32_t>(m.objects.size());
   return m;
@@ -533,7 +587,7 @@ object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) const {
                      o.centroid[i] + 0.5 * o.extent[i] >= q.region_min[i];
         if (!overlaps) continue;
       }
-      by_id.emplace(oid, objectMessage(o, sid, classes_));
+      by_id.emplace(oid, objectMessage(o, sid, classes_, options_.fusion().views_exponent));
     }
   }
   for (auto& [id, o] : by_id) reply.objects.push_back(std::move(o));

@@ -32,6 +32,7 @@
 #include "procs/objectmap/occupancy_map.h"
 #include "slamaware/camera_info_t.hpp"
 #include "slamaware/detections_t.hpp"
+#include "slamaware/object_detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
 #include "slamaware/object_query_reply_t.hpp"
 #include "slamaware/object_query_t.hpp"
@@ -108,6 +109,12 @@ class ObjectMapEngine {
 
   /// The OBJECT_MAP message (saved_map_path and saved_utime are the node's business).
   object_map_t objectMap() const;
+  /// OBJECT_DETECTIONS of a DETECTIONS message just given to onDetections(): every box of it with its
+  /// object as the map holds it now (regrouped after the frame unless deferred), the object's
+  /// posterior and the box's score (frame_labels.h). The boxes of a message the map refused are
+  /// labelled by what it holds (nothing of the frame fused); a candidate it holds nothing of keeps
+  /// the box's own evidence (NO_OBJECT).
+  object_detections_t frameDetections(const detections_t& detections) const;
   /// The reply to a query (error set for an unknown kind, label or map id, or a bad region).
   object_query_reply_t answer(const object_query_t& query) const;
 

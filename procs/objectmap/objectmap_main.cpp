@@ -1,6 +1,7 @@
 // slamaware-objectmap: the object map server. Reads SLAM_MAP (occupancy), CAMERA_INFO, SLAM_POSE,
 // PROPOSALS and DETECTIONS (joined on seq: per-object evidence fusion) and OBJECT_QUERY; publishes
-// OBJECT_MAP and OBJECT_QUERY_REPLY; saves the map (OctoMap .ot + JSON object table) every
+// OBJECT_DETECTIONS (each DETECTIONS message's boxes with their objects' fused labels, always one per
+// DETECTIONS), OBJECT_MAP and OBJECT_QUERY_REPLY; saves the map (OctoMap .ot + JSON object table) every
 // save_period_s and at shutdown, and loads it at start (procs/objectmap/README.md).
 //
 // Lockstep: exactly one OBJECT_MAP per DETECTIONS message, whose content depends only on the
@@ -192,7 +193,9 @@ class ObjectMapNode {
         spdlog::debug("seq {}: boxes fused without geometry: {}", m.seq, r.no_geometry);
       }
     }
-    // Lockstep: one answer per DETECTIONS, whatever it held (the source waits for its seq).
+    // Every DETECTIONS gets its OBJECT_DETECTIONS (the boxes with their fused labels), before the
+    // lockstep OBJECT_MAP that the source waits for: one answer each, whatever it held.
+    bus_.publish(ch_.object_detections, engine_.frameDetections(m));
     if (lockstep_) publishMap(m.utime, m.seq);
   }
 

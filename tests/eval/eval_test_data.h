@@ -8,13 +8,15 @@
 #include <vector>
 
 #include "common/dataset.h"
+#include "common/tum.h"
 #include "tests/support/test_support.h"
 
 namespace slamaware::test {
 
-// A sequence folder with `frames` placeholder frames (never read), the classes and the boxes.
+// A sequence folder with `frames` placeholder frames (never read), the classes and the boxes; a
+// video (ground-truth poses, all at the origin) unless `video` is false (separate views: boxes only).
 inline std::string makeSequence(const std::string& name, int frames, const std::vector<std::string>& classes,
-                                const std::vector<GroundTruthBox>& boxes) {
+                                const std::vector<GroundTruthBox>& boxes, bool video = true) {
   const std::string dir = tempDir(name);
   std::filesystem::create_directories(dir + "/rgb");
   SequenceInfo info;
@@ -25,6 +27,10 @@ inline std::string makeSequence(const std::string& name, int frames, const std::
   info.classes = classes;
   writeSequenceInfo(dir + "/sequence.yaml", info);
   writeBoxes(dir + "/boxes.csv", boxes);
+  std::vector<TimedPose> poses;
+  for (int i = 0; i < frames; ++i) poses.push_back({static_cast<double>(i), SE3::Identity()});
+  std::filesystem::remove(dir + "/groundtruth.txt");
+  if (video) writeTum(dir + "/groundtruth.txt", poses);
   for (int i = 0; i < frames; ++i) {
     char file[64];
     std::snprintf(file, sizeof(file), "/rgb/%06d.png", i);

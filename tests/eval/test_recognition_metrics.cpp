@@ -1,16 +1,18 @@
-// The single_view / multi_view sections of the eval report: VOC all-point AP on hand-computed
-// examples (ties, no ground truth), the matching of boxes to ground truth (one match per ground-truth
-// box, distractors), pooling over sequences, the report keys of DESIGN.md §7, and the multi-view
-// labels through the object map library (a hand-made recording, merged candidates, the fallback).
+// The single_view / multi_view_online / multi_view_final sections of the eval report: VOC all-point
+// AP on hand-computed examples (ties, no ground truth), the matching of boxes to ground truth (one
+// match per ground-truth box, distractors), pooling over sequences, the report keys of DESIGN.md
+// §7, and the multi-view sections scored from what the object map published (and nothing else).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 
 #include "tests/eval/eval_test_data.h"
 #include "tests/objectmap/synthetic_world.h"
+#include "procs/objectmap/object_map.h"
 #include "tests/support/test_support.h"
 #include "tools/eval/recognition_metrics.h"
 
@@ -281,313 +283,132 @@ TEST(RecognitionSection, TheSuiteIsScoredOnPooledDetections) {
 
 // ---- Multi-view labels --------------------------------------------------------------------------
 
-// One candidate seen in 3 frames: two views weakly say cap, one strongly says coffee_mug. The
-// single-view labels are cap, cap, coffee_mug; every box gets the fused label coffee_mug
-// (0.5·0.5·0.05 < 0.4·0.4·0.9), read from a recorded log and scored against a mug in each frame.
-// The replay checks itself against the node's last OBJECT_MAP in the log.
-TEST(MultiViewLabels, BoxesOfOneCandidateGetTheFusedLabel) {
-  const std::string dir = test::tempDir("eval_multiview");
-  const std::string log_path = dir + "/run.lcm";
+// ---- What the processes published ------------------------------------------------------------
+
+namespace {
+
+template <class Msg>
+std::vector<uint8_t> bytes(const Msg& m) {
+  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+// One candidate seen in 3 frames: two views weakly say cap, one strongly says coffee_mug, so its
+// object is a cap after frames 0 and 5 and a mug after frame 10 (0.5·0.5·0.05 < 0.4·0.4·0.9);
+// candidate 6 is seen once, as background. Recorded as the lockstep node publishes: DETECTIONS,
+// then the map's OBJECT_DETECTIONS and OBJECT_MAP of each frame. `edit` may change an
+// OBJECT_DETECTIONS before it is written.
+const std::vector<detections_t>& threeFrames() {
+  static const std::vector<detections_t> messages = {
+      detections(0, 1, kModel, {{5, logs({0.5, 0.4, 0.1})}, {6, logs({0.1, 0.1, 0.8})}}),
+      detections(5, 1, kModel, {{5, logs({0.5, 0.4, 0.1})}}),
+      detections(10, 1, kModel, {{5, logs({0.05, 0.9, 0.05})}})};
+  return messages;
+}
+
+std::string recordThreeFrames(const std::string& path, const std::function<void(object_detections_t&)>& edit = {}) {
   const Channels ch;
-  const auto weak_cap = logs({0.5, 0.4, 0.1}), strong_mug = logs({0.05, 0.9, 0.05});
-  const std::vector<detections_t> messages = {
-      detections(0, 1, kModel, {{5, weak_cap}, {6, logs({0.1, 0.1, 0.8})}}),
-      detections(5, 1, kModel, {{5, weak_cap}}), detections(10, 1, kModel, {{5, strong_mug}})};
-  // The node's OBJECT_MAP after each DETECTIONS, as the lockstep node publishes it.
   ObjectMapEngine node(plainSum());
-  auto record = [&](const std::string& path, bool tamper) {
-    lcm::LogFile log(path, "w");
-    int64_t n = 0;
-    for (const auto& d : messages) {
-      std::string why;
-      writeEvent(log, ch.detections, d, n++);
-      ASSERT_TRUE(node.onDetections(d, &why)) << why;
-      object_map_t m = node.objectMap();
-      if (tamper && &d == &messages.back()) m.objects[0].label = "cap";
-      writeEvent(log, ch.object_map, m, n++);
-    }
-  };
-  record(log_path, false);
-  const RecognitionRecording run = readRecognitionRecording(log_path, ch, plainSum());
-  EXPECT_EQ(run.matches_node, 1) << "the replay gives the node's objects";
-  EXPECT_EQ(run.objects, 2);
-  node = ObjectMapEngine(plainSum());
-  record(dir + "/tampered.lcm", true);
-  EXPECT_EQ(readRecognitionRecording(dir + "/tampered.lcm", ch, plainSum()).matches_node, 0);
+  lcm::LogFile log(path, "w");
+  int64_t n = 0;
+  for (const auto& d : threeFrames()) {
+    std::string why;
+    writeEvent(log, ch.detections, d, n++);
+    EXPECT_TRUE(node.onDetections(d, &why)) << why;
+    object_detections_t od = node.frameDetections(d);
+    if (edit) edit(od);
+    writeEvent(log, ch.object_detections, od, n++);
+    object_map_t m = node.objectMap();
+    m.utime = d.utime;
+    m.seq = d.seq;
+    writeEvent(log, ch.object_map, m, n++);
+  }
+  return path;
+}
+
+}  // namespace
+
+// The multi-view sections score what the object map published: online, each box's published score
+// and label at its frame (the object a cap until the mug's view came); final, its object's
+// posterior in the last OBJECT_MAP (a mug, in every frame) with the weights the map published.
+TEST(PublishedLabels, BoxesAreScoredAsTheObjectMapPublishedThem) {
+  const std::string log = recordThreeFrames(test::tempDir("eval_published") + "/run.lcm");
+  const Channels ch;
+  const ObjectMapOutputs outputs = readObjectMapOutputs(log, ch);
+  ASSERT_EQ(outputs.frames.size(), 3u);
+  ASSERT_TRUE(outputs.have_map);
+  const RecognitionRecording run = readRecognitionRecording(log, ch, outputs);
   ASSERT_EQ(run.classes, kModel);
-  ASSERT_EQ(run.frames.size(), 3u);
-  const double cap = std::log(0.5) * 2 + std::log(0.05), mug = std::log(0.4) * 2 + std::log(0.9),
-               bg = std::log(0.1) * 2 + std::log(0.05);
-  const double norm = std::log(std::exp(cap) + std::exp(mug) + std::exp(bg));
+  EXPECT_EQ(run.frames_without_object_detections, 0);
+  EXPECT_EQ(run.objects, 2);
+  const object_t* mug_object = nullptr;
+  for (const auto& o : outputs.last_map.objects)
+    if (std::find(o.candidate_ids.begin(), o.candidate_ids.end(), 5) != o.candidate_ids.end()) mug_object = &o;
+  ASSERT_NE(mug_object, nullptr) << "OBJECT_MAP names the candidates of each object";
+  EXPECT_EQ(mug_object->label, "coffee_mug");
   for (int f : {0, 5, 10}) {
     const auto& b = run.frames.at(f)[0];
-    EXPECT_EQ(b.candidate, 5);
-    EXPECT_TRUE(b.multi_from_object);
-    ASSERT_EQ(b.fused.log_p.size(), 3u);
-    EXPECT_NEAR(b.fused.log_p[0], cap - norm, 1e-5);
-    EXPECT_NEAR(b.fused.log_p[1], mug - norm, 1e-5);
-    EXPECT_NEAR(b.fused.log_p[2], bg - norm, 1e-5);
-    // Labelled by the fused evidence, scored with the box's own view's p(mug) and the objectness
-    // of its candidate's three views (0.9, 0.9, 0.95: mean 0.9167), which are also all of its
-    // object's (median 0.9).
-    EXPECT_EQ(b.multi.label, 1);
-    ASSERT_EQ(b.multi.log_p.size(), 3u);
-    const double views = (0.9 + 0.9 + 0.95) / 3 * 0.9;
-    EXPECT_NEAR(b.log_objectness, std::log(std::cbrt((f == 10 ? 0.95 : 0.9) * views)), 1e-5);
-    const double box_class = std::cbrt((f == 10 ? 0.9 : 0.4) * views);
-    EXPECT_NEAR(b.multi.log_p[1], mug - norm + std::log(box_class), 1e-5);
-    EXPECT_NEAR(b.single.log_p[1], std::log(f == 10 ? 0.9 : 0.4), 1e-6);
+    const object_detections_t& od = outputs.frames.at(f);
+    EXPECT_EQ(b.object, mug_object->id);
+    EXPECT_EQ(b.role, object_detections_t::PRIMARY);
+    for (size_t c = 0; c < 3; ++c) EXPECT_EQ(b.online.log_p[c], static_cast<double>(od.log_score[0][c]));
+    EXPECT_EQ(b.online.label, f == 10 ? 1 : 0) << "frame " << f << ": what the map knew then";
+    EXPECT_EQ(b.final.label, 1) << "frame " << f << ": the last map's label";
+    for (size_t c = 0; c < 2; ++c)
+      EXPECT_NEAR(b.final.log_p[c], mug_object->log_posterior[c] + od.log_weight[0][c], 1e-6);
+    EXPECT_NEAR(std::exp(b.final.log_p[0]) + std::exp(b.final.log_p[1]) + std::exp(b.final.log_p[2]), 1.0, 1e-6);
   }
-  // The other candidate keeps its own (background) evidence.
-  EXPECT_NEAR(std::exp(run.frames.at(0)[1].fused.log_p[2]), 0.8, 1e-6);
-  // The posterior of the average view (posterior_views_exponent 1): the sum over 3 views / 3.
-  ObjectMapOptions average = plainSum();
-  average.posterior_views_exponent = 1;
-  const RecognitionRecording avg = readRecognitionRecording(log_path, ch, average);
-  const double avg_norm = std::log(std::exp(cap / 3) + std::exp(mug / 3) + std::exp(bg / 3));
-  EXPECT_NEAR(avg.frames.at(0)[0].fused.log_p[1], mug / 3 - avg_norm, 1e-5);
-  EXPECT_EQ(avg.frames.at(0)[0].multi.label, 1);
 
-  const std::string seq = makeSequence("eval_multiview_seq", 11, {"cap", "coffee_mug"},
+  const std::string seq = makeSequence("eval_published_seq", 11, {"cap", "coffee_mug"},
                                        {truth(0, 100, 100, 50, 50, "coffee_mug"),
                                         truth(5, 100, 100, 50, 50, "coffee_mug"),
                                         truth(10, 100, 100, 50, 50, "coffee_mug")});
   const RecognitionResult r = scoreRecognition(run, SequenceFolder::open(seq), RecognitionEvalOptions{});
-  EXPECT_EQ(r.classes, (std::vector<std::string>{"cap", "coffee_mug"}));
   EXPECT_EQ(r.single.frames, 3) << "frames 0, 5, 10";
   EXPECT_EQ(r.single.classes.at("coffee_mug").labelled_tp, 1);
-  EXPECT_EQ(r.single.classes.at("cap").labelled, 2);
-  EXPECT_EQ(r.multi.classes.at("coffee_mug").labelled_tp, 3);
-  EXPECT_EQ(r.multi.classes.at("cap").labelled, 0);
-  EXPECT_EQ(r.multi.fallback_boxes, 0);
-  EXPECT_NEAR(recognitionSection(r.multi)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0, 1e-9);
-  EXPECT_NEAR(recognitionSection(r.single)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0 / 3, 1e-9);
+  EXPECT_EQ(r.online.classes.at("coffee_mug").labelled_tp, 1) << "frames 0 and 5 were labelled cap then";
+  EXPECT_EQ(r.online.classes.at("cap").labelled, 2);
+  EXPECT_EQ(r.final.classes.at("coffee_mug").labelled_tp, 3);
+  EXPECT_NEAR(recognitionSection(r.final)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0, 1e-9);
 }
 
-// Multi-view scores: p(c | object) x (1 - p(background | box)) for the object classes, the rest to
-// background; a confident object seen through a box that its own view calls background ranks below
-// the same object through a box that frames it, but keeps its label.
-TEST(MultiViewLabels, AFusedLabelIsScoredByTheBoxsOwnObjectness) {
-  auto lg = [](std::vector<double> p) {
-    for (double& v : p) v = std::log(v);
-    return p;
-  };
-  const std::vector<double> fused = lg({0.02, 0.97, 0.01});  // the object is a mug
-  const auto every = [](double log_factor) { return std::vector<double>(3, log_factor); };
-  const std::vector<double> framed = multiViewScores(fused, every(logObjectness(lg({0.1, 0.8, 0.1}))));
-  const std::vector<double> part = multiViewScores(fused, every(logObjectness(lg({0.05, 0.05, 0.9}))));
-  ASSERT_EQ(framed.size(), 3u);
-  EXPECT_NEAR(std::exp(framed[1]), 0.97 * 0.9, 1e-9);
-  EXPECT_NEAR(std::exp(framed[0]), 0.02 * 0.9, 1e-9);
-  EXPECT_NEAR(std::exp(framed[0]) + std::exp(framed[1]) + std::exp(framed[2]), 1.0, 1e-9);
-  EXPECT_NEAR(std::exp(part[1]), 0.97 * 0.1, 1e-9);
-  // A box whose view is sure it frames an object (log p(background) = -800) scores as the object.
-  EXPECT_NEAR(multiViewScores(fused, every(logObjectness({-1, -0.5, -800})))[1], std::log(0.97), 1e-9);
-  EXPECT_EQ(multiViewScores({}, std::vector<double>{}), std::vector<double>{});
-  EXPECT_EQ(logObjectness({}), 0.0);
+// The evaluator relabels nothing: a label or score changed in the recorded OBJECT_DETECTIONS is what
+// it scores, and a DETECTIONS without its OBJECT_DETECTIONS counts as a box the map said nothing of.
+TEST(PublishedLabels, TheEvaluatorScoresTheRecordedLabelsWhateverTheyAre) {
+  const std::string dir = test::tempDir("eval_published_edit");
+  const std::string log = recordThreeFrames(dir + "/edited.lcm", [](object_detections_t& od) {
+    if (od.seq != 10) return;
+    od.labels[0] = "cap";
+    od.log_score[0] = logs({0.6, 0.3, 0.1});
+  });
+  const Channels ch;
+  const RecognitionRecording run = readRecognitionRecording(log, ch, readObjectMapOutputs(log, ch));
+  EXPECT_EQ(run.frames.at(10)[0].online.label, 0) << "the recorded label, not one of the evaluator's";
+  EXPECT_NEAR(run.frames.at(10)[0].online.log_p[0], std::log(0.6), 1e-6);
 
-  // Both boxes over a mug in one frame: the framing one is ranked first and matched; the part
-  // (IoU < 0.5) is a false positive ranked below it, and both are still labelled mug.
-  RecognitionScores s = emptyScores({"cap", "coffee_mug"});
-  LabelledBox a{{100, 100, 50, 50}, framed, 1}, b{{100, 100, 20, 20}, part, 1};
-  scoreFrame(kModel, {b, a}, {truth(0, 100, 100, 50, 50, "coffee_mug")}, 0.5, &s);
-  const ClassTally& mug = s.classes.at("coffee_mug");
-  ASSERT_EQ(mug.ranked.size(), 2u);
-  EXPECT_TRUE(mug.ranked[0].true_positive);
-  EXPECT_FALSE(mug.ranked[1].true_positive);
-  EXPECT_EQ(mug.labelled, 2) << "the label is the fused one, not the argmax of the scores";
-  EXPECT_DOUBLE_EQ(averagePrecision(mug.ranked, mug.truth), 1.0);
+  ObjectMapOutputs missing = readObjectMapOutputs(log, ch);
+  missing.frames.erase(5);
+  const RecognitionRecording gap = readRecognitionRecording(log, ch, missing);
+  EXPECT_EQ(gap.frames_without_object_detections, 1);
+  EXPECT_EQ(gap.frames.at(5)[0].role, -1);
+  EXPECT_EQ(gap.frames.at(5)[0].online.log_p.back(), 0.0) << "no object said: background";
 }
 
-// A box's p(object | box) is the geometric mean of its own view's, its candidate's mean over every
-// box of the candidate, and its object's median over every box of the object: a part that one view
-// takes for a whole object is held back by the candidate's other views, and a distractor whose views
-// mostly call it background by the object's views, however well one box frames it (the median: its
-// one sure view of four does not lift it, as it would lift a mean).
-TEST(MultiViewLabels, ObjectnessIsTheBoxsViewWithItsCandidatesAndItsObjectsViews) {
-  auto box = [](int32_t candidate, int32_t object, double p_background) {
-    RecognitionRecording::Box b;
-    b.map_id = 1;
-    b.candidate = candidate;
-    b.object = object;
-    b.single.log_p = {std::log((1 - p_background) / 2), std::log((1 - p_background) / 2), std::log(p_background)};
-    b.fused.log_p = {std::log(0.1), std::log(0.9), -100};
-    return b;
-  };
-  std::map<int32_t, std::vector<RecognitionRecording::Box>> frames;
-  frames[0] = {box(3, 7, 0.2), box(5, 7, 0.2), box(9, 8, 0.1)};
-  frames[1] = {box(3, 7, 0.9), box(9, 8, 0.95)};
-  frames[2] = {box(3, 7, 0.9), box(5, 7, 0.4), box(9, 8, 0.95), box(11, -1, 0.5)};
-  frames[3] = {box(9, 8, 0.95)};
-  scoreMultiView(&frames);
-  // Candidate 3: views 0.8, 0.1, 0.1 -> mean 1/3; candidate 5: 0.8, 0.6 -> 0.7; their object 7:
-  // 0.1, 0.1, 0.6, 0.8, 0.8 -> median 0.6. Candidate 9, alone in object 8: 0.9, 0.05, 0.05, 0.05 ->
-  // mean 0.2625, median 0.05 (the mean of the middle two). Candidate 11 has no object: its own
-  // median stands in.
-  const auto mean3 = [](double a, double b, double c) { return (std::log(a) + std::log(b) + std::log(c)) / 3; };
-  EXPECT_NEAR(frames[0][0].log_objectness, mean3(0.8, 1.0 / 3, 0.6), 1e-9);
-  EXPECT_NEAR(frames[0][1].log_objectness, mean3(0.8, 0.7, 0.6), 1e-9);
-  EXPECT_NEAR(frames[2][1].log_objectness, mean3(0.6, 0.7, 0.6), 1e-9);
-  EXPECT_NEAR(frames[0][2].log_objectness, mean3(0.9, 0.2625, 0.05), 1e-9);
-  EXPECT_NEAR(frames[2][3].log_objectness, std::log(0.5), 1e-9);
-  // Scored with the box's own view's p(mug | box), 0.4, in place of its 1 - p(background), 0.8.
-  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[1]), 0.9 * std::cbrt(0.4 * 0.7 * 0.6), 1e-9);
-  EXPECT_NEAR(std::exp(frames[0][1].multi.log_p[0]), 0.1 * std::cbrt(0.4 * 0.7 * 0.6), 1e-9);
-  EXPECT_LT(frames[0][0].multi.log_p[1], frames[0][1].multi.log_p[1])
-      << "the same view, but the candidate's other views say it is not a whole object";
-  EXPECT_LT(frames[0][2].multi.log_p[1], frames[0][1].multi.log_p[1])
-      << "a surer view and the same fused class, but the object's other views call it background";
-}
-
-// Two boxes of one candidate in one frame, both sure they frame an object (p(background) 0.1): the
-// one whose own view gives the object's fused class 0.85 ranks above the one whose view gives it
-// 0.3 (a box on the mug and its neighbour, which the view takes partly for a cap). Labels stay.
-TEST(MultiViewLabels, ABoxsOwnViewOfTheFusedClassRanksItAmongTheObjectsBoxes) {
-  auto box = [](std::vector<double> p) {
-    RecognitionRecording::Box b;
-    b.map_id = 1;
-    b.candidate = 3;
-    b.object = 7;
-    for (double& v : p) v = std::log(v);
-    b.single.log_p = p;
-    b.fused.log_p = {std::log(0.05), std::log(0.9), std::log(0.05)};
-    return b;
-  };
-  std::map<int32_t, std::vector<RecognitionRecording::Box>> frames;
-  frames[0] = {box({0.05, 0.85, 0.1}), box({0.6, 0.3, 0.1})};
-  scoreMultiView(&frames);
-  const auto& framed = frames[0][0].multi.log_p;
-  const auto& joined = frames[0][1].multi.log_p;
-  EXPECT_DOUBLE_EQ(frames[0][0].log_objectness, frames[0][1].log_objectness) << "both equally sure of an object";
-  EXPECT_NEAR(std::exp(framed[1]), 0.9 * std::cbrt(0.85 * 0.9 * 0.9), 1e-9);
-  EXPECT_NEAR(std::exp(joined[1]), 0.9 * std::cbrt(0.3 * 0.9 * 0.9), 1e-9);
-  EXPECT_GT(framed[1], joined[1]);
-  EXPECT_NEAR(std::exp(framed[0]) + std::exp(framed[1]) + std::exp(framed[2]), 1.0, 1e-9);
-}
-
-// One object, one detection per frame: of the boxes of one object in a frame, the one its own view
-// finds most object-like keeps its scores; the others are demoted by a Gaussian of the share of
-// them inside it (Soft-NMS): a box framing the object as the kept one does, or a part of it inside
-// the kept box (a sliver with an IoU of only 0.2), ranks below the detections; a box on another
-// part of the object beside the kept one keeps its score. Their label stays the object's, and a box
-// of another object (or of none) is untouched.
-TEST(MultiViewLabels, DuplicatesOfAnObjectInAFrameAreDemotedByTheirOverlap) {
-  auto box = [](int32_t object, double log_bg, std::vector<double> multi, Box2 where) {
-    RecognitionRecording::Box b;
-    b.object = object;
-    b.single.log_p = {-3.0, -3.0, log_bg};
-    b.multi.log_p = std::move(multi);
-    b.multi.label = 1;
-    b.multi.box = where;
-    return b;
-  };
-  const std::vector<double> mug{std::log(0.02), std::log(0.9), std::log(0.08)};
-  const Box2 whole{100, 100, 50, 50}, shifted{105, 100, 50, 50}, beside{150, 100, 20, 50}, side{110, 100, 10, 50};
-  std::vector<RecognitionRecording::Box> boxes{box(4, std::log(0.6), mug, shifted), box(4, std::log(0.1), mug, whole),
-                                               box(4, std::log(0.7), mug, beside), box(7, std::log(0.9), mug, whole),
-                                               box(-1, std::log(0.9), mug, whole),  box(4, std::log(0.3), mug, side)};
-  EXPECT_EQ(demoteDuplicateBoxes(&boxes), 2);
-  EXPECT_EQ(boxes[1].multi.log_p, mug) << "the most object-like box of object 4 keeps its scores";
-  EXPECT_EQ(boxes[3].multi.log_p, mug);
-  EXPECT_EQ(boxes[4].multi.log_p, mug);
-  const double overlap = 45.0 * 50 / 2500;  // 90 % of the shifted box inside the whole (IoU 9/11)
-  const double demoted = -overlap * overlap / kDuplicateSigma;
-  EXPECT_NEAR(boxes[5].multi.log_p[1], std::log(0.9) - 1 / kDuplicateSigma, 1e-9)
-      << "the side of the object, wholly inside the kept box: demoted as a duplicate, not by its IoU (0.2)";
-  EXPECT_NEAR(boxes[0].multi.log_p[1], std::log(0.9) + demoted, 1e-9);
-  EXPECT_NEAR(boxes[0].multi.log_p[0], std::log(0.02) + demoted, 1e-9);
-  EXPECT_NEAR(std::exp(boxes[0].multi.log_p[2]), 1 - (0.92 * std::exp(demoted)), 1e-9);
-  EXPECT_EQ(boxes[2].multi.log_p, mug) << "no overlap with the kept box: another part, its score stays";
-  EXPECT_EQ(boxes[0].multi.label, 1) << "a duplicate keeps its object's label";
-
-  // Scored: the kept box matches the mug; the shifted duplicate and the side are false positives
-  // ranked after every other box.
-  RecognitionScores s = emptyScores({"cap", "coffee_mug"});
-  std::vector<LabelledBox> frame;
-  for (auto& b : boxes) frame.push_back(b.multi);
-  scoreFrame(kModel, frame, {truth(0, 100, 100, 50, 50, "coffee_mug")}, 0.5, &s);
-  const ClassTally& t = s.classes.at("coffee_mug");
-  ASSERT_EQ(t.ranked.size(), 6u);
-  EXPECT_EQ(std::count_if(t.ranked.begin(), t.ranked.end(), [](const ScoredDetection& d) { return d.true_positive; }), 1);
-  std::vector<ScoredDetection> ranked = t.ranked;
-  std::sort(ranked.begin(), ranked.end(), [](const auto& x, const auto& y) { return x.score < y.score; });
-  EXPECT_FALSE(ranked[0].true_positive);
-  EXPECT_FALSE(ranked[1].true_positive);
-  EXPECT_LT(ranked[1].score, ranked[2].score - 5) << "the shifted duplicate and the side rank last, far below";
-}
-
-// Two candidates of one object (the proposals stage over-segments; here two clusters of the same
-// mug) are grouped by the object map: the boxes of both get the object's posterior, over the union
-// of their views, the same for both.
-TEST(MultiViewLabels, CandidatesOfOneObjectShareItsPosterior) {
-  test::SyntheticWorldOptions wo;
-  wo.frames = 30;
-  auto objects = test::SyntheticWorld::defaultObjects();
-  test::SyntheticObject twin = objects[0];  // the mug again, under another candidate id
-  twin.candidate = 21;
-  objects.push_back(twin);
-  const test::SyntheticWorld w(wo, objects);
-  MultiViewLabeller labeller{plainSum()};
-  labeller.onCameraInfo(w.cameraInfo());
-  const auto clouds = w.keyframeClouds(1);
-  for (int f = 0; f < wo.frames; ++f) {
-    for (const auto& c : clouds)
-      if (c.seq == f) labeller.onMap(c);
-    labeller.onPose(w.poseMessage(f, 1));
-    labeller.onProposals(w.proposals(f, 1));
-    labeller.onDetections(w.detections(f, 1));
-  }
-  EXPECT_EQ(labeller.refused(), 0);
-  const Object* a = labeller.engine().objectOfCandidate(1, objects[0].candidate);
-  const Object* b = labeller.engine().objectOfCandidate(1, 21);
-  ASSERT_TRUE(a && b);
-  EXPECT_EQ(a, b) << "one object";
-  EXPECT_EQ(a->candidates, (std::vector<int32_t>{objects[0].candidate, 21}));
-  const std::vector<std::string>& classes = test::SyntheticWorld::classNames();
-  bool from_a = false, from_b = false;
-  const std::vector<double> pa = labeller.logPosterior(1, objects[0].candidate, classes, &from_a);
-  const std::vector<double> pb = labeller.logPosterior(1, 21, classes, &from_b);
-  EXPECT_TRUE(from_a && from_b);
-  EXPECT_EQ(pa, pb);
-  ASSERT_EQ(pa.size(), a->posterior.size());
-  for (size_t k = 0; k < pa.size(); ++k) EXPECT_NEAR(std::exp(pa[k]), a->posterior[k], 1e-9);
-  EXPECT_EQ(std::max_element(pa.begin(), pa.end()) - pa.begin(), objects[0].cls);
-  // The bowl is an object of its own.
-  EXPECT_NE(labeller.engine().objectOfCandidate(1, objects[1].candidate), a);
-
-  // The object map summary: every object labelled, none dominant (several objects apart).
-  const nlohmann::json summary = objectMapSummary(labeller.engine());
-  EXPECT_EQ(summary["objects"].get<int>(), static_cast<int>(labeller.engine().numObjects()));
-  EXPECT_EQ(summary["labelled_objects"], summary["objects"]);
-  EXPECT_EQ(summary["segments"].get<int>(), 1);
-  const double share = summary["largest_object_share"].get<double>();
-  EXPECT_GT(share, 0.0);
-  EXPECT_LT(share, 70.0) << "the mug is not most of a scene of several objects";
-  EXPECT_GE(summary["largest_object_voxels"].get<int>(), a->num_voxels);
-  EXPECT_GT(summary["main_segment_object_voxels"].get<int>(), summary["largest_object_voxels"].get<int>());
-}
-
-// A candidate the object map does not hold (its only box was refused: a log-probability above 0)
-// is labelled by its own evidence (log-probabilities clamped to [-100, 0]); one never seen gets a
-// uniform distribution.
-TEST(MultiViewLabels, ACandidateTheMapDoesNotHoldFallsBackToItsOwnEvidence) {
-  MultiViewLabeller labeller{plainSum()};
-  std::vector<float> bad = logs({0.2, 0.7, 0.1});
-  bad[2] = 0.01f;  // not a log-probability: the object map refuses the box
-  labeller.onDetections(detections(0, 1, kModel, {{7, bad}, {8, logs({0.6, 0.3, 0.1})}}));
-  EXPECT_EQ(labeller.engine().objectOfCandidate(1, 7), nullptr);
-  ASSERT_NE(labeller.engine().objectOfCandidate(1, 8), nullptr);
-  bool from_object = true;
-  const std::vector<double> p = labeller.logPosterior(1, 7, kModel, &from_object);
-  EXPECT_FALSE(from_object);
-  ASSERT_EQ(p.size(), 3u);
-  EXPECT_NEAR(p[2] - p[1], -std::log(0.7), 1e-6) << "0.01 counts as 0";
-  double sum = 0;
-  for (double v : p) sum += std::exp(v);
-  EXPECT_NEAR(sum, 1.0, 1e-9);
-  const std::vector<double> none = labeller.logPosterior(1, 99, kModel, &from_object);
-  EXPECT_FALSE(from_object);
-  for (double v : none) EXPECT_NEAR(v, std::log(1.0 / 3), 1e-12);
+// Re-running the object map on a recording's inputs with the node's options gives the node's
+// messages byte for byte (so option sweeps on recordings score what the node would publish), and
+// other options give other messages.
+TEST(PublishedLabels, ReRunningTheObjectMapGivesTheNodesMessages) {
+  const std::string log = recordThreeFrames(test::tempDir("eval_rerun") + "/run.lcm");
+  const Channels ch;
+  const ObjectMapOutputs recorded = readObjectMapOutputs(log, ch);
+  const ObjectMapOutputs again = rerunObjectMap(log, ch, plainSum());
+  ASSERT_EQ(again.frames.size(), recorded.frames.size());
+  for (const auto& [seq, m] : recorded.frames) EXPECT_EQ(bytes(again.frames.at(seq)), bytes(m)) << "seq " << seq;
+  EXPECT_EQ(bytes(again.last_map), bytes(recorded.last_map));
+  ObjectMapOptions average = plainSum();
+  average.posterior_views_exponent = 1;
+  EXPECT_NE(bytes(rerunObjectMap(log, ch, average).frames.at(10)), bytes(recorded.frames.at(10)));
 }
 
 // A sequence whose classes the model does not know (the real sequences: temple, cabinet) has no
@@ -595,4 +416,31 @@ TEST(MultiViewLabels, ACandidateTheMapDoesNotHoldFallsBackToItsOwnEvidence) {
 TEST(RecognitionSection, ASequenceWithoutAModelClassIsNotEvaluated) {
   const std::string seq = makeSequence("eval_foreign_classes", 3, {"temple"}, {truth(0, 1, 1, 30, 30, "temple")});
   EXPECT_TRUE(evaluatedClasses(kModel, SequenceFolder::open(seq)).empty());
+}
+
+// A sequence of separate views (boxes, no ground-truth poses: uw_scenes_v2_public) is scored on
+// every frame, a video on every stride-th; a detection on a frame that is not scored counts nowhere.
+TEST(RecognitionEval, EveryFrameOfASequenceOfSeparateViewsIsScored) {
+  std::vector<GroundTruthBox> boxes;
+  for (int f = 0; f < 7; ++f) boxes.push_back(truth(f, 100, 100, 50, 50, "coffee_mug"));
+  const std::string views = makeSequence("eval_separate_views_seq", 7, {"coffee_mug"}, boxes, false);
+  const std::string video = makeSequence("eval_video_seq", 7, {"coffee_mug"}, boxes, true);
+  EXPECT_EQ(framesToScore(SequenceFolder::open(views), 5), (std::vector<int>{0, 1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(framesToScore(SequenceFolder::open(video), 5), (std::vector<int>{0, 5}));
+
+  RecognitionRecording run;
+  run.classes = {"coffee_mug", "background"};
+  for (int f = 0; f < 7; ++f) {
+    RecognitionRecording::Box b;
+    b.single = {Box2{100, 100, 50, 50}, {std::log(0.9), std::log(0.1)}, -1};
+    b.online = b.final = b.single;
+    run.frames[f].push_back(b);
+  }
+  const RecognitionResult r = scoreRecognition(run, SequenceFolder::open(views), RecognitionEvalOptions{});
+  EXPECT_EQ(r.single.frames, 7);
+  EXPECT_EQ(r.single.classes.at("coffee_mug").truth, 7);
+  EXPECT_EQ(r.single.classes.at("coffee_mug").labelled_tp, 7);
+  const RecognitionResult v = scoreRecognition(run, SequenceFolder::open(video), RecognitionEvalOptions{});
+  EXPECT_EQ(v.single.frames, 2);
+  EXPECT_EQ(v.single.classes.at("coffee_mug").truth, 2);
 }

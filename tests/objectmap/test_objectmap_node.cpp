@@ -13,6 +13,7 @@
 #include "common/bus/bus.h"
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
+#include "slamaware/object_detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
 #include "slamaware/object_query_reply_t.hpp"
 #include "slamaware/object_query_t.hpp"
@@ -40,7 +41,8 @@ int64_t counter(const status_t& s, const std::string& name) {
   return 0;
 }
 
-std::vector<uint8_t> encode(const object_map_t& m) {
+template <class Msg>
+std::vector<uint8_t> encode(const Msg& m) {
   std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
   m.encode(buf.data(), 0, static_cast<int>(buf.size()));
   return buf;
@@ -49,10 +51,13 @@ std::vector<uint8_t> encode(const object_map_t& m) {
 struct Client {
   Bus bus{test::testUrl()};
   std::vector<object_map_t> maps;
+  std::vector<object_detections_t> frames;
   std::map<int64_t, object_query_reply_t> replies;
   std::optional<status_t> status;
   Client() {
     bus.subscribe<object_map_t>("OBJECT_MAP", [this](const object_map_t& m) { maps.push_back(m); });
+    bus.subscribe<object_detections_t>("OBJECT_DETECTIONS",
+                                       [this](const object_detections_t& m) { frames.push_back(m); });
     bus.subscribe<object_query_reply_t>(
         "OBJECT_QUERY_REPLY", [this](const object_query_reply_t& r) { replies[r.request_id] = r; });
     bus.subscribe<status_t>("OBJECTMAP_STATUS", [this](const status_t& s) { status = s; });
@@ -305,8 +310,9 @@ namespace {
 
 // Plays the world lockstep through a node: frame f goes out when OBJECT_MAP f - 1 came back.
 // Frame 5 has no boxes and frame 7's detections are refused (repeated class names): both are
-// still answered. Returns the OBJECT_MAP messages.
-std::vector<object_map_t> playLockstep(const std::string& dir, int frames) {
+// still answered. Returns the OBJECT_MAP messages (and the OBJECT_DETECTIONS in *labelled).
+std::vector<object_map_t> playLockstep(const std::string& dir, int frames,
+                                       std::vector<object_detections_t>* labelled = nullptr) {
   Client c;
   test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config",
                            writeConfig(dir, 0.005), "--lcm-url", test::testUrl(), "--lockstep"},
@@ -334,6 +340,7 @@ std::vector<object_map_t> playLockstep(const std::string& dir, int frames) {
   c.pump([] { return false; }, 300ms);  // nothing more may come
   EXPECT_TRUE(node.running()) << node.log();
   EXPECT_EQ(node.stop(), 0) << node.log();
+  if (labelled) *labelled = c.frames;
   return c.maps;
 }
 
@@ -342,8 +349,13 @@ std::vector<object_map_t> playLockstep(const std::string& dir, int frames) {
 TEST(ObjectMapNode, LockstepAnswersEachDetectionsOnceWithTheSameBytesEveryReplay) {
   const int frames = 30;
   const std::string dir_a = test::tempDir("objectmap_node_lockstep_a");
-  const auto first = playLockstep(dir_a, frames);
+  std::vector<object_detections_t> labelled_a, labelled_b;
+  const auto first = playLockstep(dir_a, frames, &labelled_a);
   ASSERT_EQ(first.size(), static_cast<size_t>(frames)) << "exactly one OBJECT_MAP per DETECTIONS";
+  ASSERT_EQ(labelled_a.size(), static_cast<size_t>(frames)) << "exactly one OBJECT_DETECTIONS per DETECTIONS";
+  for (int f = 0; f < frames; ++f) EXPECT_EQ(labelled_a[static_cast<size_t>(f)].seq, f) << "in order";
+  EXPECT_EQ(labelled_a[5].num_boxes, 0);
+  EXPECT_GT(labelled_a[7].num_boxes, 0) << "refused detections are answered with their boxes";
   for (int f = 0; f < frames; ++f) {
     EXPECT_EQ(first[static_cast<size_t>(f)].seq, f);
     EXPECT_EQ(first[static_cast<size_t>(f)].saved_map_path, "");
@@ -353,8 +365,11 @@ TEST(ObjectMapNode, LockstepAnswersEachDetectionsOnceWithTheSameBytesEveryReplay
   // Saves went on (every 5 ms: between most frames), yet the outputs do not show them.
   MapStore store(dir_a + "/map");
   EXPECT_GE(store.nextGeneration(), 3) << "at least one periodic save and the one at shutdown";
-  const auto second = playLockstep(test::tempDir("objectmap_node_lockstep_b"), frames);
+  const auto second = playLockstep(test::tempDir("objectmap_node_lockstep_b"), frames, &labelled_b);
   ASSERT_EQ(second.size(), first.size());
   for (size_t i = 0; i < first.size(); ++i)
     EXPECT_EQ(encode(second[i]), encode(first[i])) << "OBJECT_MAP " << i;
+  ASSERT_EQ(labelled_b.size(), labelled_a.size());
+  for (size_t i = 0; i < labelled_a.size(); ++i)
+    EXPECT_EQ(encode(labelled_b[i]), encode(labelled_a[i])) << "OBJECT_DETECTIONS " << i;
 }

@@ -11,6 +11,7 @@
 #include "slamaware/detections_t.hpp"
 #include "slamaware/image_t.hpp"
 #include "slamaware/keyframe_t.hpp"
+#include "slamaware/object_detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
 #include "slamaware/object_query_reply_t.hpp"
 #include "slamaware/object_query_t.hpp"
@@ -67,6 +68,7 @@ TEST(LcmSpy, EveryTypeLoadsFromTheJarWithTheCppFingerprint) {
       arg<detections_t>("detections_t"),
       arg<image_t>("image_t"),
       arg<keyframe_t>("keyframe_t"),
+      arg<object_detections_t>("object_detections_t"),
       arg<object_map_t>("object_map_t"),
       arg<object_query_reply_t>("object_query_reply_t"),
       arg<object_query_t>("object_query_t"),
@@ -92,7 +94,7 @@ TEST(LcmSpy, EveryTypeLoadsFromTheJarWithTheCppFingerprint) {
     const std::string name = t.substr(0, t.find('='));
     EXPECT_NE(out.find("OK " + name + "\n"), std::string::npos) << name << "\n" << out;
   }
-  EXPECT_EQ(types.size(), 16u);
+  EXPECT_EQ(types.size(), 17u);
 }
 
 TEST(LcmSpy, WrapperScriptAvoidsRemovedJvmFlags) {

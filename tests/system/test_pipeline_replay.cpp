@@ -1,14 +1,18 @@
 // The whole pipeline (camera -> slam -> proposals -> recognizer -> objectmap, every stage its own
 // process) replayed lockstep on the bundled recording logs/sample.lcm, twice, in a private network
-// namespace: every frame gets its DETECTIONS and OBJECT_MAP (and the frame the SLAM map was
-// initialised from, not located when it came, gets a second, late pair with its boxes), the two runs publish byte-identical
-// payloads on both channels, and the recognised objects are there (not only empty messages); no
-// two published boxes of a frame that are surest of the same object class overlap by IoU > 0.5
-// (DESIGN.md §3, suppressed per class), though the proposals did.
+// namespace: every frame gets its DETECTIONS, OBJECT_DETECTIONS and OBJECT_MAP (and the frame the
+// SLAM map was initialised from, not located when it came, gets a second, late set with its boxes),
+// the two runs publish byte-identical payloads on the three channels, and the recognised objects are
+// there (not only empty messages); no two published boxes of a frame that are surest of the same
+// object class overlap by IoU > 0.5 (DESIGN.md §3, suppressed per class), though the proposals did.
+// The object map re-run on the recording's inputs gives the node's messages byte for byte, and on
+// the first half of them the same messages for that half: a fused label never depends on a later
+// frame.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
+#include <lcm/lcm-cpp.hpp>
 
 #include "common/bus/log_reader.h"
 #include "common/bus/system_config.h"
@@ -19,6 +23,7 @@
 #include "tests/support/test_support.h"
 #include "tests/system/lockstep_pipeline.h"
 #include "tools/eval/pipeline_run.h"
+#include "tools/eval/recognition_metrics.h"
 
 using namespace slamaware;
 namespace fs = std::filesystem;
@@ -26,7 +31,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct Recording {
-  std::vector<std::vector<uint8_t>> detections, object_maps;
+  std::vector<std::vector<uint8_t>> detections, object_detections, object_maps;
   int camera_frames = 0;
   int64_t proposal_boxes = 0, overlapping_proposal_pairs = 0;
   std::vector<int32_t> proposal_seqs;  ///< in the order published
@@ -39,6 +44,7 @@ Recording record(const std::string& log_path, const Channels& ch) {
   while (auto m = reader.next()) {
     if (m->channel == ch.detections) r.detections.push_back(m->data);
     if (m->channel == ch.object_map) r.object_maps.push_back(m->data);
+    if (m->channel == ch.object_detections) r.object_detections.push_back(m->data);
     proposals_t p;
     if (m->channel == ch.proposals && p.decode(m->data.data(), 0, static_cast<int>(m->data.size())) > 0) {
       if (!r.proposal_seqs.empty() && p.seq < *std::max_element(r.proposal_seqs.begin(), r.proposal_seqs.end())) {
@@ -57,6 +63,32 @@ Recording record(const std::string& log_path, const Channels& ch) {
     r.camera_frames += m->channel == ch.camera;
   }
   return r;
+}
+
+template <class Msg>
+std::vector<uint8_t> bytes(const Msg& m) {
+  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+// Copies the events of a log up to (not including) its n+1-th DETECTIONS into `out`; returns the
+// DETECTIONS kept.
+int64_t truncateLog(const std::string& in, const std::string& out, const Channels& ch, int n) {
+  lcm::LogFile writer(out, "w");
+  LogReader reader(in);
+  int64_t detections = 0, event = 0;
+  while (auto m = reader.next()) {
+    if (m->channel == ch.detections && detections++ == n) break;
+    lcm::LogEvent e{};
+    e.eventnum = event++;
+    e.timestamp = m->timestamp;
+    e.channel = m->channel;
+    e.datalen = static_cast<int32_t>(m->data.size());
+    e.data = const_cast<uint8_t*>(m->data.data());
+    writer.writeEvent(&e);
+  }
+  return std::min<int64_t>(detections, n);
 }
 
 }  // namespace
@@ -87,6 +119,7 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
         << "one PROPOSALS per frame, and the late ones";
     EXPECT_EQ(r.detections.size(), r.proposal_seqs.size()) << "one DETECTIONS per PROPOSALS";
     EXPECT_EQ(r.object_maps.size(), r.detections.size()) << "one OBJECT_MAP per DETECTIONS";
+    EXPECT_EQ(r.object_detections.size(), r.detections.size()) << "one OBJECT_DETECTIONS per DETECTIONS";
   }
   ASSERT_EQ(runs[0].detections.size(), runs[1].detections.size());
   for (size_t i = 0; i < runs[0].detections.size(); ++i)
@@ -94,6 +127,27 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
   ASSERT_EQ(runs[0].object_maps.size(), runs[1].object_maps.size());
   for (size_t i = 0; i < runs[0].object_maps.size(); ++i)
     ASSERT_EQ(runs[0].object_maps[i], runs[1].object_maps[i]) << "OBJECT_MAP #" << i << " differs";
+  ASSERT_EQ(runs[0].object_detections.size(), runs[1].object_detections.size());
+  for (size_t i = 0; i < runs[0].object_detections.size(); ++i)
+    ASSERT_EQ(runs[0].object_detections[i], runs[1].object_detections[i]) << "OBJECT_DETECTIONS #" << i << " differs";
+
+  // The object map re-run on the recorded inputs publishes what the node did, byte for byte...
+  const std::string log0 = dir + "/run0.lcm";
+  const ObjectMapOptions map_options;  // config/objectmap.yaml equals the defaults (tested)
+  const ObjectMapOutputs again = rerunObjectMap(log0, sys.channels, map_options);
+  const ObjectMapOutputs recorded = readObjectMapOutputs(log0, sys.channels);
+  ASSERT_EQ(again.frames.size(), recorded.frames.size());
+  for (const auto& [seq, m] : recorded.frames) ASSERT_EQ(bytes(again.frames.at(seq)), bytes(m)) << "seq " << seq;
+  EXPECT_EQ(bytes(again.last_map), bytes(recorded.last_map));
+  // ...and on the first half of the recording, the same for that half: what a frame's boxes were
+  // labelled depends on nothing later.
+  const std::string half = dir + "/half.lcm";
+  const int64_t kept = truncateLog(log0, half, sys.channels, static_cast<int>(recorded.frames.size() / 2));
+  ASSERT_GT(kept, 10);
+  const ObjectMapOutputs early = rerunObjectMap(half, sys.channels, map_options);
+  ASSERT_EQ(static_cast<int64_t>(early.frames.size()), kept - 1) << "frame 0 is answered twice (late)";
+  for (const auto& [seq, m] : early.frames)
+    ASSERT_EQ(bytes(m), bytes(recorded.frames.at(seq))) << "seq " << seq << " changed by later frames";
 
   // What was replayed is the real thing: boxes were classified, and the map holds objects.
   int64_t boxes = 0;

@@ -29,6 +29,7 @@ object_t object(int32_t id, const std::string& label, double x, int32_t voxels) 
   o.map_id = 1;
   o.label = label;
   o.num_classes = 0;
+  o.num_candidates = 0;
   o.num_views = 5;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int k = 0; k < 3; ++k) {

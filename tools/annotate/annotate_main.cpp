@@ -1,8 +1,12 @@
 // slamaware-annotate: turns a recorded session into pictures a person can check at a glance:
-//   annotated.mp4  every CAMERA frame with its proposal boxes, their labels and confidences
-//                  (DETECTIONS), the candidate ids and the SLAM state of the frame;
+//   annotated.mp4  every CAMERA frame with its objects as the object map labelled them at that
+//                  frame (OBJECT_DETECTIONS: each object's one box, its fused label and posterior;
+//                  background candidates left out, or faint with --background), the SLAM state of
+//                  the frame; --single-view draws every box with the recognizer's own label instead
+//                  (DETECTIONS), as a recording without OBJECT_DETECTIONS is drawn;
 //   topdown.png    the semi-dense map seen from above its dominant plane, the camera path and
-//                  the labelled objects of the last OBJECT_MAP (not background).
+//                  the labelled objects of the last OBJECT_MAP (not background), their labels
+//                  placed where they do not cover each other.
 // It reads only the log (no bus), so it works on any recording, live or replayed.
 #include <spdlog/spdlog.h>
 
@@ -19,6 +23,7 @@
 #include "common/bus/node.h"
 #include "common/image_codec.h"
 #include "slamaware/detections_t.hpp"
+#include "slamaware/object_detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
 #include "slamaware/point_cloud_t.hpp"
 #include "slamaware/pose_t.hpp"
@@ -56,18 +61,56 @@ cv::Scalar labelColour(const std::string& label) {
   return {static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2])};
 }
 
-void putLabel(cv::Mat& img, const std::string& text, cv::Point at, const cv::Scalar& colour) {
+// The rectangle a label's text takes with its baseline-left corner at `at`.
+cv::Rect labelRect(const std::string& text, cv::Point at) {
   int base = 0;
   const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &base);
-  at.y = std::max(at.y, size.height + 2);
-  cv::rectangle(img, {at.x, at.y - size.height - 2}, {at.x + size.width + 2, at.y + base}, colour, cv::FILLED);
-  cv::putText(img, text, {at.x + 1, at.y - 1}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
+  return {at.x, at.y - size.height - 2, size.width + 2, size.height + 2 + base};
+}
+
+// Draws a label (text on its colour) with its baseline-left corner at `at`, kept inside the image.
+cv::Rect putLabel(cv::Mat& img, const std::string& text, cv::Point at, const cv::Scalar& colour) {
+  cv::Rect r = labelRect(text, at);
+  r.x = std::clamp(r.x, 0, std::max(0, img.cols - r.width));
+  r.y = std::clamp(r.y, 0, std::max(0, img.rows - r.height));
+  cv::rectangle(img, r, colour, cv::FILLED);
+  cv::putText(img, text, {r.x + 1, r.y + r.height - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
+  return r;
+}
+
+// A place for a label of an object drawn at `box` that covers none of `taken`: above the box, below
+// it, then further out in steps; the first free one (else above the box). The place is added to
+// `taken`.
+cv::Point freeLabelPlace(const std::string& text, const cv::Rect& box, std::vector<cv::Rect>* taken) {
+  const cv::Rect size = labelRect(text, {0, 0});
+  std::vector<cv::Point> candidates;
+  for (int step = 0; step < 12; ++step) {
+    const int d = step * (size.height + 2);
+    candidates.push_back({box.x, box.y - 2 - d});
+    candidates.push_back({box.x, box.y + box.height + size.height + d});
+    candidates.push_back({box.x + box.width + 4, box.y + size.height + d});
+  }
+  for (const cv::Point& c : candidates) {
+    const cv::Rect r = labelRect(text, c);
+    if (std::none_of(taken->begin(), taken->end(), [&](const cv::Rect& t) { return (t & r).area() > 0; })) {
+      taken->push_back(r);
+      return c;
+    }
+  }
+  taken->push_back(labelRect(text, candidates.front()));
+  return candidates.front();
 }
 
 struct FrameAnnotations {
   std::optional<pose_t> pose;
   std::optional<proposals_t> proposals;
   std::optional<detections_t> detections;
+  std::optional<object_detections_t> objects;
+};
+
+struct DrawOptions {
+  bool single_view = false;  ///< the recognizer's labels of every box instead of the map's
+  bool background = false;   ///< also the background candidates and the objects' other boxes, faint
 };
 
 struct Session {
@@ -128,6 +171,10 @@ Session readSession(const std::string& log, const Channels& ch) {
         auto m = decodeAs<detections_t>(*ev);
         ok = m.has_value();
         if (m) s.by_seq[m->seq].detections = *m;
+      } else if (ev->channel == ch.object_detections) {
+        auto m = decodeAs<object_detections_t>(*ev);
+        ok = m.has_value();
+        if (m) s.by_seq[m->seq].objects = *m;
       } else if (ev->channel == ch.object_map) {
         auto m = decodeAs<object_map_t>(*ev);
         ok = m.has_value();
@@ -147,11 +194,44 @@ Session readSession(const std::string& log, const Channels& ch) {
   return s;
 }
 
-void drawFrame(cv::Mat& img, int32_t seq, const FrameAnnotations& a) {
+// The frame's objects as the map labelled them then: each object's box with its label and
+// posterior; the rest faint (options.background) or left out. Returns the boxes drawn.
+int drawObjects(cv::Mat& img, const object_detections_t& d, const DrawOptions& options) {
+  int drawn = 0;
+  std::vector<cv::Rect> taken;
+  for (int i = 0; i < d.num_boxes; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    const std::string& label = d.labels[k];
+    const bool object = d.roles[k] == object_detections_t::PRIMARY && label != "background" && !label.empty();
+    if (!object && !options.background) continue;
+    const box_t& b = d.boxes[k];
+    const cv::Rect r(cvRound(b.x), cvRound(b.y), cvRound(b.w), cvRound(b.h));
+    if (!object) {
+      cv::rectangle(img, r, {150, 150, 150}, 1);
+      ++drawn;
+      continue;
+    }
+    const cv::Scalar colour = labelColour(label);
+    cv::rectangle(img, r, colour, 2);
+    const auto c = std::find(d.class_names.begin(), d.class_names.end(), label) - d.class_names.begin();
+    char text[96];
+    std::snprintf(text, sizeof(text), "#%d %s %.2f", d.object_ids[k], label.c_str(),
+                  std::exp(d.log_posterior[k][static_cast<size_t>(c)]));
+    putLabel(img, text, freeLabelPlace(text, r, &taken), colour);
+    ++drawn;
+  }
+  return drawn;
+}
+
+void drawFrame(cv::Mat& img, int32_t seq, const FrameAnnotations& a, const DrawOptions& options) {
   std::string state = "no pose";
   if (a.pose) state = std::string(stateName(a.pose->state)) + " map " + std::to_string(a.pose->map_id);
   int boxes = 0;
-  if (a.detections) {
+  const char* what = "boxes";
+  if (a.objects && !options.single_view) {
+    boxes = drawObjects(img, *a.objects, options);
+    what = options.background ? "boxes" : "objects";
+  } else if (a.detections) {
     const detections_t& d = *a.detections;
     for (int i = 0; i < d.num_boxes; ++i) {
       const auto& lp = d.log_prob[static_cast<size_t>(i)];
@@ -178,7 +258,7 @@ void drawFrame(cv::Mat& img, int32_t seq, const FrameAnnotations& a) {
     }
   }
   char text[128];
-  std::snprintf(text, sizeof(text), "frame %d  SLAM %s  boxes %d", seq, state.c_str(), boxes);
+  std::snprintf(text, sizeof(text), "frame %d  SLAM %s  %s %d", seq, state.c_str(), what, boxes);
   cv::rectangle(img, {0, img.rows - 22}, {img.cols, img.rows}, {0, 0, 0}, cv::FILLED);
   cv::putText(img, text, {6, img.rows - 7}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
 }
@@ -234,6 +314,7 @@ bool drawTopDown(const Session& s, const std::string& path) {
   for (size_t i = 1; i < s.path.size(); ++i)
     cv::line(img, px({s.path[i - 1].x, s.path[i - 1].y, s.path[i - 1].z}), px({s.path[i].x, s.path[i].y, s.path[i].z}),
              {200, 90, 0}, 2, cv::LINE_AA);
+  std::vector<cv::Rect> taken;
   if (s.last_objects) {
     for (const auto& o : s.last_objects->objects) {
       // The labelled objects only: background candidates (most of them) would hide the map.
@@ -253,9 +334,16 @@ bool drawTopDown(const Session& s, const std::string& path) {
         hi = {std::max(hi.x, q.x), std::max(hi.y, q.y)};
       }
       const cv::Scalar colour = labelColour(o.label);
-      cv::rectangle(img, lo, hi, colour, 2);
-      putLabel(img, "#" + std::to_string(o.id) + " " + o.label + " (" + std::to_string(o.num_views) + " views)", lo,
-               colour);
+      const cv::Rect box(lo, hi);
+      cv::rectangle(img, box, colour, 2);
+      const std::string text = "#" + std::to_string(o.id) + " " + o.label + " (" + std::to_string(o.num_views) + " views)";
+      const cv::Point at = freeLabelPlace(text, box, &taken);
+      const cv::Rect label = putLabel(img, text, at, colour);
+      // A label moved away from its box gets a line to it.
+      const cv::Rect next_to(box.x - 4, box.y - label.height - 4, box.width + label.width + 8,
+                             box.height + 2 * label.height + 8);
+      if ((label & next_to).area() == 0)
+        cv::line(img, {label.x, label.y + label.height / 2}, {box.x, box.y}, colour, 1, cv::LINE_AA);
     }
   }
   cv::putText(img, "map " + std::to_string(s.map_id) + ": " + std::to_string(pts.size()) + " points, camera path in blue",
@@ -271,7 +359,12 @@ int main(int argc, char** argv) {
   NodeArgs node;
   std::string log, out_dir = "build/demo";
   double fps = 30;
+  DrawOptions draw;
   addNodeOptions(app, node, false);
+  app.add_flag("--single-view", draw.single_view,
+               "draw every box with the recognizer's own label (DETECTIONS) instead of the object map's");
+  app.add_flag("--background", draw.background,
+               "also draw the background candidates and the objects' other boxes (faint)");
   app.add_option("log", log, "LCM log of a session (lcm-logger format)")->required()->check(CLI::ExistingFile);
   app.add_option("--out-dir", out_dir, "folder for annotated.mp4 and topdown.png");
   app.add_option("--fps", fps, "frame rate of the video")->check(CLI::PositiveNumber);
@@ -306,7 +399,7 @@ int main(int argc, char** argv) {
           }
         }
         auto it = s.by_seq.find(msg->seq);
-        drawFrame(img, msg->seq, it == s.by_seq.end() ? FrameAnnotations{} : it->second);
+        drawFrame(img, msg->seq, it == s.by_seq.end() ? FrameAnnotations{} : it->second, draw);
         writer.write(img);
         ++written;
       }

@@ -1,10 +1,13 @@
 // slamaware-ctl watch: one live status line of the running pipeline — camera rate, SLAM state,
-// tracked frames, proposals per frame, frames recognised and dropped, objects in the map. On a terminal
+// tracked frames, proposals per frame, frames recognised and dropped, objects in the map, and the
+// objects in view: the last OBJECT_DETECTIONS' objects with their fused labels. On a terminal
 // the line is rewritten in place; otherwise one line every --period seconds (for logs).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -13,6 +16,7 @@
 #include "common/bus/bus.h"
 #include "common/bus/shutdown.h"
 #include "slamaware/detections_t.hpp"
+#include "slamaware/object_detections_t.hpp"
 #include "slamaware/object_map_t.hpp"
 #include "slamaware/pose_t.hpp"
 #include "slamaware/proposals_t.hpp"
@@ -42,6 +46,7 @@ struct WatchState {
   int64_t tracked = 0, boxes = 0, proposal_msgs = 0, dropped = 0;
   std::map<std::string, int> labels;  // objects per label (background left out)
   int objects = 0;
+  std::string in_view;  // the last frame's objects as the map labelled them ("#12 coffee_mug 0.93, ...")
 };
 
 std::string statusLine(const WatchState& s, double elapsed_s, Clock::time_point now) {
@@ -59,6 +64,7 @@ std::string statusLine(const WatchState& s, double elapsed_s, Clock::time_point 
     line += sep + label + (n > 1 ? " x" + std::to_string(n) : "");
     sep = ", ";
   }
+  if (!s.in_view.empty()) line += " | in view: " + s.in_view;
   return line;
 }
 
@@ -82,6 +88,17 @@ int runWatch(const NodeArgs& node, double duration_s, double period_s) {
     s.boxes += p.num_boxes;
   });
   bus.subscribe<detections_t>(ch.detections, [&](const detections_t&) { s.detections.tick(Clock::now()); });
+  bus.subscribe<object_detections_t>(ch.object_detections, [&](const object_detections_t& d) {
+    s.in_view.clear();
+    for (size_t i = 0; i < d.labels.size() && i < d.roles.size(); ++i) {
+      if (d.roles[i] != object_detections_t::PRIMARY || d.labels[i] == "background") continue;
+      const auto c = std::find(d.class_names.begin(), d.class_names.end(), d.labels[i]) - d.class_names.begin();
+      char item[96];
+      std::snprintf(item, sizeof(item), "#%d %s %.2f", d.object_ids[i], d.labels[i].c_str(),
+                    std::exp(d.log_posterior[i][static_cast<size_t>(c)]));
+      s.in_view += (s.in_view.empty() ? "" : ", ") + std::string(item);
+    }
+  });
   bus.subscribe<status_t>(ch.statusOf("recognizer"), [&](const status_t& st) { s.dropped = st.frames_dropped; });
   bus.subscribe<object_map_t>(
       ch.object_map,

@@ -1,17 +1,19 @@
 // slamaware-eval: runs the pipeline (the processes that exist: camera -> slam -> ...) lockstep on
 // each sequence folder, records the bus, and computes the report sections of the stages from the
-// recording and the ground truth (DESIGN.md §7): the "slam", "proposals", "single_view" and
-// "multi_view" sections of every sequence, and "overall" over the synthetic suite, plus plots per
-// sequence (trajectory, recall against boxes, precision-recall per class). Runs inside a private
-// network namespace (scripts/eval). --offline runs the SLAM library in-process instead (no bus;
-// for development); --from-logs scores earlier recordings and --proposals-config re-runs the
-// proposals stage on them with other options.
+// recording and the ground truth (DESIGN.md §7): the "slam", "proposals", "single_view",
+// "multi_view_online" and "multi_view_final" sections of every sequence, and "overall" over the
+// synthetic suite, plus plots per sequence (trajectory, recall against boxes, precision-recall per
+// class). Only what the processes published is scored. Runs inside a private network namespace
+// (scripts/eval). --offline runs the SLAM library in-process instead (no bus; for development);
+// --from-logs scores earlier recordings, and --proposals-config / --objectmap-config re-run the
+// proposals stage / the object map on them with other options.
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <fstream>
 #include <stdexcept>
 #include <nlohmann/json.hpp>
@@ -39,38 +41,35 @@ std::string selfDir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
-// Multi-view ranked by the fused posterior alone (a diagnostic beside the multi_view section).
-nlohmann::json fusedOnlySummary(const RecognitionScores& fused) {
-  const nlohmann::json s = recognitionSection(fused);
-  return {{"mAP", s["mAP"]}, {"recall", s["recall"]}};
-}
-
 // Every box of a recording with its single-view and multi-view log-probabilities, one CSV row per
-// box (frame, candidate, object, box, then log p single, fused, multi per class).
+// box (frame, candidate, object, role, box, then log p single, online, final per class).
 void writeBoxesCsv(const RecognitionRecording& rr, const std::string& path) {
   std::ofstream f(path);
-  f << "frame,map_id,candidate,object,x,y,w,h";
-  for (const char* kind : {"single", "fused", "multi"})
+  f << "frame,map_id,candidate,object,role,x,y,w,h";
+  for (const char* kind : {"single", "online", "final"})
     for (const auto& c : rr.classes) f << "," << kind << ":" << c;
   f << "\n";
   for (const auto& [frame, boxes] : rr.frames)
     for (const auto& b : boxes) {
-      f << frame << "," << b.map_id << "," << b.candidate << "," << b.object << "," << b.single.box.x << ","
-        << b.single.box.y << "," << b.single.box.w << "," << b.single.box.h;
-      for (const auto* lp : {&b.single.log_p, &b.fused.log_p, &b.multi.log_p})
+      f << frame << "," << b.map_id << "," << b.candidate << "," << b.object << "," << b.role << ","
+        << b.single.box.x << "," << b.single.box.y << "," << b.single.box.w << "," << b.single.box.h;
+      for (const auto* lp : {&b.single.log_p, &b.online.log_p, &b.final.log_p})
         for (double v : *lp) f << "," << v;
       f << "\n";
     }
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
-// The single_view and multi_view sections of a sequence (into `out`) and its precision-recall
-// plot, from the DETECTIONS of its recording and the object map replayed; no classes in the
-// result when the sequence has none to evaluate.
+// The single_view, multi_view_online and multi_view_final sections of a sequence (into `out`) and its
+// precision-recall plot, from the DETECTIONS of its recording and the object map's outputs
+// (recorded, or re-run with `objectmap_options` when given); no classes in the result when the
+// sequence has none to evaluate.
 RecognitionResult recognitionSections(const std::string& name, const SequenceFolder& seq, const std::string& log,
-                                      const Channels& channels, const ObjectMapOptions& objectmap_options,
+                                      const Channels& channels, const ObjectMapOptions* objectmap_options,
                                       const std::string& out_dir, bool dump_boxes, nlohmann::json& out) {
-  const RecognitionRecording rr = readRecognitionRecording(log, channels, objectmap_options);
+  const ObjectMapOutputs outputs = objectmap_options ? rerunObjectMap(log, channels, *objectmap_options)
+                                                     : readObjectMapOutputs(log, channels);
+  const RecognitionRecording rr = readRecognitionRecording(log, channels, outputs);
   if (rr.empty()) {
     spdlog::info("{}: no DETECTIONS in the recording: no single_view / multi_view", name);
     return {};
@@ -94,20 +93,24 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
     return res;
   }
   out["single_view"] = recognitionSection(res.single);
-  out["multi_view"] = recognitionSection(res.multi);
-  out["multi_view"]["fused_posterior_only"] = fusedOnlySummary(res.fused);
-  out["multi_view"]["objects"] = rr.objects;
-  out["multi_view"]["candidates"] = rr.candidates;
-  out["multi_view"]["duplicate_boxes"] = rr.duplicates;
-  out["multi_view"]["replay_matches_node"] =
-      rr.matches_node < 0 ? nlohmann::json(nullptr) : nlohmann::json(rr.matches_node == 1);
+  out["multi_view_online"] = recognitionSection(res.online);
+  out["multi_view_final"] = recognitionSection(res.final);
+  out["multi_view_final"]["hindsight"] =
+      "each box's object labelled by the last OBJECT_MAP (evidence of the whole sequence, later frames included)";
+  nlohmann::json roles;
+  const char* names[] = {"primary", "duplicate", "part", "no_object"};
+  for (const auto& [role, n] : rr.roles) roles[role >= 0 && role < 4 ? names[role] : "unknown"] = n;
+  out["multi_view_online"]["boxes_by_role"] = roles;
+  out["multi_view_online"]["frames_without_object_detections"] = rr.frames_without_object_detections;
+  out["multi_view_final"]["objects"] = rr.objects;
+  out["multi_view_final"]["boxes_whose_object_is_gone"] = rr.final_without_object;
   const std::string plot = (fs::path(out_dir) / "plots" / (name + "_pr.png")).string();
-  drawPrCurves(res.single, res.multi, name + ": precision-recall at IoU 0.5, every 5th frame", plot);
-  out["single_view"]["plot"] = out["multi_view"]["plot"] = plot;
+  drawPrCurves(res.single, res.online, res.final, name + ": precision-recall at IoU 0.5, every 5th frame", plot);
+  out["single_view"]["plot"] = out["multi_view_online"]["plot"] = out["multi_view_final"]["plot"] = plot;
   auto pct = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
-  spdlog::info("{}: mAP single view {:.1f}%, multi-view {:.1f}%; recall {:.1f}% / {:.1f}% ({} boxes, {} objects)",
-               name, pct(out["single_view"]["mAP"]), pct(out["multi_view"]["mAP"]), pct(out["single_view"]["recall"]),
-               pct(out["multi_view"]["recall"]), res.single.boxes, rr.objects);
+  spdlog::info("{}: mAP single view {:.1f}%, multi-view online {:.1f}%, final {:.1f}% ({} boxes, {} objects)", name,
+               pct(out["single_view"]["mAP"]), pct(out["multi_view_online"]["mAP"]),
+               pct(out["multi_view_final"]["mAP"]), res.single.boxes, rr.objects);
   return res;
 }
 
@@ -141,7 +144,8 @@ int main(int argc, char** argv) {
   app.add_option("--proposals-config", proposals_config,
                  "re-run the proposals stage on the recording with this options file");
   app.add_option("--objectmap-config", objectmap_config,
-                 "multi-view labels: object map options (default: <config-dir>/objectmap.yaml)");
+                 "re-run the object map on the recording with this options file (as the lockstep node) and "
+                 "score its outputs instead of the recorded ones");
   app.add_option("--draw-proposals", draw_frames,
                  "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
   app.add_option("--baseline-frames", peo.baseline_frames,
@@ -172,11 +176,9 @@ int main(int argc, char** argv) {
       slam_options = loadConfig<SlamOptions>(slam_config, "slam", false);
     }
 
-    // The multi-view labels replay the objectmap stage with the options the node was given.
-    if (objectmap_config.empty() && fs::exists(fs::path(pipeline.config_dir) / "objectmap.yaml"))
-      objectmap_config = (fs::path(pipeline.config_dir) / "objectmap.yaml").string();
-    const ObjectMapOptions objectmap_options = loadConfig<ObjectMapOptions>(objectmap_config, "objectmap", false);
-    RecognitionScores suite_single, suite_multi, suite_fused;
+    std::optional<ObjectMapOptions> objectmap_options;
+    if (!objectmap_config.empty()) objectmap_options = loadConfig<ObjectMapOptions>(objectmap_config, "objectmap", false);
+    RecognitionScores suite_single, suite_online, suite_final;
     bool any_recognition = false;
 
     nlohmann::json report = nlohmann::json::object();
@@ -252,12 +254,12 @@ int main(int argc, char** argv) {
         }
         if (!offline) {
           const RecognitionResult res =
-              recognitionSections(name, seq, log, system.channels, objectmap_options, out_dir, dump_boxes,
-                                  report["sequences"][name]);
+              recognitionSections(name, seq, log, system.channels, objectmap_options ? &*objectmap_options : nullptr,
+                                  out_dir, dump_boxes, report["sequences"][name]);
           if (!res.classes.empty() && isSyntheticSequence(seq)) {
             mergeRecognition(&suite_single, res.single);
-            mergeRecognition(&suite_multi, res.multi);
-            mergeRecognition(&suite_fused, res.fused);
+            mergeRecognition(&suite_online, res.online);
+            mergeRecognition(&suite_final, res.final);
             any_recognition = true;
           }
         }
@@ -276,11 +278,13 @@ int main(int argc, char** argv) {
     }
     if (any_recognition) {
       report["overall"]["single_view"] = recognitionSection(suite_single);
-      report["overall"]["multi_view"] = recognitionSection(suite_multi);
-      report["overall"]["multi_view"]["fused_posterior_only"] = fusedOnlySummary(suite_fused);
+      report["overall"]["multi_view_online"] = recognitionSection(suite_online);
+      report["overall"]["multi_view_final"] = recognitionSection(suite_final);
       const std::string plot = (fs::path(out_dir) / "plots" / "suite_pr.png").string();
-      drawPrCurves(suite_single, suite_multi, "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
-      report["overall"]["single_view"]["plot"] = report["overall"]["multi_view"]["plot"] = plot;
+      drawPrCurves(suite_single, suite_online, suite_final,
+                   "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
+      report["overall"]["single_view"]["plot"] = report["overall"]["multi_view_online"]["plot"] =
+          report["overall"]["multi_view_final"]["plot"] = plot;
     }
     std::ofstream(out) << report.dump(2) << "\n";
     return failures ? 1 : 0;

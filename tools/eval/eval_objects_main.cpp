@@ -1,18 +1,26 @@
-// slamaware-eval-objects: category accuracy of the recognizer on instances it was not trained on,
-// per object set, with the confusion matrix, written as a JSON fragment that the evaluation
-// report merges (DESIGN.md §7):
-//   {"objects": {"<set name>": {"accuracy": %, "confusion": [[...]], "classes": [...], ...}}}
-// Protocol: leave-one-instance-out (one fold per instance) for sets of up to --loio-max-instances
-// instances, else one fold holding out one instance of each category.
-// Without --objects it evaluates every object set in <shared>/objects and build/data/objects.
+// slamaware-eval-objects: recognition without the pipeline, written as a JSON fragment that the
+// evaluation report merges (DESIGN.md §7).
+//
+// Object sets: category accuracy on instances the recognizer was not trained on, with the
+// confusion matrix: {"objects": {"<set name>": {"accuracy": %, "confusion": [[...]], ...}}}.
+// Leave-one-instance-out (one fold per instance) for sets of up to --loio-max-instances instances,
+// else one fold holding out one instance of each category; a set that cannot be split (fewer than
+// two categories, or no category with two instances) is skipped and says why ("skipped").
+// Without --objects, every object set in <shared>/objects and build/data/objects.
 // --extra-training [SET=]DIR adds another set's crops (of the evaluated set's categories) to the
 // training data of every fold of SET (of every other set without "SET="); make eval adds the
 // rendered config/objects/apple_ball.yaml to uw_rgbd_apple_ball's folds.
-// Positional arguments (the sequence folders scripts/eval passes to every eval tool): the
-// ground-truth boxes of their every 5th frame are classified with --model (the shipped model by
-// default), which measures the recognizer apart from the proposals:
-//   {"sequences": {"<name>": {"gt_boxes": {"accuracy": %, "jittered_accuracy": %, "confusion": ...}}},
-//    "overall": {"gt_boxes": {...}}}   (objects of other categories count as background)
+//
+// Sequence folders (positional; scripts/eval passes the same ones to every eval tool), with
+// --model (the shipped model by default):
+//   "gt_boxes": the ground-truth boxes classified (the recognizer apart from the proposals):
+//     accuracy, a jittered copy's accuracy, per class, confusion matrix (objects of other
+//     categories count as background). A continuous video (ground-truth poses) on every 5th frame,
+//     as the pipeline's sections; separate frames (boxes, no poses) on every boxed frame.
+//   "single_view_ss" (photographed sequences of the model's classes): OpenCV selective search's
+//     boxes of each scored frame through the recognizer and its suppression, scored as detections
+//     (mAP) against the ground-truth boxes: detection on real frames without SLAM.
+//   {"sequences": {"<name>": {"gt_boxes": {...}, "single_view_ss": {...}}}, "overall": {"gt_boxes": {...}}}
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -28,6 +36,7 @@
 #include "common/image_codec.h"
 #include "procs/recognizer/recognizer.h"
 #include "procs/recognizer/trainer.h"
+#include "tools/eval/recognition_metrics.h"
 
 using namespace slamaware;
 namespace fs = std::filesystem;
@@ -76,10 +85,28 @@ struct BoxTally {
         jittered ? 100.0 * static_cast<double>(jittered_correct) / static_cast<double>(jittered) : 0.0;
     j["classes"] = classes;
     j["confusion"] = confusion;
+    j["per_class"] = nlohmann::json::object();
+    for (size_t c = 0; c < confusion.size(); ++c) {
+      int64_t n = 0;
+      for (int64_t v : confusion[c]) n += v;
+      if (n == 0) continue;
+      j["per_class"][classes[c]] = {{"boxes", n}, {"accuracy", 100.0 * static_cast<double>(confusion[c][c]) / static_cast<double>(n)}};
+    }
     std::vector<double> r = runner_up_log_prob;
     std::sort(r.begin(), r.end());
     j["runner_up_log_prob_median"] = r.empty() ? 0.0 : r[r.size() / 2];
     return j;
+  }
+  void print(std::ostream& out) const {
+    out << "  per class (accuracy, boxes); confusion (rows: true, columns: predicted):\n";
+    for (size_t c = 0; c < confusion.size(); ++c) {
+      int64_t n = 0;
+      for (int64_t v : confusion[c]) n += v;
+      out << fmt::format("    {:<14} {:>6} {:>4} |", classes[c],
+                         n ? fmt::format("{:.1f}%", 100.0 * static_cast<double>(confusion[c][c]) / static_cast<double>(n)) : "-", n);
+      for (int64_t v : confusion[c]) out << fmt::format(" {:>4}", v);
+      out << "\n";
+    }
   }
 };
 
@@ -90,8 +117,9 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
   t.confusion.assign(static_cast<size_t>(C), std::vector<int64_t>(static_cast<size_t>(C), 0));
   std::map<int, std::vector<GroundTruthBox>> by_frame;
   for (const auto& b : seq.boxes()) by_frame[b.frame].push_back(b);
-  for (const auto& [frame, truth] : by_frame) {
-    if (frame % stride != 0 || frame >= static_cast<int>(seq.size())) continue;
+  for (const int frame : framesToScore(seq, stride)) {
+    const auto& truth = by_frame[frame];
+    if (truth.empty()) continue;
     const cv::Mat image = readImage(seq.framePath(static_cast<size_t>(frame)));
     std::vector<BoxRequest> req;
     std::vector<int> label;
@@ -126,6 +154,55 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
     }
   }
   return t;
+}
+
+// Selective search's boxes (at most `max_boxes`, found on the frame at `width` px) of every
+// scored frame through the recognizer and the node's suppression of overlapping boxes, scored as
+// single-view detections of `evaluated` against the ground-truth boxes.
+nlohmann::json selectiveSearchDetection(Recognizer& recognizer, const RecognizerOptions& options,
+                                        const SequenceFolder& seq, const std::vector<std::string>& evaluated, int stride,
+                                        int max_boxes, int width) {
+  std::map<int, std::vector<GroundTruthBox>> by_frame;
+  for (const auto& b : seq.boxes()) by_frame[b.frame].push_back(b);
+  RecognitionScores scores = emptyScores(evaluated);
+  int64_t boxes = 0;
+  for (const int frame : framesToScore(seq, stride)) {
+    const cv::Mat image = readImage(seq.framePath(static_cast<size_t>(frame)));
+    std::vector<BoxRequest> req;
+    for (const Box2& b : selectiveSearch(image, width, max_boxes)) req.push_back({b.x, b.y, b.w, b.h, 0});
+    FrameDetections d = recognizer.recognize(image, req);
+    suppressOverlaps(&d, options.nms_iou, options.nms_per_class);
+    std::vector<LabelledBox> labelled;
+    for (const auto& b : d.boxes)
+      labelled.push_back({Box2{b.x, b.y, b.w, b.h}, std::vector<double>(b.log_prob.begin(), b.log_prob.end()), -1});
+    boxes += static_cast<int64_t>(labelled.size());
+    scoreFrame(d.classes, labelled, by_frame[frame], 0.5, &scores);
+  }
+  nlohmann::json j = recognitionSection(scores);
+  j["proposals"] = fmt::format("OpenCV selective search (fast), at most {} boxes per frame found at {} px wide", max_boxes,
+                               width);
+  j["boxes_per_frame_after_suppression"] =
+      scores.frames ? static_cast<double>(boxes) / static_cast<double>(scores.frames) : 0.0;
+  return j;
+}
+
+// Why an object set cannot be evaluated by held-out instances ("" when it can): leave-one-instance-
+// out needs two instances of every category (a category's only instance held out leaves nothing to
+// learn it from), one held-out instance per category needs one category with two; both need two
+// categories.
+std::string whyNotSplit(const ObjectSet& set, bool loio) {
+  const auto instances = set.instances();
+  if (instances.size() < 2) return "it has fewer than two categories";
+  std::vector<std::string> single;
+  for (const auto& [category, list] : instances)
+    if (list.size() < 2) single.push_back(category);
+  if (loio && !single.empty())
+    return fmt::format("{} of its {} categories have a single instance ({}{}): leave-one-instance-out cannot hold "
+                       "it out",
+                       single.size(), instances.size(), fmt::join(single.begin(), single.begin() + std::min<size_t>(single.size(), 5), ", "),
+                       single.size() > 5 ? ", ..." : "");
+  if (single.size() == instances.size()) return "no category has two instances to hold one out";
+  return "";
 }
 
 // An --extra-training argument: "SET=DIR" (for the set named SET only) or "DIR" (set empty: for
@@ -187,6 +264,10 @@ int main(int argc, char** argv) {
                  "sequence folders: their ground-truth boxes are classified with --model (objects of other "
                  "categories count as background)");
   app.add_option("--model", model_path, "model for the ground-truth boxes of the sequences");
+  int ss_boxes = 300, ss_width = 320;
+  app.add_option("--ss-boxes", ss_boxes,
+                 "photographed sequences: selective-search boxes per frame classified as detections (0: none)");
+  app.add_option("--ss-width", ss_width, "px, frames are downscaled to this width for selective search");
   bool skip_sets = false;
   app.add_flag("--no-object-sets", skip_sets, "only the ground-truth boxes of the sequences");
   CLI11_PARSE(app, argc, argv);
@@ -221,8 +302,16 @@ int main(int argc, char** argv) {
         for (const auto& [c, list] : set.instances()) n += list.size();
         return n;
       }();
-      const bool loio = protocol == "loio" || (protocol == "auto" && static_cast<int>(instances) <= loio_max);
+      // Photographed sets are small and are what counts: every instance is held out in turn.
+      const bool loio = protocol == "loio" ||
+                        (protocol == "auto" && (!set.rendered() || static_cast<int>(instances) <= loio_max));
       const std::string name = folderName(dir);
+      const std::string why_not = whyNotSplit(set, loio);
+      if (!why_not.empty()) {
+        j["objects"][name] = {{"skipped", why_not}};
+        std::cout << name << ": skipped, " << why_not << "\n";
+        continue;
+      }
       const std::vector<std::string> extra_dirs = extraTrainingFor(name, extra);
       const HeldOutResult r =
           loio ? leaveOneInstanceOut(dir, options, progress, extra_dirs, held_out)
@@ -251,7 +340,8 @@ int main(int argc, char** argv) {
     }
     if (!sequences.empty()) {
       auto model = std::make_shared<const RecognizerModel>(loadModel(model_path));
-      Recognizer recognizer(model, RecognizerOptions{});
+      const RecognizerOptions recognizer_options;
+      Recognizer recognizer(model, recognizer_options);
       BoxTally suite;
       for (const auto& dir : sequences) {
         const SequenceFolder seq = SequenceFolder::open(dir);
@@ -262,7 +352,18 @@ int main(int argc, char** argv) {
         std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
                   << " ground-truth boxes right (jittered: " << t.json()["jittered_accuracy"].get<double>()
                   << "%)\n";
-        if (isSyntheticSequence(seq)) suite.merge(t);
+        t.print(std::cout);
+        if (isSyntheticSequence(seq)) {
+          suite.merge(t);
+          continue;
+        }
+        const std::vector<std::string> evaluated = evaluatedClasses(recognizer.classes(), seq);
+        if (evaluated.empty() || ss_boxes <= 0) continue;
+        const nlohmann::json ss =
+            selectiveSearchDetection(recognizer, recognizer_options, seq, evaluated, 5, ss_boxes, ss_width);
+        j["sequences"][name]["single_view_ss"] = ss;
+        std::cout << name << ": selective search + recognizer, single-view mAP " << ss["mAP"] << " ("
+                  << ss["boxes_per_frame_after_suppression"] << " boxes per frame)\n";
       }
       if (suite.boxes > 0) {
         j["overall"]["gt_boxes"] = suite.json();

@@ -61,25 +61,6 @@ double median(std::vector<int> v) {
   return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
-// Selective search (OpenCV ximgproc, fast mode) on a frame downscaled to `width`; boxes in the
-// frame's pixels, in the order OpenCV ranks them.
-std::vector<Box2> selectiveSearch(const cv::Mat& bgr, int width, int max_boxes) {
-  const double s = width > 0 && bgr.cols > width ? static_cast<double>(width) / bgr.cols : 1.0;
-  cv::Mat small;
-  cv::resize(bgr, small, cv::Size(), s, s, cv::INTER_AREA);
-  auto ss = cv::ximgproc::segmentation::createSelectiveSearchSegmentation();
-  ss->setBaseImage(small);
-  ss->switchToSelectiveSearchFast();
-  std::vector<cv::Rect> rects;
-  ss->process(rects);
-  std::vector<Box2> out;
-  for (const auto& r : rects) {
-    if (static_cast<int>(out.size()) >= max_boxes) break;
-    out.push_back({r.x / s, r.y / s, r.width / s, r.height / s});
-  }
-  return out;
-}
-
 void drawPlot(const ProposalScores& sc, const std::string& path) {
   const int W = 640, H = 420;
   const double kmax = 2000;
@@ -103,6 +84,23 @@ void drawPlot(const ProposalScores& sc, const std::string& path) {
 }
 
 }  // namespace
+
+std::vector<Box2> selectiveSearch(const cv::Mat& bgr, int width, int max_boxes) {
+  const double s = width > 0 && bgr.cols > width ? static_cast<double>(width) / bgr.cols : 1.0;
+  cv::Mat small;
+  cv::resize(bgr, small, cv::Size(), s, s, cv::INTER_AREA);
+  auto ss = cv::ximgproc::segmentation::createSelectiveSearchSegmentation();
+  ss->setBaseImage(small);
+  ss->switchToSelectiveSearchFast();
+  std::vector<cv::Rect> rects;
+  ss->process(rects);
+  std::vector<Box2> out;
+  for (const auto& r : rects) {
+    if (static_cast<int>(out.size()) >= max_boxes) break;
+    out.push_back({r.x / s, r.y / s, r.width / s, r.height / s});
+  }
+  return out;
+}
 
 ProposalRecording readProposalRecording(const std::string& log_path, const Channels& ch) {
   ProposalRecording run;

@@ -5,6 +5,7 @@
 // a PNG of recall against boxes per frame for both. Only the evaluator reads ground truth.
 #include <map>
 #include <nlohmann/json.hpp>
+#include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,11 @@ struct Box2 {
   double x = 0, y = 0, w = 0, h = 0;
 };
 double iou(const Box2& a, const Box2& b);
+
+/// Selective search (OpenCV ximgproc, fast mode) on a frame downscaled to `width` px (0: as it is):
+/// at most `max_boxes` boxes in the frame's pixels, in the order OpenCV ranks them. The single-view
+/// baseline of the proposals and of recognition on real frames.
+std::vector<Box2> selectiveSearch(const cv::Mat& bgr, int width, int max_boxes);
 
 /// What the proposals stage published for one run, by frame seq; `localized` are the frames
 /// SLAM localised (TRACKING or RELOCALIZED).

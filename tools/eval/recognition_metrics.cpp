@@ -13,7 +13,8 @@
 #include "common/bus/log_reader.h"
 #include "common/geometry.h"
 #include "common/image_codec.h"
-#include "procs/objectmap/fusion.h"
+#include "procs/objectmap/frame_labels.h"
+#include "procs/objectmap/object_map.h"
 #include "tools/eval/plot.h"
 
 namespace slamaware {
@@ -21,8 +22,6 @@ namespace slamaware {
 namespace {
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-/// As the object map: a log-probability below this is this (sums stay finite).
-constexpr double kMinLogProb = -100.0;
 
 nlohmann::json percentOrNull(double num, double den) {
   return den > 0 ? nlohmann::json(100.0 * num / den) : nlohmann::json(nullptr);
@@ -37,16 +36,6 @@ int argmaxOf(const std::vector<double>& v) {
   return best;
 }
 
-/// log-softmax of summed log-evidence (shifted by its maximum).
-std::vector<double> logSoftmax(const std::vector<double>& e) {
-  if (e.empty()) return {};
-  const double m = *std::max_element(e.begin(), e.end());
-  double s = 0;
-  for (double v : e) s += std::exp(v - m);
-  std::vector<double> out(e.size());
-  for (size_t i = 0; i < e.size(); ++i) out[i] = e[i] - m - std::log(s);
-  return out;
-}
 
 // log(p / (1 - p)) of class k from log-probabilities of all classes: log p_k - log sum_{j != k} p_j.
 // Monotone in p_k, so it ranks boxes as p_k does, but without the ties that rounding makes of
@@ -63,9 +52,6 @@ double logOdds(const std::vector<double>& log_p, size_t k) {
   return log_p[k] - (m + std::log(s));
 }
 
-bool usableBox(const box_t& b) {
-  return std::isfinite(b.x) && std::isfinite(b.y) && std::isfinite(b.w) && std::isfinite(b.h) && b.w > 0 && b.h > 0;
-}
 
 }  // namespace
 
@@ -199,7 +185,6 @@ void mergeRecognition(RecognitionScores* into, const RecognitionScores& more) {
   into->background_elsewhere += more.background_elsewhere;
   for (const auto& [t, row] : more.confusion)
     for (const auto& [l, n] : row) into->confusion[t][l] += n;
-  into->fallback_boxes += more.fallback_boxes;
 }
 
 nlohmann::json recognitionSection(const RecognitionScores& s) {
@@ -243,12 +228,11 @@ nlohmann::json recognitionSection(const RecognitionScores& s) {
   d["background_elsewhere"] = percentOrNull(s.background_elsewhere, s.boxes_elsewhere);
   d["confusion"] = s.confusion;
   j["diagnostics"] = d;
-  j["fallback_boxes"] = s.fallback_boxes;
   return j;
 }
 
-void drawPrCurves(const RecognitionScores& single, const RecognitionScores& multi, const std::string& title,
-                  const std::string& path) {
+void drawPrCurves(const RecognitionScores& single, const RecognitionScores& online, const RecognitionScores& final,
+                  const std::string& title, const std::string& path) {
   std::vector<std::string> classes;
   for (const auto& [cls, t] : single.classes)
     if (t.truth > 0) classes.push_back(cls);
@@ -282,347 +266,172 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& mult
         panel.curve({{100.0 * t.labelled_tp / t.truth, 100.0 * t.labelled_tp / t.labelled}}, colour, "", 4);
     };
     draw(single, plot_colour::kBlue, "single view");
-    draw(multi, plot_colour::kOrange, "multi-view");
+    draw(online, plot_colour::kOrange, "multi-view online");
+    draw(final, plot_colour::kRed, "multi-view final");
   }
   writeImage(path, img);
 }
 
-// ---- Multi-view labels ------------------------------------------------------------------------
+// ---- What the processes published ----------------------------------------------------------
 
-MultiViewLabeller::MultiViewLabeller(const ObjectMapOptions& options)
-    : engine_(options), fusion_(options.fusion()) {}
-
-void MultiViewLabeller::countRefusal(bool accepted, const char* channel, const std::string& why) {
-  if (accepted) return;
-  ++refused_;
-  spdlog::debug("objectmap refused {}: {}", channel, why);
-}
-void MultiViewLabeller::onCameraInfo(const camera_info_t& m) {
-  std::string why;
-  countRefusal(engine_.onCameraInfo(m, &why), "CAMERA_INFO", why);
-}
-void MultiViewLabeller::onMap(const point_cloud_t& m) {
-  std::string why;
-  countRefusal(engine_.onMap(m, &why), "SLAM_MAP", why);
-}
-void MultiViewLabeller::onPose(const pose_t& m) {
-  std::string why;
-  countRefusal(engine_.onPose(m, &why), "SLAM_POSE", why);
-}
-void MultiViewLabeller::onProposals(const proposals_t& m) {
-  std::string why;
-  countRefusal(engine_.onProposals(m, &why), "PROPOSALS", why);
-}
-
-void MultiViewLabeller::onDetections(const detections_t& d) {
-  std::string why;
-  countRefusal(engine_.onDetections(d, &why), "DETECTIONS", why);
-  // The candidate's own evidence, for the fallback: one box per frame (the most object-like), as the map.
-  if (own_classes_.empty()) own_classes_ = d.class_names;
-  std::vector<int> index(own_classes_.size(), -1);
-  for (size_t k = 0; k < own_classes_.size(); ++k)
-    for (size_t n = 0; n < d.class_names.size(); ++n)
-      if (d.class_names[n] == own_classes_[k]) index[k] = static_cast<int>(n);
-  const size_t nb = std::min({d.boxes.size(), d.candidate_ids.size(), d.log_prob.size()});
-  for (size_t i = 0; i < nb; ++i) {
-    const auto& row = d.log_prob[i];
-    if (!usableBox(d.boxes[i]) || row.empty() ||
-        std::any_of(row.begin(), row.end(), [](float v) { return std::isnan(v); }))
-      continue;
-    OwnView v;
-    v.area = d.boxes[i].w * d.boxes[i].h;
-    const float floor = *std::min_element(row.begin(), row.end());
-    for (int n : index) v.log_p.push_back(n >= 0 && static_cast<size_t>(n) < row.size() ? row[n] : floor);
-    auto& views = own_[{d.map_id, d.candidate_ids[i]}];
-    auto it = views.find(d.seq);
-    if (it == views.end() || moreObjectLikeView(v.log_p, v.area, it->second.log_p, it->second.area))
-      views[d.seq] = std::move(v);
-  }
-}
-
-std::vector<double> MultiViewLabeller::logPosterior(int32_t map_id, int32_t candidate,
-                                                    const std::vector<std::string>& classes, bool* from_object) {
-  std::vector<double> evidence;
-  double weight = 0;
-  std::vector<std::string> names;
-  const Object* o = engine_.objectOfCandidate(map_id, candidate);
-  if (o && !o->log_evidence.empty()) {
-    evidence = o->log_evidence;
-    weight = o->evidence_weight;
-    names = engine_.classes();
-  } else if (auto it = own_.find({map_id, candidate}); it != own_.end()) {
-    // As the map fuses (procs/objectmap/fusion.h), each view clamped as the map clamps.
-    std::vector<std::vector<float>> clamped;
-    for (const auto& [seq, v] : it->second) {
-      clamped.push_back(v.log_p);
-      for (float& x : clamped.back()) x = std::clamp(x, static_cast<float>(kMinLogProb), 0.f);
-    }
-    std::vector<const std::vector<float>*> views;
-    for (const auto& v : clamped) views.push_back(&v);
-    evidence = sumLogProbabilities(views, own_classes_.size(), fusion_.objectness_weights, &weight);
-    names = own_classes_;
-  }
-  if (from_object) *from_object = o && !o->log_evidence.empty();
-  // As the map's posterior (posteriorFromLogEvidence), in logs.
-  const std::vector<double> lp = logSoftmax(scaledLogEvidence(evidence, weight, fusion_.views_exponent));
-  std::vector<double> out(classes.size(), kNegInf);
-  for (size_t k = 0; k < classes.size(); ++k)
-    for (size_t n = 0; n < names.size(); ++n)
-      if (names[n] == classes[k]) out[k] = lp[n];
-  if (names.empty() && !classes.empty()) std::fill(out.begin(), out.end(), -std::log(double(classes.size())));
-  return out;
-}
-
-double logObjectness(const std::vector<double>& log_p) {
-  if (log_p.empty()) return 0.0;
-  // log(1 - p(background)), exact also for p(background) near 0 or 1.
-  const double lb = std::min(0.0, log_p.back());
-  return lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
-}
-
-namespace {
-
-// Adds `log_factors[c]` to each object class c of `log_p` (background last) and gives the
-// background the rest of the probability.
-void scaleObjectClasses(std::vector<double>* log_p, const std::vector<double>& log_factors) {
-  if (log_p->empty()) return;
-  const size_t bg = log_p->size() - 1;
-  double object_sum = 0;
-  for (size_t c = 0; c < bg; ++c) {
-    (*log_p)[c] += log_factors[c];
-    object_sum += std::exp((*log_p)[c]);
-  }
-  (*log_p)[bg] = std::log(std::max(1e-300, 1.0 - std::min(1.0, object_sum)));
-}
-
-void scaleObjectClasses(std::vector<double>* log_p, double log_factor) {
-  scaleObjectClasses(log_p, std::vector<double>(log_p->size(), log_factor));
-}
-
-// The share of box a's area that lies inside box b (0 for an empty a).
-double shareInside(const Box2& a, const Box2& b) {
-  const double area = a.w * a.h;
-  return area > 0 ? rectIntersection(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) / area : 0.0;
-}
-
-}  // namespace
-
-std::vector<double> multiViewScores(const std::vector<double>& fused, const std::vector<double>& log_box) {
-  std::vector<double> out = fused;
-  if (log_box.size() == out.size()) scaleObjectClasses(&out, log_box);
-  return out;
-}
-
-void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames) {
-  // p(object | box) over the boxes of each candidate (their mean) and of each object (their median).
-  using Key = std::pair<int32_t, int32_t>;  // (map, candidate) or (map, object)
-  struct Views {
-    std::vector<double> p;
-    double logMean() const { return std::log(std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / p.size())); }
-    double logMedian() const {
-      std::vector<double> q = p;
-      const size_t n = q.size(), m = n / 2;
-      std::nth_element(q.begin(), q.begin() + m, q.end());
-      const double upper = q[m];
-      const double median = n % 2 ? upper : (*std::max_element(q.begin(), q.begin() + m) + upper) / 2;
-      return std::log(std::max(1e-300, median));
-    }
-  };
-  std::map<Key, Views> candidates, objects;
-  for (auto& [seq, boxes] : *frames)
-    for (auto& b : boxes) {
-      b.log_objectness = logObjectness(b.single.log_p);
-      candidates[{b.map_id, b.candidate}].p.push_back(std::exp(b.log_objectness));
-      if (b.object >= 0) objects[{b.map_id, b.object}].p.push_back(std::exp(b.log_objectness));
-    }
-  // A box without an object: its candidate's median stands in for the object's.
-  std::map<Key, double> candidate_mean, candidate_median, object_median;
-  for (const auto& [key, views] : candidates) {
-    candidate_mean[key] = views.logMean();
-    candidate_median[key] = views.logMedian();
-  }
-  for (const auto& [key, views] : objects) object_median[key] = views.logMedian();
-  for (auto& [seq, boxes] : *frames)
-    for (auto& b : boxes) {
-      const double views = candidate_mean.at({b.map_id, b.candidate}) +
-                           (b.object >= 0 ? object_median.at({b.map_id, b.object})
-                                          : candidate_median.at({b.map_id, b.candidate}));
-      b.log_objectness = (b.log_objectness + views) / 3;
-      // Per class c, the box's own view's p(c | box) in place of its 1 - p(background | box).
-      std::vector<double> log_box(b.fused.log_p.size(), b.log_objectness);
-      if (b.single.log_p.size() == log_box.size())
-        for (size_t c = 0; c + 1 < log_box.size(); ++c) log_box[c] = (std::min(0.0, b.single.log_p[c]) + views) / 3;
-      b.multi.log_p = multiViewScores(b.fused.log_p, log_box);
-    }
-}
-
-int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes) {
-  std::map<int32_t, size_t> best;  // object -> the box its own view finds most object-like
-  // By log p(background | box) itself: 1 - p(background) rounds to 1 for the many boxes whose
-  // view is sure (log p(background) of -800), and they would tie.
-  const auto background = [](const RecognitionRecording::Box& b) {
-    return b.single.log_p.empty() ? 0.0 : b.single.log_p.back();
-  };
-  for (size_t i = 0; i < boxes->size(); ++i) {
-    const int32_t o = (*boxes)[i].object;
-    if (o < 0) continue;
-    const auto [it, added] = best.emplace(o, i);
-    if (!added && background((*boxes)[i]) < background((*boxes)[it->second])) it->second = i;
-  }
-  int duplicates = 0;
-  for (size_t i = 0; i < boxes->size(); ++i) {
-    RecognitionRecording::Box& b = (*boxes)[i];
-    if (b.object < 0 || best.at(b.object) == i || b.multi.log_p.empty()) continue;
-    const double overlap = shareInside(b.multi.box, (*boxes)[best.at(b.object)].multi.box);
-    if (!(overlap > 0)) continue;  // another part of the object, beside the kept box
-    scaleObjectClasses(&b.multi.log_p, std::max(kMinLogProb, -overlap * overlap / kDuplicateSigma));
-    ++duplicates;
-  }
-  return duplicates;
-}
-
-nlohmann::json objectMapSummary(const ObjectMapEngine& engine) {
-  const std::vector<std::string>& classes = engine.classes();
-  int objects = 0, labelled = 0;
-  size_t best_union = 0, best_largest = 0;
-  int best_objects = 0;
-  int32_t best_segment = -1;
-  for (const auto& [id, seg] : engine.segments()) {
-    std::set<VoxelKey> all;
-    size_t largest = 0;
-    for (const auto& [oid, o] : seg->table.objects()) {
-      ++objects;
-      labelled += o.label >= 0 && static_cast<size_t>(o.label) < classes.size() &&
-                  classes[static_cast<size_t>(o.label)] != kBackgroundClass;
-      std::set<VoxelKey> own;
-      for (int32_t c : o.candidates) {
-        const auto& v = seg->table.candidates().at(c).voxels;
-        own.insert(v.begin(), v.end());
+ObjectMapOutputs readObjectMapOutputs(const std::string& log_path, const Channels& ch) {
+  ObjectMapOutputs out;
+  LogReader reader(log_path);
+  while (auto r = reader.next()) {
+    if (r->channel == ch.object_detections) {
+      object_detections_t m;
+      if (decodeRecord(*r, &m)) out.frames[m.seq] = std::move(m);
+    } else if (r->channel == ch.object_map) {
+      object_map_t m;
+      if (decodeRecord(*r, &m)) {
+        out.last_map = std::move(m);
+        out.have_map = true;
       }
-      largest = std::max(largest, own.size());
-      all.insert(own.begin(), own.end());
-    }
-    if (all.size() > best_union) {
-      best_union = all.size();
-      best_largest = largest;
-      best_objects = static_cast<int>(seg->table.objects().size());
-      best_segment = id;
     }
   }
+  return out;
+}
+
+ObjectMapOutputs rerunObjectMap(const std::string& log_path, const Channels& ch, const ObjectMapOptions& options) {
+  ObjectMapOutputs out;
+  ObjectMapEngine engine(options);
+  LogReader reader(log_path);
+  std::string why;  // refusals are the node's status counters; the outputs are the same either way
+  while (auto r = reader.next()) {
+    if (r->channel == ch.camera_info) {
+      camera_info_t m;
+      if (decodeRecord(*r, &m)) engine.onCameraInfo(m, &why);
+    } else if (r->channel == ch.slam_map) {
+      point_cloud_t m;
+      if (decodeRecord(*r, &m)) engine.onMap(m, &why);
+    } else if (r->channel == ch.slam_pose) {
+      pose_t m;
+      if (decodeRecord(*r, &m)) engine.onPose(m, &why);
+    } else if (r->channel == ch.proposals) {
+      proposals_t m;
+      if (decodeRecord(*r, &m)) engine.onProposals(m, &why);
+    } else if (r->channel == ch.detections) {
+      detections_t m;
+      if (!decodeRecord(*r, &m)) continue;
+      engine.onDetections(m, &why);
+      // As the lockstep node publishes them (objectmap_main.cpp).
+      out.frames[m.seq] = engine.frameDetections(m);
+      out.last_map = engine.objectMap();
+      out.last_map.utime = m.utime;
+      out.last_map.seq = m.seq;
+      out.have_map = true;
+    }
+  }
+  return out;
+}
+
+nlohmann::json objectMapSummary(const object_map_t& map) {
+  int labelled = 0;
+  std::map<int32_t, std::pair<int64_t, int64_t>> segments;  // map id -> (voxels, largest)
+  std::map<int32_t, int> per_segment;
+  for (const auto& o : map.objects) {
+    labelled += !o.label.empty() && o.label != kBackgroundClass;
+    auto& [sum, largest] = segments[o.map_id];
+    sum += o.num_voxels;
+    largest = std::max<int64_t>(largest, o.num_voxels);
+    ++per_segment[o.map_id];
+  }
+  int32_t main = -1;
+  for (const auto& [id, v] : segments)
+    if (main < 0 || v.first > segments[main].first) main = id;
   nlohmann::json j;
-  j["segments"] = engine.segments().size();
-  j["objects"] = objects;
+  j["segments"] = segments.size();
+  j["objects"] = map.objects.size();
   j["labelled_objects"] = labelled;
-  j["main_segment"] = best_segment;
-  j["main_segment_objects"] = best_objects;
-  j["main_segment_object_voxels"] = best_union;
-  j["largest_object_voxels"] = best_largest;
-  j["largest_object_share"] = percentOrNull(static_cast<double>(best_largest), static_cast<double>(best_union));
+  j["main_segment"] = main;
+  j["main_segment_objects"] = main >= 0 ? per_segment[main] : 0;
+  j["main_segment_object_voxels"] = main >= 0 ? segments[main].first : 0;
+  j["largest_object_voxels"] = main >= 0 ? segments[main].second : 0;
+  j["largest_object_share"] = main >= 0 ? percentOrNull(static_cast<double>(segments[main].second),
+                                                        static_cast<double>(segments[main].first))
+                                        : nlohmann::json(nullptr);
   return j;
 }
 
 // ---- A sequence ------------------------------------------------------------------------------
 
+namespace {
+
+// Row `row` of a message's per-class values in `classes`' order (by name; -inf where absent).
+std::vector<double> byName(const std::vector<std::string>& names, const std::vector<float>& row,
+                           const std::vector<std::string>& classes) {
+  std::vector<double> out(classes.size(), kNegInf);
+  for (size_t k = 0; k < classes.size(); ++k)
+    for (size_t n = 0; n < names.size() && n < row.size(); ++n)
+      if (names[n] == classes[k]) out[k] = row[n];
+  return out;
+}
+
+int indexOfName(const std::vector<std::string>& classes, const std::string& name) {
+  const auto it = std::find(classes.begin(), classes.end(), name);
+  return it == classes.end() ? -1 : static_cast<int>(it - classes.begin());
+}
+
+}  // namespace
+
 RecognitionRecording readRecognitionRecording(const std::string& log_path, const Channels& ch,
-                                              const ObjectMapOptions& options) {
+                                              const ObjectMapOutputs& outputs) {
   RecognitionRecording run;
-  {
-    // Replaying the object map costs a map rebuild per full cloud: only for logs with DETECTIONS.
-    LogReader scan(log_path);
-    bool any = false;
-    while (auto r = scan.next())
-      if (r->channel == ch.detections) {
-        any = true;
-        break;
-      }
-    if (!any) return run;
-  }
-  MultiViewLabeller labeller(options);
+  std::map<int32_t, const object_t*> final_objects;
+  for (const auto& o : outputs.last_map.objects) final_objects[o.id] = &o;
   LogReader reader(log_path);
-  object_map_t node_map;
-  bool have_node_map = false;
   while (auto r = reader.next()) {
-    if (r->channel == ch.object_map) {
-      have_node_map = decodeRecord(*r, &node_map) || have_node_map;
-    } else if (r->channel == ch.camera_info) {
-      camera_info_t m;
-      if (decodeRecord(*r, &m)) labeller.onCameraInfo(m);
-    } else if (r->channel == ch.slam_map) {
-      point_cloud_t m;
-      if (decodeRecord(*r, &m)) labeller.onMap(m);
-    } else if (r->channel == ch.slam_pose) {
-      pose_t m;
-      if (decodeRecord(*r, &m)) labeller.onPose(m);
-    } else if (r->channel == ch.proposals) {
-      proposals_t m;
-      if (decodeRecord(*r, &m)) labeller.onProposals(m);
-    } else if (r->channel == ch.detections) {
-      detections_t m;
-      if (!decodeRecord(*r, &m)) continue;
-      labeller.onDetections(m);
-      if (run.classes.empty()) run.classes = m.class_names;
-      auto& boxes = run.frames[m.seq];
-      boxes.clear();
-      const size_t nb = std::min({m.boxes.size(), m.candidate_ids.size(), m.log_prob.size()});
-      for (size_t i = 0; i < nb; ++i) {
-        RecognitionRecording::Box b;
-        b.single.box = {m.boxes[i].x, m.boxes[i].y, m.boxes[i].w, m.boxes[i].h};
-        // Classes by name in the first message's order (one model per run).
-        b.single.log_p.assign(run.classes.size(), kNegInf);
-        for (size_t k = 0; k < run.classes.size(); ++k)
-          for (size_t n = 0; n < m.class_names.size() && n < m.log_prob[i].size(); ++n)
-            if (m.class_names[n] == run.classes[k]) b.single.log_p[k] = m.log_prob[i][n];
-        b.map_id = m.map_id;
-        b.candidate = m.candidate_ids[i];
-        b.multi.box = b.single.box;
-        boxes.push_back(std::move(b));
+    if (r->channel != ch.detections) continue;
+    detections_t m;
+    if (!decodeRecord(*r, &m)) continue;
+    if (run.classes.empty()) run.classes = m.class_names;  // one model per run: its order
+    const auto od = outputs.frames.find(m.seq);
+    const bool have = od != outputs.frames.end() && od->second.utime == m.utime &&
+                      od->second.boxes.size() == m.boxes.size();
+    // (A frame sent twice, as the lockstep source's first frame is, keeps its last outputs; an
+    // empty DETECTIONS has nothing to score.)
+    run.frames_without_object_detections += !have && !m.boxes.empty();
+    auto& boxes = run.frames[m.seq];
+    boxes.clear();
+    const size_t nb = std::min({m.boxes.size(), m.candidate_ids.size(), m.log_prob.size()});
+    for (size_t i = 0; i < nb; ++i) {
+      RecognitionRecording::Box b;
+      b.single.box = {m.boxes[i].x, m.boxes[i].y, m.boxes[i].w, m.boxes[i].h};
+      b.single.log_p = byName(m.class_names, m.log_prob[i], run.classes);
+      b.map_id = m.map_id;
+      b.candidate = m.candidate_ids[i];
+      b.online.box = b.final.box = b.single.box;
+      if (have) {
+        const object_detections_t& d = od->second;
+        b.object = d.object_ids[i];
+        b.role = d.roles[i];
+        ++run.roles[b.role];
+        b.online.log_p = byName(d.class_names, d.log_score[i], run.classes);
+        b.online.label = indexOfName(run.classes, d.labels[i]);
+        b.final = b.online;
+        const auto fo = final_objects.find(b.object);
+        if (b.object >= 0 && fo != final_objects.end()) {
+          // The last OBJECT_MAP's posterior of the object, with the weights the map gave this box.
+          const std::vector<double> post = byName(outputs.last_map.class_names, fo->second->log_posterior, run.classes);
+          const std::vector<double> weight = byName(d.class_names, d.log_weight[i], run.classes);
+          b.final.log_p = post;
+          scaleObjectClasses(&b.final.log_p, weight);
+          b.final.label = indexOfName(run.classes, fo->second->label);
+        } else {
+          run.final_without_object += b.object >= 0;
+        }
+      } else {
+        // No OBJECT_DETECTIONS (an incomplete run): the box counts with nothing said of it.
+        b.online.log_p = b.final.log_p = std::vector<double>(run.classes.size(), kNegInf);
+        if (!b.online.log_p.empty()) b.online.log_p.back() = b.final.log_p.back() = 0;
       }
+      boxes.push_back(std::move(b));
     }
   }
-  if (run.classes.empty()) return run;
-  // The labels at the end of the sequence.
-  struct Label {
-    std::vector<double> log_p;
-    bool from_object = false;
-    int32_t object = -1;
-  };
-  std::map<std::pair<int32_t, int32_t>, Label> cache;  // (map, candidate) -> its label
-  for (auto& [seq, boxes] : run.frames)
-    for (auto& b : boxes) {
-      auto it = cache.find({b.map_id, b.candidate});
-      if (it == cache.end()) {
-        Label l;
-        l.log_p = labeller.logPosterior(b.map_id, b.candidate, run.classes, &l.from_object);
-        const Object* o = labeller.engine().objectOfCandidate(b.map_id, b.candidate);
-        l.object = o && l.from_object ? o->id : -1;
-        it = cache.emplace(std::make_pair(b.map_id, b.candidate), std::move(l)).first;
-      }
-      b.fused.box = b.single.box;
-      b.fused.log_p = it->second.log_p;
-      b.multi.label = argmaxOf(b.fused.log_p);
-      b.multi_from_object = it->second.from_object;
-      b.object = it->second.object;
-    }
-  scoreMultiView(&run.frames);
-  for (auto& [seq, boxes] : run.frames) run.duplicates += demoteDuplicateBoxes(&boxes);
-  run.objects = static_cast<int>(labeller.engine().numObjects());
-  run.object_map = objectMapSummary(labeller.engine());
-  run.candidates = static_cast<int>(labeller.engine().numCandidates());
-  if (have_node_map) {
-    // The node fused the same messages in lockstep: the replay must give its objects (labels,
-    // views and voxels).
-    auto summary = [](const object_map_t& m) {
-      std::vector<std::tuple<std::string, int32_t, int32_t>> s;
-      for (const auto& o : m.objects) s.emplace_back(o.label, o.num_views, o.num_voxels);
-      std::sort(s.begin(), s.end());
-      return s;
-    };
-    run.matches_node = summary(labeller.engine().objectMap()) == summary(node_map) ? 1 : 0;
-    if (!run.matches_node)
-      spdlog::warn("{}: the replayed object map differs from the objectmap node's last OBJECT_MAP ({} / {} objects)",
-                   log_path, run.objects, node_map.num_objects);
-  }
-  if (labeller.refused() > 0) spdlog::warn("{}: the object map refused {} messages", log_path, labeller.refused());
+  run.objects = static_cast<int>(outputs.last_map.objects.size());
+  run.object_map = objectMapSummary(outputs.last_map);
+  if (run.frames_without_object_detections > 0)
+    spdlog::warn("{}: {} DETECTIONS without their OBJECT_DETECTIONS", log_path, run.frames_without_object_detections);
   return run;
 }
 
@@ -637,33 +446,38 @@ std::vector<std::string> evaluatedClasses(const std::vector<std::string>& model_
   return out;
 }
 
+std::vector<int> framesToScore(const SequenceFolder& sequence, int stride) {
+  const int step = sequence.hasGroundTruth() ? std::max(1, stride) : 1;
+  std::vector<int> frames;
+  for (int f = 0; f < static_cast<int>(sequence.size()); f += step) frames.push_back(f);
+  return frames;
+}
+
 RecognitionResult scoreRecognition(const RecognitionRecording& run, const SequenceFolder& seq,
                                    const RecognitionEvalOptions& o) {
   RecognitionResult r;
   r.classes = evaluatedClasses(run.classes, seq);
   r.single = emptyScores(r.classes);
-  r.multi = emptyScores(r.classes);
-  r.fused = emptyScores(r.classes);
+  r.online = emptyScores(r.classes);
+  r.final = emptyScores(r.classes);
   if (r.classes.empty()) return r;
   std::map<int, std::vector<GroundTruthBox>> truth;
   if (seq.hasBoxes())
     for (const auto& b : seq.boxes()) truth[b.frame].push_back(b);
   static const std::vector<GroundTruthBox> no_truth;
-  const int stride = std::max(1, o.stride);
-  for (int f = 0; f < static_cast<int>(seq.size()); f += stride) {
-    std::vector<LabelledBox> single, multi, fused;
+  for (const int f : framesToScore(seq, o.stride)) {
+    std::vector<LabelledBox> single, online, final;
     if (auto it = run.frames.find(f); it != run.frames.end())
       for (const auto& b : it->second) {
         single.push_back(b.single);
-        multi.push_back(b.multi);
-        fused.push_back(b.fused);
-        r.multi.fallback_boxes += !b.multi_from_object;
+        online.push_back(b.online);
+        final.push_back(b.final);
       }
     const auto t = truth.find(f);
     const std::vector<GroundTruthBox>& gt = t == truth.end() ? no_truth : t->second;
     scoreFrame(run.classes, single, gt, o.iou, &r.single);
-    scoreFrame(run.classes, multi, gt, o.iou, &r.multi);
-    scoreFrame(run.classes, fused, gt, o.iou, &r.fused);
+    scoreFrame(run.classes, online, gt, o.iou, &r.online);
+    scoreFrame(run.classes, final, gt, o.iou, &r.final);
   }
   return r;
 }

@@ -1,10 +1,13 @@
 #pragma once
-// The "single_view" and "multi_view" sections of the eval report (DESIGN.md §7): detection of the
-// object classes on every 5th frame, each proposal box of DETECTIONS labelled from its frame alone
-// (single view) or with the fused evidence of its object at the end of the sequence (multi view),
-// scored against the ground-truth boxes by VOC average precision, plus precision and recall at the
-// label the system reports (argmax over the classes, background included). Definitions in
-// tools/eval/README.md. Only the evaluator reads ground truth.
+// The "single_view", "multi_view_online" and "multi_view_final" sections of the eval report
+// (DESIGN.md §7): detection of the object classes on every 5th frame, each box as the processes
+// published it: DETECTIONS (single view: its frame alone), OBJECT_DETECTIONS (multi view online: its
+// object's evidence up to that frame, ranked by the object map's score) and the last OBJECT_MAP
+// (multi view final, the paper's protocol: its object's evidence over the whole sequence), scored
+// against the ground-truth boxes by VOC average precision, plus precision and recall at the label
+// the system reports (argmax over the classes, background included). The evaluator relabels,
+// re-ranks, fuses and suppresses nothing. Definitions in tools/eval/README.md. Only the evaluator
+// reads ground truth.
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -14,7 +17,9 @@
 
 #include "common/bus/system_config.h"
 #include "common/dataset.h"
-#include "procs/objectmap/object_map.h"
+#include "procs/objectmap/objectmap_options.h"
+#include "slamaware/object_detections_t.hpp"
+#include "slamaware/object_map_t.hpp"
 #include "tools/eval/proposal_metrics.h"
 
 namespace slamaware {
@@ -66,7 +71,6 @@ struct RecognitionScores {
   int boxes_on_distractors = 0, background_on_distractors = 0;
   int boxes_elsewhere = 0, background_elsewhere = 0;
   std::map<std::string, std::map<std::string, int>> confusion;  ///< truth -> label -> boxes on objects
-  int fallback_boxes = 0;  ///< multi view: boxes labelled by their own candidate (see README)
 };
 
 /// Scores without tallies for the evaluated classes.
@@ -91,137 +95,70 @@ void mergeRecognition(RecognitionScores* into, const RecognitionScores& more);
 /// never reported), plus counts and the diagnostics.
 nlohmann::json recognitionSection(const RecognitionScores& scores);
 
-/// Precision-recall curves per class (classes with ground truth), single and multi view, one
-/// panel per class, into a PNG.
-void drawPrCurves(const RecognitionScores& single, const RecognitionScores& multi, const std::string& title,
-                  const std::string& path);
+/// Precision-recall curves per class (classes with ground truth), single view and the multi-view
+/// online and final labels, one panel per class, into a PNG.
+void drawPrCurves(const RecognitionScores& single, const RecognitionScores& online, const RecognitionScores& final,
+                  const std::string& title, const std::string& path);
 
-// ---- Multi-view labels ------------------------------------------------------------------------
+// ---- What the processes published ----------------------------------------------------------
 
-/// Replays the messages the objectmap node gets (CAMERA_INFO, SLAM_MAP, SLAM_POSE, PROPOSALS,
-/// DETECTIONS, in the order it got them) through the object map library, and then labels a box by
-/// the object its candidate belongs to at the end: the object's posterior (softmax of the summed
-/// log-evidence of all its views). A candidate the object map does not hold (its boxes were all
-/// refused) falls back to its own evidence: the sum over the sequence of its boxes' log p (one box
-/// per frame, the larger; each clamped to [-100, 0] as the object map clamps), softmax. (A
-/// candidate without voxels is an object of its own in the map, so its label is its own evidence
-/// too.)
-class MultiViewLabeller {
- public:
-  explicit MultiViewLabeller(const ObjectMapOptions& options);
-
-  void onCameraInfo(const camera_info_t& m);
-  void onMap(const point_cloud_t& m);
-  void onPose(const pose_t& m);
-  void onProposals(const proposals_t& m);
-  void onDetections(const detections_t& m);
-
-  /// log p(class | every view of the candidate's object) for `classes` (a class the object map
-  /// lacks gets -inf); *from_object is false when the fallback was used.
-  std::vector<double> logPosterior(int32_t map_id, int32_t candidate, const std::vector<std::string>& classes,
-                                   bool* from_object = nullptr);
-
-  ObjectMapEngine& engine() { return engine_; }
-  /// Messages the object map refused (with the reason logged at debug level).
-  int refused() const { return refused_; }
-
- private:
-  /// Counts (and logs at debug level) a message the object map refused.
-  void countRefusal(bool accepted, const char* channel, const std::string& why);
-  struct OwnView {
-    float area = 0;
-    std::vector<float> log_p;  ///< in own_classes_ order
-  };
-  ObjectMapEngine engine_;
-  std::vector<std::string> own_classes_;
-  std::map<std::pair<int32_t, int32_t>, std::map<int32_t, OwnView>> own_;  ///< (map, candidate) -> seq -> view
-  int refused_ = 0;
-  FusionOptions fusion_;  ///< as the map fuses
+/// The object map's outputs of a run: OBJECT_DETECTIONS by frame seq and the last OBJECT_MAP.
+struct ObjectMapOutputs {
+  std::map<int32_t, object_detections_t> frames;
+  object_map_t last_map;
+  bool have_map = false;
 };
+
+/// The OBJECT_DETECTIONS and last OBJECT_MAP recorded in a log. Throws LogError for a damaged log.
+ObjectMapOutputs readObjectMapOutputs(const std::string& log_path, const Channels& channels);
+
+/// The object map run again on a recording's inputs (CAMERA_INFO, SLAM_MAP, SLAM_POSE, PROPOSALS,
+/// DETECTIONS, in the recorded order) with other `options`, publishing as the lockstep node does:
+/// one OBJECT_DETECTIONS and one OBJECT_MAP per DETECTIONS. With the node's options it gives the
+/// recorded messages byte for byte (tested), so options can be tried on recordings without running
+/// the pipeline again (--objectmap-config).
+ObjectMapOutputs rerunObjectMap(const std::string& log_path, const Channels& channels,
+                                const ObjectMapOptions& options);
+
+/// What the last OBJECT_MAP holds (the "object_map" section of a sequence): segments, objects,
+/// labelled objects, and in the segment whose objects hold the most voxels: its objects, their
+/// voxels and the share of them the largest object holds (near 100 % when the scene is one object
+/// and its parts lie in it: the Middlebury temple).
+nlohmann::json objectMapSummary(const object_map_t& map);
 
 // ---- A sequence ------------------------------------------------------------------------------
 
-/// The boxes of DETECTIONS by frame seq, with single-view and multi-view scores.
+/// The boxes of a recording by frame seq, each labelled three ways from what the processes
+/// published; the evaluator never fuses, re-ranks or suppresses (tools/eval/README.md).
 struct RecognitionRecording {
   struct Box {
-    LabelledBox single;  ///< the box's own p(class | box)
-    LabelledBox fused;   ///< p(class | every view of its object): label and score
-    LabelledBox multi;   ///< label of `fused`, scored by scoreMultiView()
+    LabelledBox single;  ///< DETECTIONS: the box's own log p(class | box)
+    /// OBJECT_DETECTIONS of the same frame: the map's log_score, labelled by its posterior (what a
+    /// user saw at that moment; evidence up to that frame).
+    LabelledBox online;
+    /// The paper's protocol, in hindsight: the box's object labelled by its log posterior in the
+    /// last OBJECT_MAP, with the box's published log_weight per object class (the background the
+    /// rest); a box without an object in that map keeps its online scores.
+    LabelledBox final;
     int32_t map_id = -1, candidate = -1;
-    int32_t object = -1;  ///< id of its object in the replayed map (-1: fallback)
-    double log_objectness = 0;  ///< log p(object | box): its own view's, its candidate's, its object's (scoreMultiView)
-    bool multi_from_object = true;
+    int32_t object = -1;  ///< OBJECT_DETECTIONS' object id (-1: none)
+    int role = -1;        ///< object_detections_t role; -1: no OBJECT_DETECTIONS for the frame
   };
-  std::vector<std::string> classes;  ///< the model's, background last
+  std::vector<std::string> classes;  ///< DETECTIONS' class names (the model's, background last)
   std::map<int32_t, std::vector<Box>> frames;
-  int objects = 0;  ///< objects of the object map at the end
-  int candidates = 0;
-  int duplicates = 0;  ///< boxes demoted by demoteDuplicateBoxes()
-  nlohmann::json object_map;  ///< objectMapSummary() of the replayed map at the end
-  /// The replay against the node: 1 when the replayed map's objects (labels, views, voxels) equal
-  /// those of the last OBJECT_MAP the objectmap node published, 0 when not, -1 when the recording
-  /// has no OBJECT_MAP.
-  int matches_node = -1;
+  int objects = 0;                           ///< in the last OBJECT_MAP
+  int frames_without_object_detections = 0;  ///< DETECTIONS with no OBJECT_DETECTIONS (an incomplete run)
+  int final_without_object = 0;              ///< boxes whose object the last OBJECT_MAP does not hold
+  std::map<int, int> roles;                  ///< boxes per OBJECT_DETECTIONS role
+  nlohmann::json object_map;                 ///< objectMapSummary() of the last OBJECT_MAP
 
   bool empty() const { return classes.empty(); }
 };
 
-/// What the object map holds (the "object_map" section of a sequence): segments, objects,
-/// labelled objects, and in the segment whose objects hold the most voxels: its objects, the voxels
-/// they hold together (union) and the share of them the largest object holds — near 100 % when the
-/// scene is one object and its parts lie in it (the Middlebury temple), so "one dominant object".
-nlohmann::json objectMapSummary(const ObjectMapEngine& engine);
-
-/// log(1 - p(background)) from log-probabilities with the background last (0 for none).
-double logObjectness(const std::vector<double>& log_p);
-
-/// The multi-view detection scores of a box (log, in the model's class order, background last)
-/// from its object's fused posterior and p(c, object | box) per class (log_box, as long as
-/// fused_log_p; otherwise the fused posterior unchanged): p(c) = p(c | object's views) x
-/// exp(log_box[c]) for each object class, p(background) the rest. The object's views say which
-/// object it is; only the box's views can say whether this box frames the whole object (a box on a
-/// part of a mug, or on the mug and half the table, is a view of the mug's object but not a mug
-/// detection). The reported label stays the fused posterior's argmax.
-std::vector<double> multiViewScores(const std::vector<double>& fused_log_p, const std::vector<double>& log_box);
-
-/// Scores every box of a recording (`frames`, their single and fused log p set) as a multi-view
-/// detection: for each object class c, p(c | object's views) x the geometric mean of three: the
-/// box's own view's p(c | box), the mean of 1 - p(background) over every box of its candidate in
-/// the recording (a candidate that is a part of an object, or an object with a stretch of table, is
-/// boxed alike in most of its views, and most of them say so; one view alone is noisy), and the
-/// median of that over every box of its object (all its candidates; a box without an object: its
-/// candidate's median). The last is what the object's typical view says of whether it is an object
-/// at all: the fused class posterior weights each view by its objectness, so a distractor that most
-/// of its views call background gets the class its few other views give it (lab_marble's mushroom:
-/// 242 of its 309 boxes called background, fused bowl 0.71). The median, not the mean: an object's
-/// boxes are of several candidates (the object, a part, the object with its neighbour), and a
-/// minority of sure views does not make it an object. The box's own view says how well *this box*
-/// shows an object of class c: a box on a part of the object or on it and its neighbour is less
-/// sure of the object's class than one that frames it, even where both are sure they frame an
-/// object. `log_objectness` keeps the mean with the box's own 1 - p(background | box).
-void scoreMultiView(std::map<int32_t, std::vector<RecognitionRecording::Box>>* frames);
-
-/// The width of demoteDuplicateBoxes()'s Gaussian, in the squared share of a box inside the kept one.
-constexpr double kDuplicateSigma = 0.1;
-
-/// An object is one detection per frame. Of the boxes of one frame (`boxes`) whose candidates
-/// belong to the same object of the map, the one its own view finds most object-like (lowest
-/// p(background | box); ties: the earlier box) keeps its multi-view scores; the others are
-/// duplicates of it, demoted as by Soft-NMS (Bodla et al. 2017) with a Gaussian of the share s of
-/// their area that lies inside the kept box: their object classes are scaled by
-/// exp(-s^2 / kDuplicateSigma), at least by e^-100. A box that frames the object much as the kept
-/// one does, or a part of it inside the kept box (a cereal box's side face, which the fused
-/// evidence calls a cereal box as well), ranks below every detection; a box of the same object
-/// that lies mostly outside the kept one (another of its parts, or the whole object around a
-/// kept sliver of it) keeps most of its score. Their label, the object's, stays. Boxes without an
-/// object (-1), and boxes that do not overlap the kept one, are left alone. Returns the number of
-/// duplicates demoted.
-int demoteDuplicateBoxes(std::vector<RecognitionRecording::Box>* boxes);
-
-/// Reads DETECTIONS of a recorded log and replays it through MultiViewLabeller (`options`: the
-/// objectmap stage's). Throws LogError for a damaged log. Empty when the log has no DETECTIONS.
+/// Joins the DETECTIONS of a recorded log with the object map's outputs (`outputs`: recorded, or
+/// re-run) box by box. Throws LogError for a damaged log. Empty when the log has no DETECTIONS.
 RecognitionRecording readRecognitionRecording(const std::string& log_path, const Channels& channels,
-                                              const ObjectMapOptions& options);
+                                              const ObjectMapOutputs& outputs);
 
 struct RecognitionEvalOptions {
   int stride = 5;  ///< every stride-th frame (the proposals section's frames)
@@ -229,8 +166,7 @@ struct RecognitionEvalOptions {
 };
 
 struct RecognitionResult {
-  RecognitionScores single, multi;
-  RecognitionScores fused;  ///< multi-view ranked by the fused posterior alone (a diagnostic)
+  RecognitionScores single, online, final;
   std::vector<std::string> classes;  ///< evaluated: the model's (background excluded) that the sequence lists
 };
 
@@ -238,8 +174,13 @@ struct RecognitionResult {
 std::vector<std::string> evaluatedClasses(const std::vector<std::string>& model_classes,
                                           const SequenceFolder& sequence);
 
-/// Scores every stride-th frame of the sequence (frames without boxes count: their ground truth is
-/// missed).
+/// The frames of a sequence that are scored: of a continuous video (it has ground-truth poses)
+/// every stride-th frame; of a sequence of separate views (boxes, no poses: each frame was chosen
+/// and annotated on its own, e.g. uw_scenes_v2_public) every frame.
+std::vector<int> framesToScore(const SequenceFolder& sequence, int stride);
+
+/// Scores the frames framesToScore() picks (frames without boxes count: their ground truth is
+/// missed, their boxes are false positives).
 RecognitionResult scoreRecognition(const RecognitionRecording& run, const SequenceFolder& sequence,
                                    const RecognitionEvalOptions& options);
 
