@@ -122,65 +122,6 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
   });
 }
 
-/// The keys' bounds of a set of voxels, per axis: lowest and highest + 1 (empty: lo > hi).
-struct KeyBounds {
-  int64_t lo[3] = {0x10000, 0x10000, 0x10000}, hi[3] = {0, 0, 0};
-  explicit KeyBounds(const std::vector<VoxelKey>& voxels) {
-    for (VoxelKey v : voxels)
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min<int64_t>(lo[k], voxelKeyAxis(v, k));
-        hi[k] = std::max<int64_t>(hi[k], voxelKeyAxis(v, k) + 1);
-      }
-  }
-  bool empty() const { return lo[0] >= hi[0]; }
-  /// Intersection over union of the two boxes (0 if one is empty).
-  double iou(const KeyBounds& o) const {
-    if (empty() || o.empty()) return 0;
-    double va = 1, vb = 1, vi = 1;
-    for (int k = 0; k < 3; ++k) {
-      va *= static_cast<double>(hi[k] - lo[k]);
-      vb *= static_cast<double>(o.hi[k] - o.lo[k]);
-      vi *= static_cast<double>(std::max<int64_t>(0, std::min(hi[k], o.hi[k]) - std::max(lo[k], o.lo[k])));
-    }
-    return vi / (va + vb - vi);
-  }
-  /// Whether the boxes, widened by `margin` voxels, do not touch.
-  bool apart(const KeyBounds& o, int margin) const {
-    for (int k = 0; k < 3; ++k)
-      if (lo[k] >= o.hi[k] + margin || o.lo[k] >= hi[k] + margin) return true;
-    return false;
-  }
-};
-
-/// Intersection over union of the axis-aligned boxes around two sets of voxels (0 if one is empty).
-double boxIou(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
-  return KeyBounds(a).iou(KeyBounds(b));
-}
-
-/// Share of `small`'s voxels that have a voxel of `large` within `radius` voxels on every axis (both
-/// sorted; radius 0: the share they have in common). Semi-dense points are noisy at the scale of a
-/// voxel, so two groups of one object's candidates interleave more than they coincide.
-double nearShare(const std::vector<VoxelKey>& small, const std::vector<VoxelKey>& large, int radius) {
-  if (small.empty()) return 0;
-  radius = std::max(0, radius);
-  size_t near = 0;
-  for (VoxelKey v : small) {
-    bool found = false;
-    for (int dz = -radius; dz <= radius && !found; ++dz)
-      for (int dy = -radius; dy <= radius && !found; ++dy)
-        for (int dx = -radius; dx <= radius && !found; ++dx) {
-          const int64_t x = static_cast<int64_t>(voxelKeyAxis(v, 0)) + dx;
-          const int64_t y = static_cast<int64_t>(voxelKeyAxis(v, 1)) + dy;
-          const int64_t z = static_cast<int64_t>(voxelKeyAxis(v, 2)) + dz;
-          if (x < 0 || y < 0 || z < 0 || x > 0xffff || y > 0xffff || z > 0xffff) continue;
-          const VoxelKey k = packVoxelKey(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(z));
-          found = std::binary_search(large.begin(), large.end(), k);
-        }
-    near += found ? 1 : 0;
-  }
-  return static_cast<double>(near) / static_cast<double>(small.size());
-}
-
 /// The groups of `uf`'s roots, each the concatenation of its members' groups (root = lowest index:
 /// groups stay in order).
 std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vector<int32_t>>& groups, UnionFind& uf) {
@@ -325,67 +266,6 @@ std::vector<VoxelKey> ObjectTable::groupVoxels(const std::vector<int32_t>& group
   return out;
 }
 
-std::vector<std::vector<int32_t>> ObjectTable::mergeSameSpace(std::vector<std::vector<int32_t>> groups,
-                                                              const GroupingOptions& grouping,
-                                                              const GroupVoxels& voxels_of) const {
-  std::vector<const std::vector<VoxelKey>*> sets;
-  std::vector<KeyBounds> bounds;
-  for (const auto& group : groups) {
-    sets.push_back(&voxels_of(group));
-    bounds.emplace_back(*sets.back());
-  }
-  // Pairs whose boxes overlap enough, the largest box IoU first.
-  std::vector<std::tuple<double, size_t, size_t>> pairs;
-  for (size_t i = 0; i < groups.size(); ++i)
-    for (size_t j = i + 1; j < groups.size(); ++j) {
-      const double iou = bounds[i].iou(bounds[j]);
-      if (iou > 0 && iou >= grouping.same_space_box_iou) pairs.emplace_back(-iou, i, j);
-    }
-  std::sort(pairs.begin(), pairs.end());
-  UnionFind uf(groups.size());
-  joinInOrder(pairs, sets, uf, [&](const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
-    const bool a_small = a.size() <= b.size();
-    return KeyBounds(a).iou(KeyBounds(b)) >= grouping.same_space_box_iou &&
-           nearShare(a_small ? a : b, a_small ? b : a, grouping.near_voxels) >= grouping.same_space_overlap;
-  });
-  return concatenateJoined(groups, uf);
-}
-
-std::vector<std::vector<int32_t>> ObjectTable::joinBackgroundParts(
-    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, const GroupVoxels& voxels_of,
-    const std::function<int(const std::vector<int32_t>&)>& label_of,
-    const std::function<std::vector<double>(const std::vector<int32_t>&)>& posterior_of, int background) const {
-  std::vector<int> label(groups.size());
-  std::vector<const std::vector<VoxelKey>*> own;
-  std::vector<KeyBounds> bounds;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    label[g] = label_of(groups[g]);
-    own.push_back(&voxels_of(groups[g]));
-    bounds.emplace_back(*own.back());
-  }
-  // Each part joins the group its voxels are nearest to (the highest share; ties: the first).
-  UnionFind uf(groups.size());
-  for (size_t g = 0; g < groups.size(); ++g) {
-    if (label[g] != background || own[g]->empty()) continue;
-    const std::vector<double> p = posterior_of(groups[g]);  // one per class, like the labels
-    size_t best = groups.size();
-    double best_share = 0;
-    for (size_t h = 0; h < groups.size(); ++h) {
-      if (h == g || label[h] < 0 || label[h] == background || own[h]->size() < own[g]->size() ||
-          p[static_cast<size_t>(label[h])] < grouping.background_part_min_posterior ||
-          bounds[g].apart(bounds[h], grouping.near_voxels))
-        continue;
-      const double share = nearShare(*own[g], *own[h], grouping.near_voxels);
-      if (share >= grouping.background_part_overlap && share > best_share) {
-        best = h;
-        best_share = share;
-      }
-    }
-    if (best < groups.size()) uf.unite(g, best);
-  }
-  return concatenateJoined(groups, uf);
-}
-
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
@@ -408,10 +288,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     const double large = static_cast<double>(std::max(a.size(), b.size()));
     if (!(small > 0)) return false;
     const double share = static_cast<double>(inter) / small;
-    if (share >= grouping.merge_overlap && small >= grouping.merge_size_ratio * large) return true;
-    // The same stretch of space, its voxels only partly the same: one object whose voxels were voted
-    // from different views (a part, or a whole with a stretch of table, has a box of its own size).
-    return grouping.merge_box_iou > 0 && share >= grouping.merge_box_overlap && boxIou(a, b) >= grouping.merge_box_iou;
+    return share >= grouping.merge_overlap && small >= grouping.merge_size_ratio * large;
   };
   std::vector<const std::vector<VoxelKey>*> sets;
   for (const Candidate* c : cands) sets.push_back(&c->voxels);
@@ -455,18 +332,9 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     if (it == group_voxels.end()) it = group_voxels.emplace(members, groupVoxels(members)).first;
     return it->second;
   };
-  if (grouping.same_space_overlap > 0) groups = mergeSameSpace(std::move(groups), grouping, voxels_of);
   const auto label_of = [&](const std::vector<int32_t>& m) { return argmaxClass(fusionOf(m).evidence); };
   if (grouping.same_label_overlap > 0 && num_classes > 1)
     groups = mergeSameLabel(std::move(groups), grouping, voxels_of, label_of, static_cast<int>(num_classes) - 1);
-  if (grouping.background_part_overlap > 0 && num_classes > 1)
-    groups = joinBackgroundParts(
-        std::move(groups), grouping, voxels_of, label_of,
-        [&](const std::vector<int32_t>& m) {
-          const Fused& f = fusionOf(m);
-          return posteriorFromLogEvidence(f.evidence, f.weight, fusion.views_exponent);
-        },
-        static_cast<int>(num_classes) - 1);
 
   // 3. Stable ids: greedily give each previous object's id to the group sharing most of its
   // candidates (ties: lower previous id, then earlier group); the other groups get new ids.

@@ -118,19 +118,6 @@ class ObjectTable {
                                                    const std::function<int(const std::vector<int32_t>&)>& label_of,
                                                    int background) const;
 
-  /// Merges groups whose voxel unions fill the same stretch of space: their bounding boxes overlap
-  /// by same_space_box_iou and same_space_overlap of the smaller's voxels lie within near_voxels of
-  /// the larger's (one object split into groups that no pair of candidates joins); order kept.
-  std::vector<std::vector<int32_t>> mergeSameSpace(std::vector<std::vector<int32_t>> groups,
-                                                   const GroupingOptions& grouping, const GroupVoxels& voxels_of) const;
-  /// A group that `label_of` calls `background`, whose voxels lie within near_voxels of a larger
-  /// group's of an object class c (background_part_overlap of them; the group holding most) and whose
-  /// own posterior gives c at least background_part_min_posterior joins that group: a part of the
-  /// object that its own boxes frame badly; order kept.
-  std::vector<std::vector<int32_t>> joinBackgroundParts(
-      std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, const GroupVoxels& voxels_of,
-      const std::function<int(const std::vector<int32_t>&)>& label_of,
-      const std::function<std::vector<double>(const std::vector<int32_t>&)>& posterior_of, int background) const;
   /// The sorted union of a group's candidates' voxels (update() keeps each group's once: GroupVoxels).
   std::vector<VoxelKey> groupVoxels(const std::vector<int32_t>& group) const;
 

@@ -72,46 +72,22 @@ struct VotingOptions {
 /// candidate seen in few views holds much of the background of its boxes. Two groups of
 /// candidates merge when their voxels overlap by merge_overlap of the smaller group AND the smaller
 /// is at least merge_size_ratio of the larger (a part is not merged into a whole it lies in by
-/// geometry alone), or when their bounding boxes overlap by merge_box_iou and they share
-/// merge_box_overlap of the smaller's voxels (one object voted from different views: the same stretch
-/// of space, one much sparser than the other; a part has a box of its own size). Then groups that are called the same object class (not background) merge when
+/// geometry alone). Then groups that are called the same object class (not background) merge when
 /// they share same_label_overlap of the smaller's voxels: a mug's handle and the mug it belongs to
-/// are one mug (without its label, the handle could as well be part of the table). Groups are also
-/// one object when their boxes overlap by same_space_box_iou and same_space_overlap of the smaller's
-/// voxels lie within near_voxels of the larger's (one object's noisy points, interleaved), and a
-/// group called background joins a larger object group when background_part_overlap of its voxels lie
-/// near it and its own posterior gives that object's class background_part_min_posterior (a part the
-/// boxes frame badly). procs/objectmap/README.md has the measurements.
+/// are one mug (without its label, the handle could as well be part of the table).
+/// procs/objectmap/README.md has the measurements.
 struct GroupingOptions {
   double merge_overlap = 0.8;     ///< share of the smaller group's voxels the two share
   double merge_size_ratio = 0.8;  ///< smaller group / larger group, in voxels
-  double merge_box_iou = 0.7;      ///< or: their bounding boxes overlap by this IoU (<= 0: never)...
-  double merge_box_overlap = 0.5;  ///< ...and they share this share of the smaller group's voxels
   double same_label_overlap = 0.5;  ///< same class: share of the smaller's voxels (<= 0: no such merge)
-  int near_voxels = 1;  ///< voxels, a voxel is near another group's when one of it is this close (each axis)
-  double same_space_overlap = 0.7;  ///< groups: share of the smaller's voxels near the larger's (<= 0: never) ...
-  double same_space_box_iou = 0.5;  ///< ... and their bounding boxes overlap by this IoU
-  double background_part_overlap = 0.9;  ///< a background group this much near an object's joins it (<= 0: never) ...
-  double background_part_min_posterior = 0.3;  ///< ... when its own posterior of the object's class is this high
 
   template <class V>
   void visit(V& v) {
     v("merge_overlap", merge_overlap, "share of the smaller group's voxels both must share");
     v("merge_size_ratio", merge_size_ratio,
       "the smaller group has at least this share of the larger's voxels");
-    v("merge_box_iou", merge_box_iou,
-      "or: two groups whose bounding boxes overlap by this IoU (<= 0: never) ...");
-    v("merge_box_overlap", merge_box_overlap, "... and that share this share of the smaller's voxels");
     v("same_label_overlap", same_label_overlap,
       "groups of the same object class merge when they share this share of the smaller's voxels (<= 0: never)");
-    v("near_voxels", near_voxels, "voxels: a voxel this close (on each axis) to another group's is near it");
-    v("same_space_overlap", same_space_overlap,
-      "groups with this share of the smaller's voxels near the larger's (<= 0: never) ...");
-    v("same_space_box_iou", same_space_box_iou, "... and whose bounding boxes overlap by this IoU are one object");
-    v("background_part_overlap", background_part_overlap,
-      "a group called background with this share of its voxels near a larger object's (<= 0: never) ...");
-    v("background_part_min_posterior", background_part_min_posterior,
-      "... joins it when its own posterior of that object's class is at least this");
   }
 };
 

@@ -144,8 +144,11 @@ TEST(FrameLabels, TheEngineLabelsEveryBoxOfEveryFrame) {
   ASSERT_TRUE(e.onCameraInfo(w.cameraInfo(), &why));
   const auto clouds = w.keyframeClouds(1);
   for (int f = 0; f < 20; ++f) {
-    for (const auto& c : clouds)
-      if (c.seq == f) ASSERT_TRUE(e.onMap(c, &why)) << why;
+    for (const auto& c : clouds) {
+      if (c.seq == f) {
+        ASSERT_TRUE(e.onMap(c, &why)) << why;
+      }
+    }
     ASSERT_TRUE(e.onPose(w.poseMessage(f, 1), &why));
     ASSERT_TRUE(e.onProposals(w.proposals(f, 1), &why));
     const detections_t d = w.detections(f, 1);
@@ -159,7 +162,9 @@ TEST(FrameLabels, TheEngineLabelsEveryBoxOfEveryFrame) {
       ASSERT_EQ(m.log_score[static_cast<size_t>(i)].size(), m.class_names.size());
       const Object* o = e.objectOfCandidate(1, d.candidate_ids[static_cast<size_t>(i)]);
       EXPECT_EQ(m.object_ids[static_cast<size_t>(i)], o ? o->id : -1);
-      if (o) EXPECT_EQ(m.labels[static_cast<size_t>(i)], e.classes()[static_cast<size_t>(o->label)]);
+      if (o) {
+        EXPECT_EQ(m.labels[static_cast<size_t>(i)], e.classes()[static_cast<size_t>(o->label)]);
+      }
     }
   }
   // A malformed message still gets its answer (the map refused it).

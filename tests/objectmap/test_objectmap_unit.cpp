@@ -61,13 +61,6 @@ std::vector<VoxelKey> lineOfVoxels(int from, int to) {
   return k;
 }
 
-// The objects of a table: their candidates -> their label.
-std::map<std::vector<int32_t>, int> labelOfGroups(const ObjectTable& t) {
-  std::map<std::vector<int32_t>, int> g;
-  for (const auto& [id, o] : t.objects()) g[o.candidates] = o.label;
-  return g;
-}
-
 const object_t* findLabel(const object_map_t& m, const std::string& label) {
   for (const auto& o : m.objects)
     if (o.label == label) return &o;
@@ -468,61 +461,6 @@ TEST(ObjectTable, APartIsNotMergedIntoTheWholeItLiesIn) {
   EXPECT_EQ(groups, (std::set<std::vector<int32_t>>{{1}, {2, 4}, {3}}));
 }
 
-// One object whose voxels two candidates voted from different views: as large in space, but one
-// much sparser (seen from far, or in fewer views), and only partly the same voxels. By voxel counts
-// alone it looks like a part of the other; their bounding boxes say it is the same stretch of space.
-// A corner of the object (a part, called something else) still stays apart. merge_box_iou 0 turns
-// this off.
-TEST(ObjectTable, TheSameObjectVotedSparselyFromOtherViewsIsMergedAPartIsNot) {
-  VotingOptions vo;
-  auto cube = [](int x0, int x1, int size, bool checkerboard) {
-    std::vector<VoxelKey> k;
-    for (int x = x0; x < x1; ++x)
-      for (int y = 0; y < size; ++y)
-        for (int z = 0; z < size; ++z)
-          if (!checkerboard || (x + y + z) % 2 == 0) k.push_back(packVoxelKey(40000 + x, 40000 + y, 40000 + z));
-    return k;
-  };
-  auto build = [&](ObjectTable& t) {
-    for (int v = 0; v < 3; ++v) {
-      t.addVotes(1, cube(0, 10, 10, false), vo);  // 1000 voxels
-      t.addVotes(2, cube(1, 11, 10, true), vo);   // 500 voxels, 450 of them shared: 90 % of it
-      t.addVotes(3, cube(0, 4, 4, false), vo);    // a 4 x 4 x 4 corner of the first
-    }
-    // Classes: can, box, background.
-    t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});
-    t.addView(2, View{200, 2, 10, logs({0.3, 0.6, 0.1})});
-    t.addView(3, View{300, 3, 10, logs({0.1, 0.2, 0.7})});
-  };
-  auto groups = [](const ObjectTable& t) {
-    std::set<std::vector<int32_t>> g;
-    for (const auto& [id, o] : t.objects()) g.insert(o.candidates);
-    return g;
-  };
-  GroupingOptions by_box;
-  by_box.merge_box_iou = 0.7;
-  by_box.merge_box_overlap = 0.5;
-  by_box.background_part_overlap = 0;  // the corner is called background
-  int32_t next = 1;
-  ObjectTable t(0.01);
-  build(t);
-  t.update([](VoxelKey) { return true; }, vo, by_box, 3, [&] { return next++; });
-  EXPECT_EQ(groups(t), (std::set<std::vector<int32_t>>{{1, 2}, {3}}));
-  for (const auto& [id, o] : t.objects()) {
-    if (o.candidates.size() == 2) {
-      EXPECT_EQ(o.label, 0) << "the union of the evidence";
-    }
-  }
-
-  GroupingOptions off = by_box;
-  off.merge_box_iou = 0;
-  off.same_space_overlap = 0;
-  ObjectTable u(0.01);
-  build(u);
-  u.update([](VoxelKey) { return true; }, vo, off, 3, [&] { return next++; });
-  EXPECT_EQ(groups(u), (std::set<std::vector<int32_t>>{{1}, {2}, {3}}));
-}
-
 // With the label it is: a mug's handle called mug lies in the mug called mug (one object, the
 // union of their evidence); a bowl-called part of the same mug, and the same geometry called
 // background, stay apart. A candidate called mug without voxels yet joins the mug when its boxes
@@ -550,9 +488,7 @@ TEST(ObjectTable, APartCalledLikeTheWholeItLiesInIsMergedIntoIt) {
   int32_t next = 1;
   ObjectTable t(0.01);
   build(t);
-  GroupingOptions by_label;
-  by_label.background_part_overlap = 0;  // the part called background: next test
-  t.update([](VoxelKey) { return true; }, vo, by_label, 3, [&] { return next++; });
+  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
   std::map<std::vector<int32_t>, const Object*> by_group;
   for (const auto& [id, o] : t.objects()) by_group[o.candidates] = &o;
   ASSERT_EQ(by_group.size(), 4u);
@@ -564,87 +500,12 @@ TEST(ObjectTable, APartCalledLikeTheWholeItLiesInIsMergedIntoIt) {
   EXPECT_NEAR(mug.log_evidence[0], std::log(0.8) + std::log(0.7) + std::log(0.6) + std::log(0.6), 1e-5);
   EXPECT_EQ(mug.num_voxels, 100);
 
-  GroupingOptions off = by_label;
+  GroupingOptions off;
   off.same_label_overlap = 0;
   ObjectTable apart(0.01);
   build(apart);
   apart.update([](VoxelKey) { return true; }, vo, off, 3, [&] { return next++; });
   EXPECT_EQ(apart.objects().size(), 6u);
-}
-
-// A part of an object that its own boxes frame badly (a cereal box's top, a bowl's rim) is called
-// background by its views, though not by far; lying in the object, it is a part of it and joins
-// it, keeping the object's label. A part its views call background surely, and a stretch of table
-// called background that only touches the object, stay apart. background_part_overlap 0 turns
-// this off.
-TEST(ObjectTable, ABackgroundPartOfAnObjectJoinsItATouchingStretchDoesNot) {
-  VotingOptions vo;
-  auto build = [&](ObjectTable& t) {
-    for (int v = 0; v < 3; ++v) {
-      t.addVotes(1, lineOfVoxels(0, 100), vo);    // the box
-      t.addVotes(2, lineOfVoxels(40, 60), vo);    // its top, called background
-      t.addVotes(3, lineOfVoxels(95, 150), vo);   // the table beside it: 6 of 55 voxels near the box
-      t.addVotes(4, lineOfVoxels(10, 30), vo);    // another part, surely background
-    }
-    // Classes: box, can, background.
-    t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});
-    t.addView(1, View{200, 2, 50, logs({0.7, 0.2, 0.1})});
-    t.addView(2, View{300, 3, 10, logs({0.35, 0.05, 0.6})});  // p(box) 0.35 >= 0.3
-    t.addView(3, View{400, 4, 10, logs({0.1, 0.1, 0.8})});
-    t.addView(4, View{500, 5, 10, logs({0.2, 0.1, 0.7})});    // p(box) 0.2
-  };
-  int32_t next = 1;
-  ObjectTable t(0.01);
-  build(t);
-  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
-  EXPECT_EQ(labelOfGroups(t), (std::map<std::vector<int32_t>, int>{{{1, 2}, 0}, {{3}, 2}, {{4}, 2}}));
-
-  GroupingOptions off;
-  off.background_part_overlap = 0;
-  ObjectTable apart(0.01);
-  build(apart);
-  apart.update([](VoxelKey) { return true; }, vo, off, 3, [&] { return next++; });
-  EXPECT_EQ(labelOfGroups(apart), (std::map<std::vector<int32_t>, int>{{{1}, 0}, {{2}, 2}, {{3}, 2}, {{4}, 2}}));
-}
-
-// One object split into two groups that no pair of candidates joins: the semi-dense points of one
-// can, voted from different views, interleave (every other voxel) instead of coinciding, and the
-// two groups call it different things. Nearly all of one group's voxels lie next to the other's and
-// their boxes overlap: one object, the union of the evidence. A can touching it stays apart.
-// same_space_overlap 0 turns this off.
-TEST(ObjectTable, OneObjectWhoseVoxelsInterleaveIsOneObjectItsNeighbourIsNot) {
-  VotingOptions vo;
-  auto cube = [](int x0, int x1, int parity) {
-    std::vector<VoxelKey> k;
-    for (int x = x0; x < x1; ++x)
-      for (int y = 0; y < 10; ++y)
-        for (int z = 0; z < 10; ++z)
-          if (parity < 0 || (x + y + z) % 2 == parity) k.push_back(packVoxelKey(40000 + x, 40000 + y, 40000 + z));
-    return k;
-  };
-  auto build = [&](ObjectTable& t) {
-    for (int v = 0; v < 3; ++v) {
-      t.addVotes(1, cube(0, 10, 0), vo);    // 500 voxels
-      t.addVotes(2, cube(1, 11, 1), vo);    // 500 others, none of them the first's
-      t.addVotes(3, cube(11, 21, -1), vo);  // the neighbour, touching
-    }
-    // Classes: can, box, background.
-    t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});
-    t.addView(2, View{200, 2, 50, logs({0.3, 0.6, 0.1})});
-    t.addView(3, View{300, 3, 50, logs({0.1, 0.8, 0.1})});
-  };
-  int32_t next = 1;
-  ObjectTable t(0.01);
-  build(t);
-  t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
-  EXPECT_EQ(labelOfGroups(t), (std::map<std::vector<int32_t>, int>{{{1, 2}, 0}, {{3}, 1}}));
-
-  GroupingOptions off;
-  off.same_space_overlap = 0;
-  ObjectTable apart(0.01);
-  build(apart);
-  apart.update([](VoxelKey) { return true; }, vo, off, 3, [&] { return next++; });
-  EXPECT_EQ(labelOfGroups(apart), (std::map<std::vector<int32_t>, int>{{{1}, 0}, {{2}, 1}, {{3}, 1}}));
 }
 
 TEST(ObjectTable, RarelyVotedVoxelsAreForgotten) {

@@ -388,8 +388,8 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
     const auto od = outputs.frames.find(m.seq);
     const bool have = od != outputs.frames.end() && od->second.utime == m.utime &&
                       od->second.boxes.size() == m.boxes.size();
-    // (A frame sent twice, as the lockstep source's first frame is, keeps its last outputs; an
-    // empty DETECTIONS has nothing to score.)
+    // (The frame a map starts from is answered twice, empty and then late: its last outputs
+    // count, and an empty DETECTIONS has nothing to score.)
     run.frames_without_object_detections += !have && !m.boxes.empty();
     auto& boxes = run.frames[m.seq];
     boxes.clear();
