@@ -51,9 +51,10 @@ synth: deps build
 sample: deps build
 	scripts/make-sample
 
-# Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set and
-# the training scenes of config/training with the boxes the proposals stage draws on them, full
-# training options of config/train-model.yaml; about 45 minutes here, 19 GB).
+# Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set, the
+# photographed object sets of $(SHARED) when present, and the training scenes of config/training
+# with the boxes the proposals stage draws on them; options of config/train-model.yaml; about
+# 35 minutes here, 2.7 GB peak).
 model: deps build
 	FORCE=1 TRAIN_CONFIG=config/train-model.yaml PROPOSALS=1 scripts/demo-model
 
