@@ -11,8 +11,6 @@ namespace slamaware {
 
 namespace {
 
-constexpr double kMinLogProb = -100.0;
-
 double logMean(const std::vector<double>& p) {
   return std::log(std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / static_cast<double>(p.size())));
 }
@@ -139,7 +137,7 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
       continue;
     }
     l.role = BoxRole::kDuplicate;
-    const double demote = std::max(kMinLogProb, -inside * inside / kDuplicateSigma);
+    const double demote = std::max<double>(kMinLogProb, -inside * inside / kDuplicateSigma);
     for (size_t c = 0; c < bg; ++c) l.log_weight[c] += demote;
   }
   for (auto& l : out) scaleObjectClasses(&l.log_score, l.log_weight);

@@ -9,6 +9,10 @@
 
 namespace slamaware {
 
+/// Log-probabilities are clamped here where the map takes them in: e^-100 is zero for every
+/// purpose, and sums stay finite.
+constexpr float kMinLogProb = -100.f;
+
 /// How the views of an object are fused (ObjectMapOptions: objectness_weights,
 /// posterior_views_exponent; see sumLogProbabilities() and posteriorFromLogEvidence()).
 struct FusionOptions {

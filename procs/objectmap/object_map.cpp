@@ -20,8 +20,6 @@ namespace {
 
 using json = nlohmann::json;
 
-/// Log-probabilities are clamped here: e^-100 is zero for every purpose, and sums stay finite.
-constexpr float kMinLogProb = -100.f;
 /// A log-probability above this is not one (rounding in the producer is allowed for).
 constexpr float kMaxLogProb = 1e-3f;
 
@@ -272,10 +270,14 @@ std::vector<int> ObjectMapEngine::mapClasses(const std::vector<std::string>& nam
     classes_ = std::move(list);
     ++changes_;
   }
-  std::vector<int> to_map(names.size());
+  return classIndices(names);
+}
+
+std::vector<int> ObjectMapEngine::classIndices(const std::vector<std::string>& names) const {
+  std::vector<int> to_map(names.size(), -1);
   for (size_t k = 0; k < names.size(); ++k)
-    to_map[k] =
-        static_cast<int>(std::find(classes_.begin(), classes_.end(), names[k]) - classes_.begin());
+    if (auto it = std::find(classes_.begin(), classes_.end(), names[k]); it != classes_.end())
+      to_map[k] = static_cast<int>(it - classes_.begin());
   return to_map;
 }
 
@@ -482,10 +484,7 @@ object_detections_t ObjectMapEngine::frameDetections(const detections_t& d) cons
   const size_t nb = std::min({d.boxes.size(), d.candidate_ids.size(), d.log_prob.size()});
   // The message's classes in the map's order (a message the map refused may name others: those
   // are left at the floor).
-  std::vector<int> to_map(d.class_names.size(), -1);
-  for (size_t k = 0; k < d.class_names.size(); ++k)
-    for (size_t c = 0; c < nc; ++c)
-      if (d.class_names[k] == classes_[c]) to_map[k] = static_cast<int>(c);
+  const std::vector<int> to_map = classIndices(d.class_names);
   std::vector<FrameBox> boxes(nb);
   for (size_t i = 0; i < nb; ++i) {
     const box_t& b = d.boxes[i];

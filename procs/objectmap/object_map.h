@@ -154,6 +154,8 @@ class ObjectMapEngine {
  private:
   Segment& segmentFor(int32_t slam_map_id);
   std::vector<int> mapClasses(const std::vector<std::string>& names);
+  /// Each name's index in the map's classes (-1: not one of them).
+  std::vector<int> classIndices(const std::vector<std::string>& names) const;
 
   ObjectMapOptions options_;
   CameraModel camera_;

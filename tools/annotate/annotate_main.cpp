@@ -19,6 +19,7 @@
 #include <optional>
 
 #include "common/bus/image_msg.h"
+#include "common/bus/object_detections_msg.h"
 #include "common/bus/log_reader.h"
 #include "common/bus/node.h"
 #include "common/image_codec.h"
@@ -201,8 +202,7 @@ int drawObjects(cv::Mat& img, const object_detections_t& d, const DrawOptions& o
   std::vector<cv::Rect> taken;
   for (int i = 0; i < d.num_boxes; ++i) {
     const size_t k = static_cast<size_t>(i);
-    const std::string& label = d.labels[k];
-    const bool object = d.roles[k] == object_detections_t::PRIMARY && label != "background" && !label.empty();
+    const bool object = isLabelledObject(d, k);
     if (!object && !options.background) continue;
     const box_t& b = d.boxes[k];
     const cv::Rect r(cvRound(b.x), cvRound(b.y), cvRound(b.w), cvRound(b.h));
@@ -211,12 +211,9 @@ int drawObjects(cv::Mat& img, const object_detections_t& d, const DrawOptions& o
       ++drawn;
       continue;
     }
-    const cv::Scalar colour = labelColour(label);
+    const cv::Scalar colour = labelColour(d.labels[k]);
     cv::rectangle(img, r, colour, 2);
-    const auto c = std::find(d.class_names.begin(), d.class_names.end(), label) - d.class_names.begin();
-    char text[96];
-    std::snprintf(text, sizeof(text), "#%d %s %.2f", d.object_ids[k], label.c_str(),
-                  std::exp(d.log_posterior[k][static_cast<size_t>(c)]));
+    const std::string text = objectLabelText(d, k);
     putLabel(img, text, freeLabelPlace(text, r, &taken), colour);
     ++drawn;
   }

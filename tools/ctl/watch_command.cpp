@@ -14,6 +14,7 @@
 #include <string>
 
 #include "common/bus/bus.h"
+#include "common/bus/object_detections_msg.h"
 #include "common/bus/shutdown.h"
 #include "slamaware/detections_t.hpp"
 #include "slamaware/object_detections_t.hpp"
@@ -90,14 +91,8 @@ int runWatch(const NodeArgs& node, double duration_s, double period_s) {
   bus.subscribe<detections_t>(ch.detections, [&](const detections_t&) { s.detections.tick(Clock::now()); });
   bus.subscribe<object_detections_t>(ch.object_detections, [&](const object_detections_t& d) {
     s.in_view.clear();
-    for (size_t i = 0; i < d.labels.size() && i < d.roles.size(); ++i) {
-      if (d.roles[i] != object_detections_t::PRIMARY || d.labels[i] == "background") continue;
-      const auto c = std::find(d.class_names.begin(), d.class_names.end(), d.labels[i]) - d.class_names.begin();
-      char item[96];
-      std::snprintf(item, sizeof(item), "#%d %s %.2f", d.object_ids[i], d.labels[i].c_str(),
-                    std::exp(d.log_posterior[i][static_cast<size_t>(c)]));
-      s.in_view += (s.in_view.empty() ? "" : ", ") + std::string(item);
-    }
+    for (size_t i = 0; i < d.labels.size(); ++i)
+      if (isLabelledObject(d, i)) s.in_view += (s.in_view.empty() ? "" : ", ") + objectLabelText(d, i);
   });
   bus.subscribe<status_t>(ch.statusOf("recognizer"), [&](const status_t& st) { s.dropped = st.frames_dropped; });
   bus.subscribe<object_map_t>(
