@@ -133,6 +133,23 @@ void checkKeys(const YAML::Node& node, const std::string& prefix, const std::set
   }
 }
 
+/// The shortest decimal text that reads back as the same value (0.83, not 0.82999999999999996).
+template <class T>
+std::string shortestText(T value) {
+  std::string text;
+  for (int digits = 6; digits <= std::numeric_limits<T>::max_digits10; ++digits) {
+    std::ostringstream s;
+    s.precision(digits);
+    s << value;
+    text = s.str();
+    std::istringstream back(text);
+    T read{};
+    back >> read;
+    if (read == value) break;
+  }
+  return text;
+}
+
 void emitValue(std::ostringstream& out, const OptionList::Ref& ref) {
   std::visit(
       [&](auto* ptr) {
@@ -144,10 +161,7 @@ void emitValue(std::ostringstream& out, const OptionList::Ref& ref) {
           e << YAML::DoubleQuoted << *ptr;
           out << e.c_str();
         } else if constexpr (std::is_same_v<T, double> || std::is_same_v<T, float>) {
-          std::ostringstream s;
-          s.precision(std::numeric_limits<T>::max_digits10);
-          s << *ptr;
-          out << s.str();
+          out << shortestText(*ptr);
         } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, int64_t> ||
                              std::is_same_v<T, uint64_t>) {
           out << *ptr;
@@ -159,11 +173,10 @@ void emitValue(std::ostringstream& out, const OptionList::Ref& ref) {
               YAML::Emitter e;
               e << YAML::DoubleQuoted << (*ptr)[i];
               out << e.c_str();
+            } else if constexpr (std::is_floating_point_v<typename T::value_type>) {
+              out << shortestText((*ptr)[i]);
             } else {
-              std::ostringstream s;
-              s.precision(17);
-              s << (*ptr)[i];
-              out << s.str();
+              out << (*ptr)[i];
             }
           }
           out << "]";
