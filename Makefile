@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test demo eval bench record synth sample model spy clean
+.PHONY: all deps build test demo eval eval-random bench record synth sample model spy clean
 
 all: build
 
@@ -31,6 +31,13 @@ demo: deps build
 # build/eval/report.{json,md} + plots.
 eval: deps build
 	MODEL="$(MODEL)" scripts/eval $(SEQUENCES)
+
+# Generalisation run: N random scenes from seed SEED (slamaware-synth scene --random), the whole
+# pipeline on each: build/eval-random/report.{json,md}, per-scene figures and the worst scene.
+N ?= 20
+SEED ?= 1
+eval-random: deps build
+	N=$(N) SEED=$(SEED) MODEL="$(MODEL)" scripts/eval-random
 
 # Benchmarks: build/bench/report.json.
 bench: deps build

@@ -28,6 +28,7 @@
 #include "tools/eval/pipeline_run.h"
 #include "tools/eval/proposal_metrics.h"
 #include "tools/eval/recognition_metrics.h"
+#include "tools/eval/scene_spread.h"
 #include "tools/eval/slam_metrics.h"
 
 using namespace slamaware;
@@ -183,6 +184,7 @@ int main(int argc, char** argv) {
 
     nlohmann::json report = nlohmann::json::object();
     std::vector<nlohmann::json> synthetic;
+    std::vector<SceneFolder> synthetic_scenes;
     ProposalScores synthetic_proposals;
     bool any_proposals = false;
     const bool rerun = !proposals_config.empty();
@@ -225,7 +227,10 @@ int main(int argc, char** argv) {
         eo.plot_path = (fs::path(out_dir) / "plots" / (name + "_trajectory.png")).string();
         nlohmann::json slam = evaluateSlam(run, seq, eo);
         for (auto it = slam.begin(); it != slam.end(); ++it) section[it.key()] = it.value();
-        if (isSyntheticSequence(seq)) synthetic.push_back(slam);
+        if (isSyntheticSequence(seq)) {
+          synthetic.push_back(slam);
+          synthetic_scenes.push_back({name, dir});
+        }
         spdlog::info("{}: tracked {}%, ATE {} m ({}% of path), {} maps", name,
                      slam.value("tracked_pct", 0.0), slam.value("ate_rmse", 0.0),
                      slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
@@ -285,6 +290,15 @@ int main(int argc, char** argv) {
                    "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
       report["overall"]["single_view"]["plot"] = report["overall"]["multi_view_online"]["plot"] =
           report["overall"]["multi_view_final"]["plot"] = plot;
+    }
+    if (synthetic_scenes.size() >= 2) {
+      nlohmann::json& spread = report["overall"]["per_scene"];
+      spread = perSceneSection(report, synthetic_scenes,
+                               (fs::path(out_dir) / "plots" / "per_scene_recall.png").string());
+      for (const char* key : {"recall_iou50", "tracked_pct", "single_view_mAP", "multi_view_final_mAP"})
+        if (spread.contains(key) && spread[key].contains("worst"))
+          spdlog::info("per scene {}: median {:.1f}, worst {:.1f} ({})", key, spread[key]["median"].get<double>(),
+                       spread[key]["min"].get<double>(), spread[key]["worst"]["config"].get<std::string>());
     }
     std::ofstream(out) << report.dump(2) << "\n";
     return failures ? 1 : 0;

@@ -185,6 +185,36 @@ void classesRuntimeTable(const nlohmann::json& report, std::ostringstream& md) {
   }
 }
 
+// The spread over the scenes of a run (overall.per_scene): a row per scene, then per figure its
+// median and its worst scene with the config that reproduces it.
+void perSceneTable(const nlohmann::json& report, std::ostringstream& md) {
+  const nlohmann::json& spread = at(report, "overall", "per_scene");
+  if (!spread.is_object() || !spread.contains("scenes")) return;
+  static const char* kColumns[] = {"recall_iou50",    "boxes_per_frame",       "tracked_pct",
+                                   "single_view_mAP", "multi_view_online_mAP", "multi_view_final_mAP"};
+  md << "## Per scene\n\n| scene |";
+  for (const char* c : kColumns) md << " " << c << " |";
+  md << "\n|---|";
+  for (size_t i = 0; i < std::size(kColumns); ++i) md << "---|";
+  md << "\n";
+  for (const auto& row : spread["scenes"]) {
+    md << "| " << row.value("scene", "?") << " |";
+    for (const char* c : kColumns) md << " " << (row.contains(c) ? cell(row[c]) : "–") << " |";
+    md << "\n";
+  }
+  md << "\n| figure | median | min | max | worst scene (config) |\n|---|---|---|---|---|\n";
+  for (const char* c : kColumns) {
+    if (!spread.contains(c)) continue;
+    const nlohmann::json& f = spread[c];
+    md << "| " << c << " | " << cell(f["median"]) << " | " << cell(f["min"]) << " | " << cell(f["max"]) << " | "
+       << (f.contains("worst") ? f["worst"].value("config", "") : std::string("–")) << " |\n";
+  }
+  if (spread.contains("recall_iou50") && spread["recall_iou50"].contains("plot"))
+    md << "\nScenes under 85 % proposals recall: " << cell(spread["recall_iou50"]["scenes_below_85"])
+       << "; histogram: " << spread["recall_iou50"]["plot"].get<std::string>() << "\n";
+  md << "\n";
+}
+
 }  // namespace
 
 std::string renderMarkdown(const nlohmann::json& report) {
@@ -192,6 +222,7 @@ std::string renderMarkdown(const nlohmann::json& report) {
   md << "# slamaware report\n\n";
   recognitionTables(report, md);
   classesRuntimeTable(report, md);
+  perSceneTable(report, md);
   // Per-sequence sections: one table per section name, a row per sequence.
   if (report.contains("sequences") && report["sequences"].is_object()) {
     std::set<std::string> sections;
