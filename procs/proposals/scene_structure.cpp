@@ -309,10 +309,11 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
     if (!f.patches.empty()) found.push_back(std::move(f));
   }
 
-  // The support: a near-horizontal structure plane (when up is known) and its region: its dense
-  // cells within support_radius of where the views look. With a look-at point, of the planes
-  // just under it, the one with most points there (what the views aim at stands on it; the floor
-  // is far below; a slice through the tops of the objects has few points). Else the plane the
+  // The support: a near-horizontal structure plane (when up is known) and its region: its
+  // dense cells within support_radius of where the views look. With a look-at point, of the
+  // planes with points there from support_below over it to max_height under it, the nearest to
+  // it: what the views aim at stands on it. Not the one with most points there: the floor around
+  // a small table seen from afar holds more than the table top. Else the plane the
   // optical axes hit first, where it has points, most often, around the mean of those hits.
   // Without views (the algorithm alone, in tests), the largest patch of the largest plane.
   const float cos_tilt = static_cast<float>(std::cos(o.support_max_tilt_deg * M_PI / 180.0));
@@ -331,10 +332,20 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
         }
   } else {
     if (priors.has_look_at) {
-      size_t most = 0;
+      // The level nearest to the look-at point, then of the planes at that level (within
+      // support_below of it: a plane fitted through the same table top at a tilt) the one with
+      // most points there.
+      std::vector<std::pair<float, size_t>> level;  // |h|, plane
       for (size_t k = 0; k < found.size(); ++k) {
         const float h = found[k].plane.distance(priors.look_at);
         if (!horizontal(found[k]) || h < -o.support_below || h > o.max_height) continue;
+        if (!found[k].cellsNear(priors.look_at, radius, cell).empty()) level.emplace_back(std::abs(h), k);
+      }
+      float nearest = std::numeric_limits<float>::infinity();
+      for (const auto& [h, k] : level) nearest = std::min(nearest, h);
+      size_t most = 0;
+      for (const auto& [h, k] : level) {
+        if (h > nearest + o.support_below) continue;
         std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, radius, cell);
         const size_t n = found[k].pointsIn(cells);
         if (n > most) {

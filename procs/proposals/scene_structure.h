@@ -62,12 +62,13 @@ struct StructureStats {
 };
 
 /// Splits `points` (filtered, lengths of `o` already scaled) into structure and the rest: up to
-/// o.max_planes planes by RANSAC (on o.ransac_points of them); the parts of a plane whose connected patch is larger than an
-/// object (o.structure_extent) are structure and removed. The support is the near-horizontal
-/// structure plane (normal within o.support_max_tilt_deg of the views' up) that the views' optical
-/// axes hit first most often; `support` is set when there is one. Returns the points that are
-/// not structure. `band`, when given, receives the support's own points (its band of
-/// o.support_distance), which are removed.
+/// o.max_planes planes by RANSAC (on o.ransac_points of them); the parts of a plane whose connected
+/// patch is larger than an object (o.structure_extent) are structure and removed. The support is
+/// the near-horizontal structure plane (normal within o.support_max_tilt_deg of the views' up)
+/// nearest under the point the views' optical axes meet (else the one they hit first most
+/// often); `support` is set when there is one. Returns the points that are not structure.
+/// `band`, when given, receives the support's own points (its band of o.support_distance),
+/// which are removed.
 std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
                                       const ViewPriors& priors, const ProposalOptions& o, Support* support,
                                       bool* has_support, StructureStats* stats,
