@@ -13,7 +13,8 @@
 //   };
 //
 // loadConfig<TrackerOptions>(path, "tracker") reads the section "tracker" of a YAML file, rejects
-// unknown keys and ill-typed values with a ConfigError naming key and file, and logs the result.
+// unknown keys, other top-level sections and ill-typed values with a ConfigError naming key and
+// file, and logs the result.
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -109,7 +110,13 @@ template <class Options>
 Options loadConfig(const std::string& path, const std::string& section, bool print) {
   Options options;
   OptionList list = optionListOf(options);
-  if (!path.empty()) ConfigFile(path).load(section, list);
+  if (!path.empty()) {
+    ConfigFile file(path);
+    // A component's file holds its section and nothing else: a misspelt section name is refused
+    // like a misspelt key, not ignored while the component runs on its defaults.
+    if (!section.empty()) file.checkSections({section});
+    file.load(section, list);
+  }
   if (print) logOptions(section.empty() ? "options" : section, path.empty() ? "defaults" : path, list);
   return options;
 }

@@ -64,6 +64,18 @@ std::string errorOf(const std::string& yaml, const std::string& section = "toy")
 
 }  // namespace
 
+TEST(Config, AMisspeltOrForeignSectionIsRefusedNotIgnored) {
+  // `tracking:` where `toy:` was meant: the component must not run on its defaults silently.
+  const std::string misspelt = errorOf("tracking:\n  count: 7\n");
+  EXPECT_NE(misspelt.find("bad.yaml:1"), std::string::npos) << misspelt;
+  EXPECT_NE(misspelt.find("unknown section 'tracking'"), std::string::npos) << misspelt;
+  EXPECT_NE(misspelt.find("known: toy"), std::string::npos) << misspelt;
+  // Beside the right section too.
+  const std::string extra = errorOf("toy:\n  count: 7\nother: {anything: 1}\n");
+  EXPECT_NE(extra.find("bad.yaml:3"), std::string::npos) << extra;
+  EXPECT_NE(extra.find("unknown section 'other'"), std::string::npos) << extra;
+}
+
 TEST(Config, DefaultsWithoutFile) {
   const ToyOptions o = loadConfig<ToyOptions>("", "toy", false);
   EXPECT_EQ(o.count, 3);
@@ -73,8 +85,7 @@ TEST(Config, DefaultsWithoutFile) {
 TEST(Config, LoadsValuesAndNestedSections) {
   const std::string path = writeYaml("ok.yaml",
                                      "toy:\n  count: 7\n  seed: 18446744073709551615\n  ratio: 2\n  name: x\n"
-                                     "  weights: [3.5, 4]\n  tags: [p, q]\n  filter:\n    min_depth: 0.25\n"
-                                     "other: {anything: 1}\n");
+                                     "  weights: [3.5, 4]\n  tags: [p, q]\n  filter:\n    min_depth: 0.25\n");
   const ToyOptions o = loadConfig<ToyOptions>(path, "toy", false);
   EXPECT_EQ(o.count, 7);
   EXPECT_EQ(o.seed, 18446744073709551615ull);
