@@ -335,18 +335,24 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
       // The level nearest to the look-at point, then of the planes at that level (within
       // support_below of it: a plane fitted through the same table top at a tilt) the one with
       // most points there.
-      std::vector<std::pair<float, size_t>> level;  // |h|, plane
+      struct Level {
+        float h;                      // |height| of the look-at point over the plane
+        size_t plane;
+        std::vector<CellKey> cells;   // its dense cells near the look-at point
+      };
+      std::vector<Level> levels;
+      float nearest = std::numeric_limits<float>::infinity();
       for (size_t k = 0; k < found.size(); ++k) {
         const float h = found[k].plane.distance(priors.look_at);
         if (!horizontal(found[k]) || h < -o.support_below || h > o.max_height) continue;
-        if (!found[k].cellsNear(priors.look_at, radius, cell).empty()) level.emplace_back(std::abs(h), k);
-      }
-      float nearest = std::numeric_limits<float>::infinity();
-      for (const auto& [h, k] : level) nearest = std::min(nearest, h);
-      size_t most = 0;
-      for (const auto& [h, k] : level) {
-        if (h > nearest + o.support_below) continue;
         std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, radius, cell);
+        if (cells.empty()) continue;
+        nearest = std::min(nearest, std::abs(h));
+        levels.push_back({std::abs(h), k, std::move(cells)});
+      }
+      size_t most = 0;
+      for (auto& [h, k, cells] : levels) {
+        if (h > nearest + o.support_below) continue;
         const size_t n = found[k].pointsIn(cells);
         if (n > most) {
           most = n;

@@ -25,8 +25,7 @@ constexpr int kFrames = 120;
 
 double recallOfRandomScene(uint64_t seed) {
   const std::string dir = test::tempDir("random_scene_" + std::to_string(seed));
-  synth::SceneOptions options;
-  auto scene = synth::buildRandomScene(seed, 300, kFrames, &options);
+  auto scene = synth::buildRandomScene(seed, 300, kFrames, nullptr);
   synth::writeSceneFolder(*scene, dir + "/sequence", "random", false);
 
   SystemConfig sys;

@@ -1,5 +1,7 @@
 #include "tools/eval/proposal_metrics.h"
 
+#include "tools/eval/stats.h"
+
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -52,13 +54,6 @@ double recallAt(const std::vector<int>& ranks, int k) {
   if (ranks.empty()) return 0.0;
   const auto n = std::count_if(ranks.begin(), ranks.end(), [k](int r) { return r > 0 && r <= k; });
   return 100.0 * static_cast<double>(n) / static_cast<double>(ranks.size());
-}
-
-double median(std::vector<int> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
 void drawPlot(const ProposalScores& sc, const std::string& path) {

@@ -6,6 +6,7 @@
 
 #include "common/image_codec.h"
 #include "tools/eval/plot.h"
+#include "tools/eval/stats.h"
 
 namespace fs = std::filesystem;
 
@@ -29,12 +30,6 @@ const Figure kFigures[] = {
     {"multi_view_online_mAP", "multi_view_online", "mAP", true},
     {"multi_view_final_mAP", "multi_view_final", "mAP", true},
 };
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 void drawHistogram(const std::vector<double>& recalls, const std::string& path) {
   // 5-point bins from 0 to 100 %.
