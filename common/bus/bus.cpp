@@ -50,27 +50,6 @@ void Bus::dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, S
   }
 }
 
-bool Bus::decodeInto(const std::string& channel, const uint8_t* data, size_t size, const char* type,
-                     const std::function<int(const void*, int)>& decode) {
-  int used = -1;
-  try {
-    used = decode(data, static_cast<int>(size));
-  } catch (const std::exception& e) {
-    reject(channel, std::string("cannot decode ") + type + ": " + e.what());
-    return false;
-  }
-  if (used < 0) {
-    reject(channel, std::string("not a valid ") + type + " (" + std::to_string(size) +
-                        " bytes: wrong type, truncated or bad length field)");
-    return false;
-  }
-  if (static_cast<size_t>(used) != size) {
-    reject(channel, std::string(type) + " followed by " + std::to_string(size - used) + " trailing bytes");
-    return false;
-  }
-  return true;
-}
-
 bool Bus::publishRaw(const std::string& channel, const uint8_t* data, size_t size) {
   if (lcm_->publish(channel, data, static_cast<unsigned int>(size)) != 0)
     return publishFailed(channel, "LCM publish failed (" + std::to_string(size) + " bytes)");

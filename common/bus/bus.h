@@ -4,7 +4,9 @@
 // channel's cap, one that fails to decode, or one with bytes left over after decoding is
 // rejected and counted; an exception from a handler is caught and counted. A malformed message
 // never stops a process.
+#include <climits>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
@@ -18,6 +20,35 @@ class ReceiveBuffer;
 }  // namespace lcm
 
 namespace slamaware {
+
+/// Decodes `size` bytes as Msg the way every subscription does: false (and *why) when the bytes
+/// do not decode (wrong type, truncated, a length field larger than the bytes left) or leave
+/// bytes over. Never allocates more than the message's own size allows (lcmtypes/ hardens
+/// lcm-gen's decoders).
+template <class Msg>
+bool decodeMessage(const uint8_t* data, size_t size, Msg* msg, std::string* why) {
+  if (size > static_cast<size_t>(INT32_MAX)) {
+    *why = std::string("a ") + Msg::getTypeName() + " cannot be " + std::to_string(size) + " bytes";
+    return false;
+  }
+  int used = -1;
+  try {
+    used = msg->decode(data, 0, static_cast<int>(size));
+  } catch (const std::exception& e) {
+    *why = std::string("cannot decode ") + Msg::getTypeName() + ": " + e.what();
+    return false;
+  }
+  if (used < 0) {
+    *why = std::string("not a valid ") + Msg::getTypeName() + " (" + std::to_string(size) +
+           " bytes: wrong type, truncated or bad length field)";
+    return false;
+  }
+  if (static_cast<size_t>(used) != size) {
+    *why = std::string(Msg::getTypeName()) + " followed by " + std::to_string(size - used) + " trailing bytes";
+    return false;
+  }
+  return true;
+}
 
 class Bus {
  public:
@@ -49,10 +80,11 @@ class Bus {
         channel,
         [this, handler = std::move(handler)](const RawMessage& raw) {
           Msg msg{};
-          if (!decodeInto(raw.channel, raw.data, raw.size, Msg::getTypeName(), [&](const void* d, int n) {
-                return msg.decode(d, 0, n);
-              }))
+          std::string why;
+          if (!decodeMessage(raw.data, raw.size, &msg, &why)) {
+            reject(raw.channel, why);
             return;
+          }
           handler(msg);
         },
         max_bytes);
@@ -92,8 +124,6 @@ class Bus {
  private:
   struct Subscription;
   static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Subscription* sub);
-  bool decodeInto(const std::string& channel, const uint8_t* data, size_t size, const char* type,
-                  const std::function<int(const void*, int)>& decode);
   bool publishFailed(const std::string& channel, const std::string& why);
   void handlerError(const std::string& channel, const std::string& why);
   void note(const std::string& channel, const std::string& what, const std::string& why);

@@ -86,6 +86,16 @@ TEST_F(Fixture, EveryKindOfMalformedMessageIsRejectedAndCounted) {
   std::vector<uint8_t> zero_string = good;
   zero_string[off + 4] = zero_string[off + 5] = zero_string[off + 6] = zero_string[off + 7] = 0;
   bad.push_back(zero_string);
+  // a string with a NUL inside, and one whose last byte is not its NUL: lcm-gen's decoder kept
+  // them, and its encoder then wrote fewer bytes than getEncodedSize() (a relayed name would
+  // not publish)
+  const size_t first_name = off + 4 + 4;  // "bowl\0" after num_classes and its length
+  std::vector<uint8_t> inner_nul = good;
+  inner_nul[first_name + 1] = 0;
+  bad.push_back(inner_nul);
+  std::vector<uint8_t> unterminated = good;
+  unterminated[first_name + 4] = 'x';
+  bad.push_back(unterminated);
   // trailing bytes
   std::vector<uint8_t> trailing = good;
   trailing.push_back(0);
