@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -37,15 +38,26 @@ std::vector<std::string> splitCsv(const std::string& line) {
   return out;
 }
 
+/// A finite number (nan and inf are refused: no ground-truth value is either).
 double toDouble(const std::string& s, const std::string& path, int line) {
+  double v = 0;
   try {
     size_t used = 0;
-    const double v = std::stod(s, &used);
+    v = std::stod(s, &used);
     if (used != s.size()) throw std::invalid_argument(s);
-    return v;
   } catch (const std::exception&) {
     throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a number");
   }
+  if (!std::isfinite(v)) throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a finite number");
+  return v;
+}
+
+/// A whole number that fits an int (frame numbers, pixel positions).
+int toInt(const std::string& s, const std::string& path, int line) {
+  const double v = toDouble(s, path, line);
+  if (v != std::floor(v) || std::fabs(v) > 1e9)
+    throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a whole number of at most 1e9");
+  return static_cast<int>(v);
 }
 
 bool isImageFile(const fs::path& p) {
@@ -79,6 +91,10 @@ void readCsv(const std::string& path, const std::vector<std::string>& header, Fn
 
 }  // namespace
 
+namespace {
+SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path);
+}  // namespace
+
 SequenceInfo readSequenceInfo(const std::string& path) {
   YAML::Node root;
   try {
@@ -88,11 +104,21 @@ SequenceInfo readSequenceInfo(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": YAML error: " + e.what());
   }
+  // Every value of the wrong type is refused naming the file (yaml-cpp's conversions throw).
+  try {
+    return sequenceInfoOf(root, path);
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(path + ": a value of the wrong type: " + e.what());
+  }
+}
+
+namespace {
+SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path) {
   SequenceInfo info;
   info.name = required<std::string>(root, "name", path);
   info.source = root["source"] ? root["source"].as<std::string>() : "";
   info.fps = required<double>(root, "fps", path);
-  if (!(info.fps > 0)) throw DatasetError(path + ": fps must be positive");
+  if (!(info.fps > 0) || !std::isfinite(info.fps)) throw DatasetError(path + ": fps must be a positive number");
   info.frames = root["frames"] ? root["frames"].as<int>() : 0;
   const YAML::Node cam = root["camera"];
   if (!cam || !cam.IsMap()) throw DatasetError(path + ": missing map 'camera'");
@@ -111,6 +137,7 @@ SequenceInfo readSequenceInfo(const std::string& path) {
   if (root["notes"]) info.notes = root["notes"].as<std::string>();
   return info;
 }
+}  // namespace
 
 void writeSequenceInfo(const std::string& path, const SequenceInfo& info) {
   YAML::Emitter e;
@@ -200,7 +227,7 @@ std::vector<GroundTruthBox> readBoxes(const std::string& path) {
   readCsv(path, {"frame", "x", "y", "w", "h", "class", "instance"},
           [&](const std::vector<std::string>& c, int line) {
             GroundTruthBox b;
-            b.frame = static_cast<int>(toDouble(c[0], path, line));
+            b.frame = toInt(c[0], path, line);
             b.x = toDouble(c[1], path, line);
             b.y = toDouble(c[2], path, line);
             b.w = toDouble(c[3], path, line);
@@ -296,8 +323,8 @@ ObjectSet ObjectSet::open(const std::string& dir) {
           std::getline(in, line);
           const auto cells = splitCsv(line);
           if (cells.size() != 2) throw DatasetError(loc.string() + ": expected 'x,y'");
-          v.loc_x = static_cast<int>(toDouble(cells[0], loc.string(), 1));
-          v.loc_y = static_cast<int>(toDouble(cells[1], loc.string(), 1));
+          v.loc_x = toInt(cells[0], loc.string(), 1);
+          v.loc_y = toInt(cells[1], loc.string(), 1);
           v.has_location = true;
         }
         set.views_.push_back(std::move(v));

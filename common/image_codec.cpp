@@ -1,5 +1,8 @@
 #include "common/image_codec.h"
 
+#include <algorithm>
+#include <climits>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
@@ -12,7 +15,64 @@ bool isPng(const uint8_t* d, size_t n) {
   static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
   return n >= 8 && std::equal(sig, sig + 8, d);
 }
+uint32_t bigEndian(const uint8_t* p, int n) {
+  uint32_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+/// Refuses an image whose header is missing or asks for more than kMaxImagePixels, before any
+/// decoder allocates for it.
+void checkImageHeader(const uint8_t* data, size_t size, const std::string& what) {
+  int w = 0, h = 0;
+  if (!peekImageSize(data, size, &w, &h))
+    throw ImageError(what + ": no image header (JPEG frame header or PNG IHDR) found");
+  if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > kMaxImagePixels)
+    throw ImageError(what + ": the header says " + std::to_string(w) + "x" + std::to_string(h) +
+                     " pixels (at most " + std::to_string(kMaxImagePixels / 1000000) +
+                     " megapixels are decoded)");
+}
 }  // namespace
+
+bool peekImageSize(const uint8_t* data, size_t size, int* width, int* height) {
+  if (isPng(data, size)) {
+    // Signature, then the first chunk must be IHDR: length (4), type (4), width (4), height (4).
+    if (size < 24 || std::memcmp(data + 12, "IHDR", 4) != 0) return false;
+    const uint32_t w = bigEndian(data + 16, 4), h = bigEndian(data + 20, 4);
+    if (w > INT32_MAX || h > INT32_MAX) return false;
+    *width = static_cast<int>(w);
+    *height = static_cast<int>(h);
+    return true;
+  }
+  if (!isJpeg(data, size)) return false;
+  // Markers after SOI: FF xx, then (except for standalone markers) a 2-byte length that counts
+  // itself. The frame header SOFn (C0-CF but C4 DHT, C8 JPG, CC DAC) holds precision (1), height
+  // (2), width (2). Entropy-coded data (after SOS) comes only after the frame header.
+  size_t at = 2;
+  while (at + 4 <= size) {
+    if (data[at] != 0xFF) return false;
+    const uint8_t marker = data[at + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++at;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8)) {  // standalone
+      at += 2;
+      continue;
+    }
+    if (marker == 0xD9 || marker == 0xDA) return false;  // end of image / scan before any frame
+    const size_t length = bigEndian(data + at + 2, 2);
+    if (length < 2) return false;
+    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+      if (length < 7 || at + 9 > size) return false;
+      *height = static_cast<int>(bigEndian(data + at + 5, 2));
+      *width = static_cast<int>(bigEndian(data + at + 7, 2));
+      return true;
+    }
+    at += 2 + length;
+  }
+  return false;
+}
 
 std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality) {
   if (image.empty() || image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 1))
@@ -47,6 +107,8 @@ cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, b
     if (size < 20 || !std::equal(iend, iend + 8, data + size - 8))
       throw ImageError(what + ": truncated PNG (no IEND chunk)");
   }
+  checkImageHeader(data, size, what);
+  if (size > static_cast<size_t>(INT32_MAX)) throw ImageError(what + ": image file over 2 GB");
   cv::Mat img;
   try {
     img = cv::imdecode(cv::Mat(1, static_cast<int>(size), CV_8U, const_cast<uint8_t*>(data)),
@@ -74,7 +136,13 @@ cv::Mat readImage(const std::string& path, bool grey) {
 cv::Mat readImageUnchanged(const std::string& path) {
   const std::vector<uint8_t> bytes = readFile(path);
   if (bytes.empty()) throw ImageError(path + ": empty image file");
-  cv::Mat img = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  checkImageHeader(bytes.data(), bytes.size(), path);
+  cv::Mat img;
+  try {
+    img = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw ImageError(path + ": corrupt image: " + e.what());
+  }
   if (img.empty()) throw ImageError(path + ": corrupt image");
   return img;
 }

@@ -14,6 +14,14 @@ class ImageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The largest image any reader decodes (width x height, 64 megapixels): a header asking for more
+/// is refused before the decoder allocates (a 50-byte PNG can claim 4 gigapixels).
+constexpr int64_t kMaxImagePixels = int64_t{8192} * 8192;
+
+/// Width and height from a JPEG's frame header (SOF) or a PNG's IHDR, without decoding; false when
+/// the bytes hold neither.
+bool peekImageSize(const uint8_t* data, size_t size, int* width, int* height);
+
 /// JPEG bytes of an 8-bit BGR or grey image; quality 1-100.
 std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality);
 /// PNG bytes of an 8- or 16-bit image (BGR, BGRA or grey); compression 0-9.

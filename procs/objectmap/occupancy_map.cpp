@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace slamaware {
 
@@ -206,8 +208,69 @@ std::string OccupancyMap::serialize(const std::function<Rgb(VoxelKey)>& colour) 
   return out.str();
 }
 
+namespace {
+
+/// Checks the bytes of a ColorOcTree file before OctoMap reads them. OctoMap's reader trusts them:
+/// past the end of the data it goes on creating the children a damaged byte asks for, and a chain
+/// deeper than the tree's 16 levels, so 3 kB can make it build millions of nodes or write beyond
+/// its keys. The file: text header lines (comments, "id", "size", "res") up to "data", then each
+/// node depth first as its log-odds (float), colour (3 bytes) and a byte of child flags.
+void checkOctreeFile(const std::string& bytes, const std::string& what) {
+  auto fail = [&](const std::string& why) { throw std::runtime_error(what + ": not a valid OctoMap file: " + why); };
+  if (bytes.rfind("# Octomap OcTree file", 0) != 0) fail("no OctoMap header");
+  size_t at = 0;
+  std::string id;
+  long long declared = -1;
+  double resolution = 0;
+  for (;;) {
+    const size_t end = bytes.find('\n', at);
+    if (end == std::string::npos) fail("the header does not end with 'data'");
+    const std::string line = bytes.substr(at, end - at);
+    at = end + 1;
+    if (line.empty() || line[0] == '#') continue;
+    if (line == "data") break;
+    std::istringstream ls(line);
+    std::string key;
+    ls >> key;
+    if (key == "id") ls >> id;
+    else if (key == "size") ls >> declared;
+    else if (key == "res") ls >> resolution;
+    else fail("unexpected header line '" + line.substr(0, 40) + "'");
+    if (ls.fail()) fail("unreadable header line '" + line.substr(0, 40) + "'");
+  }
+  if (id != "ColorOcTree") fail("tree type '" + id + "', expected ColorOcTree");
+  if (!(resolution > 0) || !std::isfinite(resolution)) fail("resolution is not a positive number");
+  if (declared < 0) fail("no node count");
+  constexpr int kDepth = 16;        // OctoMap's tree depth: nodes at this level have no children
+  constexpr size_t kNodeBytes = 8;  // float log-odds, r, g, b, child flags
+  long long nodes = 0;
+  if (declared > 0) {
+    std::vector<int> pending = {0};  // depths of the nodes still to read, depth first
+    while (!pending.empty()) {
+      const int depth = pending.back();
+      pending.pop_back();
+      if (bytes.size() - at < kNodeBytes) fail("the data end inside node " + std::to_string(nodes));
+      float log_odds;
+      std::memcpy(&log_odds, bytes.data() + at, sizeof(float));
+      if (!std::isfinite(log_odds)) fail("node " + std::to_string(nodes) + " has no finite occupancy");
+      const auto children = static_cast<uint8_t>(bytes[at + 7]);
+      at += kNodeBytes;
+      ++nodes;
+      if (children && depth == kDepth) fail("a node below the deepest level");
+      for (int i = 0; i < 8; ++i)
+        if (children & (1u << i)) pending.push_back(depth + 1);
+    }
+  }
+  if (at != bytes.size()) fail(std::to_string(bytes.size() - at) + " bytes after the last node");
+  if (nodes != declared)
+    fail("the header says " + std::to_string(declared) + " nodes, the data hold " + std::to_string(nodes));
+}
+
+}  // namespace
+
 OccupancyMap OccupancyMap::deserialize(const std::string& bytes, const OccupancyOptions& options,
                                        const std::string& what) {
+  checkOctreeFile(bytes, what);
   std::istringstream in(bytes);
   // OctoMap reports progress and problems on std::cerr: keep them for the error message only.
   std::ostringstream chatter;

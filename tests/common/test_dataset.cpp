@@ -115,14 +115,24 @@ TEST(Dataset, BadFoldersAreRefusedWithTheFileNamed) {
   std::ofstream(dir + "/timestamps.txt") << "0 0.5\n7 1.0\n";
   EXPECT_NE(errorOf().find("timestamps.txt:2"), std::string::npos) << errorOf();
   fs::remove(dir + "/timestamps.txt");
-  std::ofstream(dir + "/boxes.csv") << "frame,x,y,w,h,class,instance\n0,1,2,3,abc,bowl,bowl_1\n";
   const SequenceFolder seq = SequenceFolder::open(dir);
-  try {
-    seq.boxes();
-    FAIL();
-  } catch (const DatasetError& e) {
-    EXPECT_NE(std::string(e.what()).find("boxes.csv:2"), std::string::npos) << e.what();
+  // Not numbers, numbers that are not finite, and frame numbers beyond int (were undefined
+  // behaviour in the conversion: found by fuzz_datasets).
+  for (const char* row : {"0,1,2,3,abc,bowl,bowl_1", "0,1,2,3,nan,bowl,bowl_1", "0,1,inf,3,4,bowl,bowl_1",
+                          "1e300,1,2,3,4,bowl,bowl_1", "1.5,1,2,3,4,bowl,bowl_1"}) {
+    std::ofstream(dir + "/boxes.csv") << "frame,x,y,w,h,class,instance\n" << row << "\n";
+    try {
+      seq.boxes();
+      ADD_FAILURE() << row << " must be refused";
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("boxes.csv:2"), std::string::npos) << e.what();
+    }
   }
+  // A value of the wrong type in sequence.yaml names the file (yaml-cpp's own exception escaped).
+  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\nframes: many\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
+  EXPECT_NE(errorOf().find("sequence.yaml"), std::string::npos) << errorOf();
+  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: .inf\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
+  EXPECT_NE(errorOf().find("fps"), std::string::npos) << errorOf();
 }
 
 TEST(Dataset, ObjectSetLayoutErrors) {

@@ -64,6 +64,36 @@ TEST(ImageCodec, CorruptDataIsRefused) {
   EXPECT_NE(errorOf(png).find("truncated PNG"), std::string::npos);
 }
 
+// A header asking for more pixels than any camera gives is refused before the decoder allocates
+// for it (OpenCV would try up to a gigapixel: 3 GB from a 60-byte file).
+TEST(ImageCodec, AHeaderAskingForAGiantImageIsRefusedBeforeDecoding) {
+  auto errorOf = [](const std::vector<uint8_t>& d) -> std::string {
+    try {
+      decodeImage(d.data(), d.size(), "frame.png");
+    } catch (const ImageError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  auto png = encodePng(testImage());
+  int w = 0, h = 0;
+  ASSERT_TRUE(peekImageSize(png.data(), png.size(), &w, &h));
+  EXPECT_EQ(w, testImage().cols);
+  EXPECT_EQ(h, testImage().rows);
+  for (int i = 16; i < 24; ++i) png[i] = 0;
+  png[17] = png[21] = 0x01;  // 65536 x 65536
+  const std::string png_error = errorOf(png);
+  EXPECT_NE(png_error.find("65536x65536"), std::string::npos) << png_error;
+  EXPECT_NE(png_error.find("frame.png"), std::string::npos) << png_error;
+  auto jpeg = encodeJpeg(testImage(), 90);
+  ASSERT_TRUE(peekImageSize(jpeg.data(), jpeg.size(), &w, &h));
+  EXPECT_EQ(w, testImage().cols);
+  size_t sof = 2;
+  while (!(jpeg[sof] == 0xFF && jpeg[sof + 1] == 0xC0)) sof += 2 + (jpeg[sof + 2] << 8 | jpeg[sof + 3]);
+  jpeg[sof + 5] = jpeg[sof + 6] = jpeg[sof + 7] = jpeg[sof + 8] = 0xEA;  // 60138 x 60138
+  EXPECT_NE(errorOf(jpeg).find("60138x60138"), std::string::npos) << errorOf(jpeg);
+}
+
 TEST(ImageCodec, MissingFileNamed) {
   try {
     readImage("/nonexistent/frame.png");

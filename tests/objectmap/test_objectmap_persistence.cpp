@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -16,6 +18,7 @@
 
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
+#include "procs/objectmap/occupancy_map.h"
 #include "tests/objectmap/synthetic_world.h"
 #include "tests/support/test_support.h"
 
@@ -422,4 +425,53 @@ TEST(MapFiles, ExportWritesTheNewestGoodMapAsMapOtAndAnObjectTable) {
   EXPECT_EQ(empty.wait(60s), 1);
   EXPECT_NE(empty.log().find("no usable map to export"), std::string::npos) << empty.log();
   EXPECT_FALSE(fs::exists(dir + "/out2/map.ot"));
+}
+
+// OctoMap's reader trusts a tree file: past the end of its data it goes on creating the children a
+// damaged flag byte asks for (a 3 kB file took minutes and gigabytes: found by fuzz_map_store).
+// Such files are refused, quickly, naming the file and what is wrong; the intact file loads.
+TEST(MapFiles, DamagedTreeBytesBehindAGoodChecksumAreRefusedQuickly) {
+  OccupancyMap map(OccupancyOptions{}, 0.04);
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 50; ++i) points.emplace_back(0.01f * i, 0.02f * (i % 7), 1.0f);
+  const Eigen::Vector3f origin(0, 0, 0);
+  map.insert(points, &origin);
+  const std::string good = map.serialize([](VoxelKey) { return Rgb{1, 2, 3}; });
+  const size_t data = good.find("\ndata\n") + 6;
+  ASSERT_NE(data, std::string::npos + 6);
+  EXPECT_NO_THROW(OccupancyMap::deserialize(good, OccupancyOptions{}, "seg1.ot"));
+  auto errorOf = [](const std::string& bytes) -> std::string {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string error;
+    try {
+      OccupancyMap::deserialize(bytes, OccupancyOptions{}, "seg1.ot");
+    } catch (const std::runtime_error& e) {
+      error = e.what();
+    }
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
+    return error;
+  };
+  std::string children_past_end = good;
+  children_past_end.back() = static_cast<char>(0xFF);  // the last leaf (depth 16) asks for 8 children
+  EXPECT_NE(errorOf(children_past_end).find("seg1.ot: not a valid OctoMap file: a node below the deepest level"),
+            std::string::npos)
+      << errorOf(children_past_end);
+  std::string root_asks_more = good;
+  root_asks_more[data + 7] = static_cast<char>(0xFF);  // the root asks for every child
+  EXPECT_NE(errorOf(root_asks_more).find("seg1.ot"), std::string::npos);
+  std::string first_leaf_deep = good;  // every node a chain of first children: deeper than 16
+  for (size_t at = data + 7; at < first_leaf_deep.size(); at += 8) first_leaf_deep[at] = 1;
+  EXPECT_NE(errorOf(first_leaf_deep).find("seg1.ot"), std::string::npos);
+  EXPECT_NE(errorOf(good.substr(0, good.size() - 3)).find("the data end inside node"), std::string::npos);
+  EXPECT_NE(errorOf(good + "xy").find("bytes after the last node"), std::string::npos);
+  std::string nan_node = good;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(&nan_node[data], &nan, sizeof(float));
+  EXPECT_NE(errorOf(nan_node).find("no finite occupancy"), std::string::npos);
+  std::string other_size = good;
+  other_size.replace(other_size.find("size "), 5, "size 1");
+  EXPECT_NE(errorOf(other_size).find("the header says"), std::string::npos);
+  std::string other_type = good;
+  other_type.replace(other_type.find("id ColorOcTree"), 14, "id OcTree");
+  EXPECT_NE(errorOf(other_type).find("expected ColorOcTree"), std::string::npos);
 }
