@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test demo eval eval-random bench record synth sample model spy clean
+.PHONY: all deps build test test-sanitize fuzz soak chaos demo eval eval-random bench record synth sample model spy clean
 
 all: build
 
@@ -19,6 +19,28 @@ build: $(BUILD)/CMakeCache.txt
 
 test: deps build
 	cd $(BUILD) && ctest --output-on-failure --timeout 1200 $(CTEST_ARGS)
+
+# The whole test suite built with AddressSanitizer + UBSan in $(SAN_BUILD) (scripts/test-sanitize):
+# any memory error, leak or undefined behaviour fails the test that hit it.
+SAN_BUILD ?= build-sanitize
+test-sanitize: deps
+	BUILD=$(SAN_BUILD) JOBS=$(JOBS) scripts/test-sanitize $(CTEST_ARGS)
+
+# Every fuzz target (tests/fuzz) for SECONDS s each, clang + libFuzzer + ASan/UBSan in $(FUZZ_BUILD).
+SECONDS ?= 60
+FUZZ_BUILD ?= build-fuzz
+fuzz: deps
+	BUILD=$(FUZZ_BUILD) JOBS=$(JOBS) scripts/fuzz $(SECONDS)
+
+# The supervised system on logs/sample.lcm (or SOURCE=...) looping in real time for MINUTES, in a
+# private network namespace: memory, CPU, latency, restarts in $(BUILD)/soak/ (report.json, rss.png).
+# `make chaos` adds kills, a hang and a damaged map save: $(BUILD)/chaos/ (tools/soak/README.md).
+soak: MINUTES ?= 30
+soak: deps build
+	scripts/netns-run $(BUILD)/bin/slamaware-soak --minutes $(MINUTES) --source $(SOURCE) --out-dir $(BUILD)/soak
+chaos: MINUTES ?= 10
+chaos: deps build
+	scripts/netns-run $(BUILD)/bin/slamaware-soak --chaos --minutes $(MINUTES) --source $(SOURCE) --out-dir $(BUILD)/chaos
 
 # The whole pipeline on the bundled sample (or SOURCE=...), in a private network namespace
 # unless NETNS=0 (then it runs on the host bus, ttl=0, for lcm-spy to watch).
