@@ -70,7 +70,7 @@ class ObjectMapNode {
         options_(options),
         engine_(options),
         store_(options.persistence.dir) {
-    deferRegrouping();
+    configureEngine();
     const size_t max_msg = static_cast<size_t>(sys.bus.max_message_bytes);
     bus_.subscribe<camera_info_t>(
         ch_.camera_info,
@@ -130,7 +130,7 @@ class ObjectMapNode {
       return;
     }
     engine_ = std::move(*loaded.engine);
-    deferRegrouping();
+    configureEngine();
     saved_changes_ = engine_.changes();
     status_.setCounter("loaded_generation", report.generation);
     status_.setCounter("load_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
@@ -228,9 +228,11 @@ class ObjectMapNode {
   }
 
   /// Real time, deferred: regroups what the inputs since the last regrouping changed.
-  void deferRegrouping() {
+  /// Real time defers regrouping; long insertions keep the heartbeat going while they progress.
+  void configureEngine() {
     deferred_ = !lockstep_ && options_.regroup_period_s > 0;
     engine_.deferRegrouping(deferred_);
+    engine_.setProgress([this] { status_.tick(); });
   }
   void regroup() {
     if (!deferred_ || !engine_.regroupPending()) return;

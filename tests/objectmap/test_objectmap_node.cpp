@@ -4,11 +4,13 @@
 // over two replays, with saves going on.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
+#include <thread>
 
 #include "common/bus/bus.h"
 #include "procs/objectmap/map_store.h"
@@ -252,6 +254,50 @@ TEST(ObjectMapNode, RealTimeRegroupsAtMostEveryPeriodAndAQueryFirst) {
   EXPECT_TRUE(node.running()) << node.log();
 }
 
+// A full cloud of a large map takes the node seconds to insert; its heartbeat must go on while
+// the work progresses, or the supervisor takes it for hung and kills it (found by the soak: the
+// object map was killed every 10 s once a looping replay's map had grown, and lost its map each
+// time). The heartbeat goes out between keyframe batches.
+TEST(ObjectMapNode, TheHeartbeatGoesOnWhileALargeCloudIsInserted) {
+  const std::string dir = test::tempDir("objectmap_node_heartbeat");
+  {
+    std::ofstream f(dir + "/objectmap.yaml");
+    f << "objectmap:\n  occupancy:\n    free_band: 0\n    max_range: 0\n  persistence:\n    dir: " << dir
+      << "/map\n    save_period_s: 600\n";
+  }
+  Client c;
+  std::vector<std::chrono::steady_clock::time_point> beats;
+  c.bus.subscribeRaw("OBJECTMAP_STATUS", [&](const Bus::RawMessage&) { beats.push_back(std::chrono::steady_clock::now()); });
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config", dir + "/objectmap.yaml",
+                           "--lcm-url", test::testUrl()},
+                          dir + "/node.log");
+  ASSERT_TRUE(c.waitRunning()) << node.log();
+  test::SyntheticWorldOptions o;
+  o.spacing = 0.0012;  // dense: every ray from its keyframe, a few seconds of work
+  o.keyframes = 40;
+  o.radius = 3;
+  const test::SyntheticWorld w(o, test::SyntheticWorld::defaultObjects());
+  c.bus.publish("CAMERA_INFO", w.cameraInfo());
+  const point_cloud_t cloud = w.fullCloud(1);
+  c.pump([] { return false; }, 1500ms);
+  beats.clear();
+  const auto sent = std::chrono::steady_clock::now();
+  c.bus.publish("SLAM_MAP", cloud);
+  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "clouds") >= 1; }, 120s)) << node.log();
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+  ASSERT_GT(took, 3.0) << "the cloud must take longer than the heartbeat period several times over ("
+                       << cloud.num_points << " points)";
+  double longest = 0;
+  auto previous = sent;
+  for (const auto& b : beats) {
+    longest = std::max(longest, std::chrono::duration<double>(b - previous).count());
+    previous = b;
+  }
+  EXPECT_LT(longest, 2.5) << "no heartbeat for " << longest << " s while a cloud of " << cloud.num_points
+                          << " points took " << took << " s";
+  EXPECT_TRUE(node.running()) << node.log();
+}
+
 TEST(ObjectMapNode, CountsMalformedMessagesOnEveryInputAndKeepsRunning) {
   const std::string dir = test::tempDir("objectmap_node_bad");
   Client c;
@@ -311,13 +357,52 @@ namespace {
 // Plays the world lockstep through a node: frame f goes out when OBJECT_MAP f - 1 came back.
 // Frame 5 has no boxes and frame 7's detections are refused (repeated class names): both are
 // still answered. Returns the OBJECT_MAP messages (and the OBJECT_DETECTIONS in *labelled).
+// With `flood`, another sender publishes malformed messages on every input channel all the while
+// (up to 5,000 per second, twenty times the pipeline's own message rate: truncated, random, wrong
+// type, a huge length field, and 25 per second over the size cap, which the node is given at
+// 64 kB); *flooded counts them. (A flood beyond what LCM can read, about 30,000 small messages per
+// second here, or one message larger than the socket buffer, makes the kernel drop datagrams
+// without regard to what they carry: that is UDP's limit, not the node's.)
 std::vector<object_map_t> playLockstep(const std::string& dir, int frames,
-                                       std::vector<object_detections_t>* labelled = nullptr) {
+                                       std::vector<object_detections_t>* labelled = nullptr,
+                                       bool flood = false, int64_t* flooded = nullptr) {
   Client c;
-  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config",
-                           writeConfig(dir, 0.005), "--lcm-url", test::testUrl(), "--lockstep"},
-                          dir + "/node.log");
+  std::vector<std::string> argv = {test::binPath("slamaware-objectmap"), "--config", writeConfig(dir, 0.005),
+                                   "--lcm-url", test::testUrl(), "--lockstep"};
+  if (flood) {
+    std::ofstream(dir + "/system.yaml") << "bus:\n  max_message_bytes: 65536\n";
+    argv.insert(argv.end(), {"--system", dir + "/system.yaml"});
+  }
+  test::ChildProcess node(argv, dir + "/node.log");
   EXPECT_TRUE(c.waitRunning()) << node.log();
+  std::atomic<bool> stop{false};
+  std::atomic<int64_t> sent{0};
+  std::thread flooder;
+  if (flood)
+    flooder = std::thread([&] {
+      Bus junk_bus(test::testUrl());
+      const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+      const std::vector<uint8_t> good = encode(w.detections(3, 1));
+      std::vector<std::vector<uint8_t>> junk;
+      junk.emplace_back(good.begin(), good.end() - 7);  // truncated
+      std::vector<uint8_t> huge = good;                 // num_classes = 2^31 - 1
+      huge[24] = 0x7f, huge[25] = huge[26] = huge[27] = 0xff;
+      junk.push_back(huge);
+      junk.emplace_back(300, 0xA5);                     // random-looking
+      junk.push_back(encode(status_t{}));               // a type no input carries
+      junk.emplace_back(size_t{100} << 10, 0);          // over the size cap (64 kB here)
+      const std::vector<std::string> inputs = {"CAMERA_INFO", "SLAM_MAP", "SLAM_POSE", "PROPOSALS", "DETECTIONS"};
+      size_t i = 0;
+      while (!stop) {
+        for (int burst = 0; burst < 5; ++burst, ++i) {
+          const auto& j = junk[i % (junk.size() - 1)];
+          const auto& bytes = i % 200 == 0 ? junk.back() : j;
+          junk_bus.publishRaw(inputs[i % inputs.size()], bytes.data(), bytes.size());
+          ++sent;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    });
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
   c.bus.publish("CAMERA_INFO", w.cameraInfo());
   const auto clouds = w.keyframeClouds(1);
@@ -338,6 +423,13 @@ std::vector<object_map_t> playLockstep(const std::string& dir, int frames,
     if (!answered) break;
   }
   c.pump([] { return false; }, 300ms);  // nothing more may come
+  stop = true;
+  if (flooder.joinable()) flooder.join();
+  if (flooded) *flooded = sent;
+  if (flood) {
+    c.pump([&] { return c.status && counter(*c.status, "rejected.DETECTIONS") > 0; }, 3s);
+    EXPECT_TRUE(c.status && c.status->rejected > 0) << "the flood is seen and counted";
+  }
   EXPECT_TRUE(node.running()) << node.log();
   EXPECT_EQ(node.stop(), 0) << node.log();
   if (labelled) *labelled = c.frames;
@@ -372,4 +464,25 @@ TEST(ObjectMapNode, LockstepAnswersEachDetectionsOnceWithTheSameBytesEveryReplay
   ASSERT_EQ(labelled_b.size(), labelled_a.size());
   for (size_t i = 0; i < labelled_a.size(); ++i)
     EXPECT_EQ(encode(labelled_b[i]), encode(labelled_a[i])) << "OBJECT_DETECTIONS " << i;
+}
+
+TEST(ObjectMapNode, AFloodOfMalformedMessagesNeitherStarvesNorChangesTheLockstepOutputs) {
+  const int frames = 12;
+  std::vector<object_detections_t> quiet_frames, flooded_frames;
+  const auto quiet = playLockstep(test::tempDir("objectmap_node_quiet"), frames, &quiet_frames);
+  int64_t flooded = 0;
+  const std::string dir = test::tempDir("objectmap_node_flood");
+  const auto noisy = playLockstep(dir, frames, &flooded_frames, true, &flooded);
+  EXPECT_GT(flooded, 1000) << "the flood ran during the whole replay";
+  ASSERT_EQ(noisy.size(), quiet.size()) << "every real input was answered in spite of the flood";
+  for (size_t i = 0; i < quiet.size(); ++i) EXPECT_EQ(encode(noisy[i]), encode(quiet[i])) << "OBJECT_MAP " << i;
+  ASSERT_EQ(flooded_frames.size(), quiet_frames.size());
+  for (size_t i = 0; i < quiet_frames.size(); ++i)
+    EXPECT_EQ(encode(flooded_frames[i]), encode(quiet_frames[i])) << "OBJECT_DETECTIONS " << i;
+  // The log names the problem, but at most once per channel per period, not once per message.
+  std::ifstream log(dir + "/node.log");
+  int lines = 0;
+  for (std::string line; std::getline(log, line);) lines += line.find("rejected message") != std::string::npos;
+  EXPECT_GE(lines, 1);
+  EXPECT_LE(lines, 40) << "a flood must not flood the log";
 }

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "common/bus/log_reader.h"
+#include "tools/eval/child_process.h"
 #include "common/dataset.h"
 #include "slamaware/keyframe_t.hpp"
 #include "slamaware/point_cloud_t.hpp"
@@ -26,81 +27,6 @@ namespace slamaware {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// A child process with stdout and stderr in a file.
-class Child {
- public:
-  Child(const std::vector<std::string>& argv, const std::string& output) {
-    std::string line;
-    for (const auto& a : argv) line += a + " ";
-    spdlog::debug("start: {}", line);
-    const pid_t parent = getpid();
-    pid_ = fork();
-    if (pid_ == 0) {
-      // A stage outlives no evaluation or bench that was killed: it gets SIGTERM (and saves, as
-      // at any stop) when the process that started it dies.
-      prctl(PR_SET_PDEATHSIG, SIGTERM);
-      if (getppid() != parent) _exit(127);
-      const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd >= 0) {
-        dup2(fd, 1);
-        dup2(fd, 2);
-        close(fd);
-      }
-      std::vector<char*> args;
-      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      execvp(args[0], args.data());
-      _exit(127);
-    }
-  }
-  ~Child() { stop(std::chrono::milliseconds(2000)); }
-  Child(const Child&) = delete;
-
-  bool running() {
-    if (pid_ <= 0 || exited_) return false;
-    struct rusage usage {};
-    if (wait4(pid_, &status_, WNOHANG, &usage) == pid_) {
-      exited_ = true;
-      max_rss_kb_ = usage.ru_maxrss;
-      cpu_s_ = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-               1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-    }
-    return !exited_;
-  }
-  /// Exit code, or -1 if it did not exit within the timeout.
-  int wait(std::chrono::milliseconds timeout) {
-    const auto end = Clock::now() + timeout;
-    while (running()) {
-      if (Clock::now() > end) return -1;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_);
-  }
-  /// SIGINT, then SIGKILL after `grace`.
-  int stop(std::chrono::milliseconds grace) {
-    if (!running())
-      return exited_ ? (WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_)) : -1;
-    kill(pid_, SIGINT);
-    int rc = wait(grace);
-    if (rc == -1) {
-      kill(pid_, SIGKILL);
-      rc = wait(std::chrono::milliseconds(2000));
-    }
-    return rc;
-  }
-  /// Peak resident memory in kB, once the process has exited.
-  long maxRssKb() const { return max_rss_kb_; }
-  /// CPU time (user + system, every thread) in s, once the process has exited.
-  double cpuSeconds() const { return cpu_s_; }
-
- private:
-  pid_t pid_ = -1;
-  int status_ = 0;
-  bool exited_ = false;
-  long max_rss_kb_ = 0;
-  double cpu_s_ = 0;
-};
 
 SE3 poseOf(const double position[3], const double orientation[4]) {
   return se3FromArrays(position, orientation);
@@ -154,13 +80,13 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     wait_for += (wait_for.empty() ? "" : ",") + system.channels.statusOf(s.name);
   }
 
-  Child logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path},
+  ChildProcess logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path},
                log_path + ".logger.txt");
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lcm-logger has no ready signal
   // Every process reads the caller's system.yaml (its channels and scheduling; the bus URL and
   // lockstep mode are given on the command line).
   const std::string& system_yaml = options.system_path;
-  std::vector<std::unique_ptr<Child>> procs;
+  std::vector<std::unique_ptr<ChildProcess>> procs;
   for (const auto& s : stages) {
     std::vector<std::string> argv = {(fs::path(options.bin_dir) / ("slamaware-" + s.name)).string(),
                                      "--lcm-url", options.lcm_url, "--log-level", "warn"};
@@ -181,7 +107,7 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
       argv.push_back("--map-dir");
       argv.push_back(options.objectmap_dir);
     }
-    procs.push_back(std::make_unique<Child>(argv, log_path + "." + s.name + ".txt"));
+    procs.push_back(std::make_unique<ChildProcess>(argv, log_path + "." + s.name + ".txt"));
   }
   std::vector<std::string> camera_argv = {(fs::path(options.bin_dir) / "slamaware-camera").string(),
                                           "--source", sequence_dir, "--wait-for", wait_for,
@@ -192,7 +118,7 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   } else {
     camera_argv.insert(camera_argv.end(), {"--lockstep", result.lockstep_channel});
   }
-  Child camera(camera_argv, log_path + ".camera.txt");
+  ChildProcess camera(camera_argv, log_path + ".camera.txt");
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(
       1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, frames))));
   const int camera_rc = camera.wait(timeout);

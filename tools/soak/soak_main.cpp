@@ -1,0 +1,402 @@
+// slamaware-soak: the whole system under its supervisor for a long time, on a recording played in
+// real time in a loop, watched from the bus: memory and CPU of every process (PROC_STATUS),
+// frames, latency camera -> DETECTIONS, restarts. With --chaos it also attacks the system as a
+// robot's life would: SIGKILL of a random pipeline process every 20-40 s, one SIGSTOP longer than
+// the heartbeat timeout, and once the object map's newest save damaged while the map process is
+// stopped. Writes report.json, report.md and rss.png (tools/soak/README.md).
+#include <signal.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <random>
+#include <regex>
+#include <set>
+#include <yaml-cpp/yaml.h>
+
+#include "common/bus/bus.h"
+#include "common/bus/frame_stamp.h"
+#include "common/bus/log_reader.h"
+#include "common/bus/system_config.h"
+#include "common/dataset.h"
+#include "common/image_codec.h"
+#include "slamaware/object_map_t.hpp"
+#include "slamaware/proc_command_t.hpp"
+#include "slamaware/proc_status_t.hpp"
+#include "tools/eval/child_process.h"
+#include "tools/eval/plot.h"
+#include "tools/eval/stats.h"
+
+namespace fs = std::filesystem;
+using namespace slamaware;
+using json = nlohmann::json;
+
+namespace {
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/// Frames of one pass over the source (the camera's seq goes on counting when it loops).
+int64_t framesOfSource(const std::string& source) {
+  if (fs::is_directory(source)) return static_cast<int64_t>(SequenceFolder::open(source).size());
+  int64_t n = 0;
+  LogReader reader(source);
+  while (auto r = reader.next()) n += r->channel == "CAMERA";
+  return n;
+}
+
+/// The system file the soak runs: the given one with the camera looping its source and the
+/// process logs in the soak's folder.
+std::string writeSoakSystem(const std::string& system, const std::string& out_dir) {
+  YAML::Node root = YAML::LoadFile(system);
+  bool camera = false;
+  for (auto p : root["processes"])
+    if (p["name"].as<std::string>() == "camera") {
+      p["command"].push_back("--loop");
+      camera = true;
+    }
+  if (!camera) throw std::runtime_error(system + ": no process named camera to loop");
+  root["supervisor"]["log_dir"] = out_dir + "/logs";
+  const std::string path = out_dir + "/system.yaml";
+  std::ofstream(path) << YAML::Dump(root) << "\n";
+  return path;
+}
+
+struct Sample {
+  double t;
+  int64_t rss_kb;
+  double cpu_pct;
+};
+
+struct ChaosEvent {
+  std::string kind;  ///< "kill", "stop", "corrupt"
+  std::string process;
+  double t = 0;
+  int old_pid = 0;
+  double back_s = -1;   ///< until it runs again with a new pid (-1: not back)
+  double limit_s = 0;   ///< the target for back_s
+  std::string detail;
+  std::set<int32_t> saved_objects;  ///< objects in the save it must reload
+  std::set<int32_t> lost_objects;   ///< of those, not in its first OBJECT_MAP after the restart
+  bool map_checked = false;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
+}
+
+/// Object ids of a saved generation's JSON (the content's "objects"); empty if unreadable.
+std::set<int32_t> savedObjects(const std::string& path) {
+  std::ifstream in(path);
+  std::string header, rest;
+  std::set<int32_t> ids;
+  try {
+    const json doc = json::parse(in);
+    for (const auto& o : doc.at("content").at("objects")) ids.insert(o.at("id").get<int32_t>());
+  } catch (const std::exception&) {
+  }
+  return ids;
+}
+
+/// The newest objectmap-<generation>.json of a folder ("" if none).
+std::string newestSave(const std::string& dir, const std::string& skip = "") {
+  static const std::regex pattern(R"(objectmap-(\d+)\.json)");
+  std::string best;
+  long long best_g = -1;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    std::smatch m;
+    const std::string name = e.path().filename().string();
+    if (std::regex_match(name, m, pattern) && std::stoll(m[1]) > best_g && e.path().string() != skip) {
+      best_g = std::stoll(m[1]);
+      best = e.path().string();
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"slamaware-soak: the supervised system for a long time on a looping recording (and --chaos)"};
+  double minutes = 30;
+  bool chaos = false;
+  std::string source = "logs/sample.lcm", system = "config/system.yaml", out_dir, bin_dir = "build/bin";
+  uint32_t seed = 1;
+  double window_min = 5;
+  app.add_option("--minutes", minutes, "duration")->check(CLI::PositiveNumber);
+  app.add_flag("--chaos", chaos, "kill, stop and damage as described at the top of tools/soak/soak_main.cpp");
+  app.add_option("--source", source, "recording or sequence folder, played in real time in a loop");
+  app.add_option("--system", system, "system.yaml of the supervisor");
+  app.add_option("--bin-dir", bin_dir, "where slamaware-supervisor is");
+  app.add_option("--out-dir", out_dir, "report, logs, object map (default build/soak or build/chaos)");
+  app.add_option("--seed", seed, "seed of the chaos schedule");
+  app.add_option("--window-min", window_min, "minutes per latency window")->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+  if (out_dir.empty()) out_dir = chaos ? "build/chaos" : "build/soak";
+  try {
+    fs::remove_all(out_dir);
+    fs::create_directories(out_dir + "/logs");
+    const int64_t loop_frames = framesOfSource(source);
+    if (loop_frames <= 0) throw std::runtime_error(source + ": no camera frames");
+    const SystemConfig sys = loadSystemConfig(system, false);
+    const Channels& ch = sys.channels;
+    const std::string soak_system = writeSoakSystem(system, out_dir);
+    const std::string map_dir = out_dir + "/objectmap";
+    setenv("SLAMAWARE_SOURCE", source.c_str(), 1);
+    setenv("SLAMAWARE_MAP_DIR", map_dir.c_str(), 1);
+
+    Bus bus(sys.bus.url);
+    std::map<std::string, proc_info_t> procs;  // latest PROC_STATUS row per process
+    std::map<std::string, std::vector<Sample>> samples;
+    std::map<int32_t, double> camera_at;        // seq -> wall time of reception
+    std::vector<std::pair<double, double>> latency;  // (t, s) camera -> DETECTIONS
+    int64_t camera_frames = 0, poses = 0, detections = 0, fused = 0, max_seq = -1;
+    std::optional<object_map_t> last_map;
+    double last_map_t = -1;
+    const double t0 = now_s();
+    bus.subscribe<proc_status_t>(ch.proc_status, [&](const proc_status_t& s) {
+      const double t = now_s() - t0;
+      for (const auto& p : s.procs) {
+        procs[p.name] = p;
+        auto& v = samples[p.name];
+        if (v.empty() || t - v.back().t >= 0.9) v.push_back({t, p.rss_kb, p.cpu_pct});
+      }
+    });
+    bus.subscribeRaw(ch.camera, [&](const Bus::RawMessage& m) {
+      if (auto st = peekFrameStamp(m.data, m.size)) {
+        camera_at[st->seq] = now_s();
+        max_seq = std::max<int64_t>(max_seq, st->seq);
+        ++camera_frames;
+      }
+    }, static_cast<size_t>(sys.bus.max_image_bytes));
+    bus.subscribeRaw(ch.slam_pose, [&](const Bus::RawMessage&) { ++poses; });
+    bus.subscribeRaw(ch.detections, [&](const Bus::RawMessage& m) {
+      if (auto st = peekFrameStamp(m.data, m.size)) {
+        ++detections;
+        auto it = camera_at.find(st->seq);
+        if (it != camera_at.end()) latency.emplace_back(now_s() - t0, now_s() - it->second);
+      }
+    });
+    bus.subscribeRaw(ch.object_detections, [&](const Bus::RawMessage&) { ++fused; });
+    bus.subscribe<object_map_t>(ch.object_map, [&](const object_map_t& m) {
+      last_map = m;
+      last_map_t = now_s() - t0;
+    });
+    auto pump = [&](double seconds) {
+      const double end = now_s() + seconds;
+      while (now_s() < end) bus.handle(20);
+      while (camera_at.size() > 2000) camera_at.erase(camera_at.begin());
+    };
+    auto command = [&](const std::string& target, int8_t what) {
+      proc_command_t c{};
+      c.utime = wallUtime();
+      c.target = target;
+      c.command = what;
+      bus.publish(ch.proc_command, c);
+    };
+
+    spdlog::info("soak{}: {} min on {} ({} frames per loop), reports in {}", chaos ? " with chaos" : "", minutes,
+                 source, loop_frames, out_dir);
+    ChildProcess supervisor({bin_dir + "/slamaware-supervisor", "--system", soak_system, "--log-level", "warn"},
+                            out_dir + "/supervisor.log");
+    const std::vector<std::string> pipeline = {"slam", "proposals", "recognizer", "objectmap"};
+    std::mt19937 rng(seed);
+    std::vector<ChaosEvent> events;
+    const double duration = minutes * 60;
+    double next_kill = 30 + std::uniform_real_distribution<double>(0, 10)(rng);
+    const double stop_at = duration * 0.35, corrupt_at = duration * 0.65;
+    bool stopped_once = false, corrupted_once = false;
+    double first_loop_end = -1;
+    std::optional<ChaosEvent> pending;  // waiting for its process to come back
+
+    auto running = [&](const std::string& name, int old_pid) {
+      auto it = procs.find(name);
+      return it != procs.end() && it->second.state == proc_info_t::STATE_RUNNING && it->second.pid != old_pid &&
+             it->second.pid > 0;
+    };
+    while (now_s() - t0 < duration) {
+      pump(0.05);
+      const double t = now_s() - t0;
+      if (first_loop_end < 0 && max_seq >= loop_frames) first_loop_end = t;
+      if (!chaos) continue;
+      if (pending) {
+        if (running(pending->process, pending->old_pid)) {
+          pending->back_s = t - pending->t;
+          if (pending->process == "objectmap" && !pending->saved_objects.empty()) {
+            // Its first OBJECT_MAP after the restart must hold every object of the save it loaded.
+            const double since = t;
+            while (now_s() - t0 < since + 5 && !(last_map && last_map_t > since)) pump(0.05);
+            if (last_map && last_map_t > since) {
+              std::set<int32_t> now_ids;
+              for (const auto& o : last_map->objects) now_ids.insert(o.id);
+              for (int32_t id : pending->saved_objects)
+                if (!now_ids.count(id)) pending->lost_objects.insert(id);
+              pending->map_checked = true;
+            }
+          }
+          spdlog::info("chaos: {} {} back after {:.2f} s", pending->kind, pending->process, pending->back_s);
+          events.push_back(*pending);
+          pending.reset();
+        } else if (t - pending->t > pending->limit_s + 30) {
+          spdlog::warn("chaos: {} {} not back after {:.0f} s", pending->kind, pending->process, t - pending->t);
+          events.push_back(*pending);
+          pending.reset();
+        }
+        continue;
+      }
+      auto pidOf = [&](const std::string& name) { return procs.count(name) ? procs[name].pid : 0; };
+      if (!stopped_once && t >= stop_at) {
+        ChaosEvent e;
+        e.kind = "stop", e.process = "proposals", e.t = t, e.old_pid = pidOf("proposals");
+        if (e.old_pid > 0 && kill(e.old_pid, SIGSTOP) == 0) {
+          e.limit_s = 10 + 2;  // heartbeat_timeout_s of config/system.yaml + 2 s
+          e.detail = "SIGSTOP; the supervisor must find it hung and restart it";
+          spdlog::info("chaos: SIGSTOP proposals (pid {})", e.old_pid);
+          pending = e;
+        }
+        stopped_once = true;
+      } else if (!corrupted_once && t >= corrupt_at) {
+        corrupted_once = true;
+        const int old_pid = pidOf("objectmap");
+        command("objectmap", proc_command_t::COMMAND_STOP);
+        const double asked = now_s();
+        while (now_s() - asked < 15 && procs["objectmap"].state != proc_info_t::STATE_STOPPED) pump(0.05);
+        const std::string newest = newestSave(map_dir);
+        const std::string previous = newestSave(map_dir, newest);
+        ChaosEvent e;
+        e.kind = "corrupt", e.process = "objectmap", e.old_pid = old_pid;
+        e.limit_s = 2;
+        if (!newest.empty()) {
+          std::fstream f(newest, std::ios::in | std::ios::out | std::ios::binary);
+          f.seekp(static_cast<std::streamoff>(fs::file_size(newest) / 2));
+          f.put('#');
+          e.saved_objects = savedObjects(previous);
+          e.detail = "damaged " + fs::path(newest).filename().string() + " while stopped; must load " +
+                     fs::path(previous).filename().string();
+        } else {
+          e.detail = "no save to damage yet";
+        }
+        spdlog::info("chaos: {}", e.detail);
+        command("objectmap", proc_command_t::COMMAND_START);
+        e.t = now_s() - t0;
+        pending = e;
+      } else if (t >= next_kill) {
+        const std::string name = pipeline[rng() % pipeline.size()];
+        ChaosEvent e;
+        e.kind = "kill", e.process = name, e.t = t, e.old_pid = pidOf(name);
+        if (name == "objectmap") e.saved_objects = savedObjects(newestSave(map_dir));
+        if (e.old_pid > 0 && kill(e.old_pid, SIGKILL) == 0) {
+          e.limit_s = 2;
+          spdlog::info("chaos: SIGKILL {} (pid {})", name, e.old_pid);
+          pending = e;
+        }
+        next_kill = t + std::uniform_real_distribution<double>(20, 40)(rng);
+      }
+    }
+    // Still producing detections at the end?
+    const int64_t detections_before = detections;
+    pump(5);
+    const int64_t detections_at_end = detections - detections_before;
+    std::map<std::string, proc_info_t> final_procs = procs;
+    supervisor.stop(std::chrono::milliseconds(20000));
+
+    // Report.
+    json report;
+    report["minutes"] = minutes;
+    report["chaos"] = chaos;
+    report["source"] = source;
+    report["frames_per_loop"] = loop_frames;
+    report["loops"] = static_cast<double>(max_seq + 1) / static_cast<double>(loop_frames);
+    report["first_loop_end_s"] = first_loop_end;
+    report["frames"] = {{"camera", camera_frames},
+                        {"slam_pose", poses},
+                        {"detections", detections},
+                        {"object_detections", fused},
+                        {"frames_without_pose", camera_frames - poses},
+                        {"frames_without_detections", camera_frames - detections},
+                        {"detections_in_last_5_s", detections_at_end}};
+    const double base_from = first_loop_end > 0 ? first_loop_end : duration / 3;
+    for (const auto& [name, v] : samples) {
+      auto median_between = [&](double a, double b) {
+        std::vector<double> r;
+        for (const auto& s : v)
+          if (s.t >= a && s.t < b) r.push_back(static_cast<double>(s.rss_kb) / 1024.0);
+        return r.empty() ? 0.0 : median(r);
+      };
+      const double after_first = median_between(base_from, base_from + 30);
+      const double at_end = median_between(duration - 30, duration + 1);
+      std::vector<double> cpu;
+      for (const auto& s : v)
+        if (s.t >= base_from) cpu.push_back(s.cpu_pct);
+      json p;
+      p["rss_mb_after_first_loop"] = after_first;
+      p["rss_mb_at_end"] = at_end;
+      p["rss_growth_pct"] = after_first > 0 ? 100.0 * (at_end - after_first) / after_first : 0.0;
+      p["cpu_pct_mean"] = cpu.empty() ? 0.0 : std::accumulate(cpu.begin(), cpu.end(), 0.0) / static_cast<double>(cpu.size());
+      p["restarts"] = final_procs.count(name) ? final_procs[name].restarts : -1;
+      report["processes"][name] = p;
+    }
+    const double window = window_min * 60;
+    std::vector<double> p95s;
+    for (double a = 0; a < duration; a += window) {
+      std::vector<double> w;
+      for (const auto& [t, l] : latency)
+        if (t >= a && t < a + window) w.push_back(l * 1000);
+      if (w.empty()) continue;
+      const double p95 = percentile(w, 0.95);
+      report["latency_windows"].push_back({{"from_s", a}, {"frames", w.size()}, {"p95_ms", p95}, {"median_ms", percentile(w, 0.5)}});
+      if (a + window <= duration + 1) p95s.push_back(p95);
+    }
+    const double p95_spread = p95s.size() > 1 ? *std::max_element(p95s.begin(), p95s.end()) /
+                                                     *std::min_element(p95s.begin(), p95s.end()) - 1
+                                              : 0;
+    report["latency_p95_spread_pct"] = 100 * p95_spread;
+    for (const auto& e : events) {
+      json j = {{"kind", e.kind}, {"process", e.process}, {"at_s", e.t}, {"back_s", e.back_s}, {"limit_s", e.limit_s},
+                {"detail", e.detail}};
+      if (!e.saved_objects.empty()) {
+        j["saved_objects"] = e.saved_objects.size();
+        j["map_checked"] = e.map_checked;
+        j["lost_objects"] = std::vector<int32_t>(e.lost_objects.begin(), e.lost_objects.end());
+      }
+      report["chaos_events"].push_back(j);
+    }
+    std::ofstream(out_dir + "/report.json") << report.dump(2) << "\n";
+
+    // RSS over time.
+    double max_mb = 1;
+    for (const auto& [name, v] : samples)
+      for (const auto& s : v) max_mb = std::max(max_mb, static_cast<double>(s.rss_kb) / 1024.0);
+    cv::Mat canvas(480, 900, CV_8UC3, cv::Scalar(255, 255, 255));
+    {
+      PlotAxis x{0, duration / 60, false, {}, "minutes"}, y{0, max_mb * 1.1, false, {}, "resident memory, MB"};
+      for (double m = 0; m <= duration / 60; m += std::max(1.0, std::round(duration / 600))) x.ticks.push_back(m);
+      for (double m = 0; m <= max_mb * 1.1; m += std::max(50.0, std::round(max_mb / 500) * 100)) y.ticks.push_back(m);
+      PlotPanel panel(canvas, cv::Rect(0, 0, 900, 480), x, y, "RSS per process (PROC_STATUS, 1 Hz)");
+      const cv::Scalar colours[] = {{200, 80, 0}, {0, 140, 255}, {60, 160, 60}, {40, 40, 220}, {160, 60, 160}, {90, 90, 90}};
+      int c = 0;
+      for (const auto& [name, v] : samples) {
+        std::vector<cv::Point2d> pts;
+        for (const auto& s : v) pts.emplace_back(s.t / 60, static_cast<double>(s.rss_kb) / 1024.0);
+        panel.curve(pts, colours[c++ % 6], name);
+      }
+    }
+    writeImage(out_dir + "/rss.png", canvas);
+    std::printf("%s\n", report.dump(2).c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}
