@@ -198,7 +198,6 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
     r.insert.dropped += s.dropped;
     r.insert.occupied_updates += s.occupied_updates;
     r.insert.free_updates += s.free_updates;
-    if (progress_) progress_();
   }
   seg.dirty = true;
   ++changes_;
@@ -770,7 +769,6 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
   fresh.regroup();
   fresh.changes_ = 0;
   fresh.defer_regrouping_ = defer_regrouping_;
-  fresh.progress_ = progress_;
   *this = std::move(fresh);
 }
 

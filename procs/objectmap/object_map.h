@@ -20,7 +20,6 @@
 // is grouped again); in real time the node defers it (deferRegrouping()) and calls regroup() at
 // most every regroup_period_s, before answering a query and before the last save.
 #include <cstdint>
-#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -131,10 +130,6 @@ class ObjectMapEngine {
   /// true: DETECTIONS only collect evidence and votes, and the objects change at regroup() (real
   /// time); false (the default: lockstep, the evaluator): regrouped after every DETECTIONS.
   void deferRegrouping(bool defer) { defer_regrouping_ = defer; }
-  /// Called between the keyframe batches of a cloud (a full cloud of a large map takes seconds):
-  /// the node keeps its heartbeat going while the work makes progress, so that the supervisor
-  /// tells a long insertion from a hang. Nothing of the map depends on it.
-  void setProgress(std::function<void()> progress) { progress_ = std::move(progress); }
   /// Whether inputs since the last regrouping may change the objects.
   bool regroupPending() const;
   /// Regroups the segments whose voxels or evidence changed (after each input unless deferred, and
@@ -179,7 +174,6 @@ class ObjectMapEngine {
   int32_t last_seq_ = -1;
   int64_t changes_ = 0;
   bool defer_regrouping_ = false;
-  std::function<void()> progress_;
   int64_t regroupings_ = 0;
 };
 

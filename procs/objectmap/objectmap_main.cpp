@@ -22,6 +22,7 @@
 
 #include "common/atomic_file.h"
 #include "common/bus/bus.h"
+#include "common/bus/busy_heartbeat.h"
 #include "common/bus/node.h"
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
@@ -58,6 +59,10 @@ LoadedMap loadNewestMap(MapStore& store, const ObjectMapOptions& options) {
   for (const auto& f : l.report.failures) spdlog::error("refused {}", f);
   return l;
 }
+
+/// s a heartbeat goes on during one long piece of work (load, insertion, regrouping, save) before
+/// it stops and the supervisor may take the process for hung.
+constexpr double kBusyLimitS = 120;
 
 class ObjectMapNode {
  public:
@@ -119,7 +124,11 @@ class ObjectMapNode {
       return;
     }
     const auto t0 = Clock::now();
-    LoadedMap loaded = loadNewestMap(store_, options_);
+    LoadedMap loaded;
+    {
+      BusyHeartbeat busy(status_, kBusyLimitS);  // a large map takes seconds to load
+      loaded = loadNewestMap(store_, options_);
+    }
     const LoadReport& report = loaded.report;
     if (!report.failures.empty()) {
       status_.count("load_failures", static_cast<int64_t>(report.failures.size()));
@@ -164,7 +173,12 @@ class ObjectMapNode {
   void onMap(const point_cloud_t& m) {
     std::string why;
     CloudReport r;
-    if (!engine_.onMap(m, &why, &r)) {
+    bool inserted;
+    {
+      BusyHeartbeat busy(status_, kBusyLimitS);  // a full cloud of a large map takes seconds
+      inserted = engine_.onMap(m, &why, &r);
+    }
+    if (!inserted) {
       bus_.reject(ch_.slam_map, why);
       return;
     }
@@ -228,16 +242,18 @@ class ObjectMapNode {
   }
 
   /// Real time, deferred: regroups what the inputs since the last regrouping changed.
-  /// Real time defers regrouping; long insertions keep the heartbeat going while they progress.
+  /// Real time defers regrouping.
   void configureEngine() {
     deferred_ = !lockstep_ && options_.regroup_period_s > 0;
     engine_.deferRegrouping(deferred_);
-    engine_.setProgress([this] { status_.tick(); });
   }
   void regroup() {
     if (!deferred_ || !engine_.regroupPending()) return;
     const auto t0 = Clock::now();
-    engine_.regroup();
+    {
+      BusyHeartbeat busy(status_, kBusyLimitS);
+      engine_.regroup();
+    }
     last_regroup_ = Clock::now();
     status_.setCounter("regroup_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
   }
@@ -248,6 +264,7 @@ class ObjectMapNode {
     const int64_t changes = engine_.changes();
     try {
       const auto t0 = Clock::now();
+      BusyHeartbeat busy(status_, kBusyLimitS);
       const MapSnapshot snapshot = engine_.snapshot();
       const SaveReport r = store_.save(snapshot);
       const double ms = secondsSince(t0) * 1000;

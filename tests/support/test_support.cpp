@@ -16,6 +16,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "common/dataset.h"
+#include "common/spawn.h"
 #include "common/image_codec.h"
 
 namespace fs = std::filesystem;
@@ -40,21 +41,7 @@ std::string tempDir(const std::string& name) {
 std::string testUrl() { return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"; }
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& log_path) : log_path_(log_path) {
-  pid_ = fork();
-  if (pid_ == 0) {
-    const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) {
-      dup2(fd, 1);
-      dup2(fd, 2);
-      close(fd);
-    }
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    execvp(args[0], args.data());
-    std::perror("exec");
-    _exit(127);
-  }
+  pid_ = spawnWithOutput(argv, log_path, false);
 }
 
 ChildProcess::~ChildProcess() {

@@ -2,10 +2,8 @@
 // A child process of a tool (the evaluator's stages, the soak's supervisor) with its stdout and
 // stderr in a file. It gets SIGTERM when the tool dies, and is stopped (SIGINT, then SIGKILL) when
 // this object goes.
-#include <fcntl.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
-#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,6 +13,8 @@
 #include <thread>
 #include <vector>
 
+#include "common/spawn.h"
+
 namespace slamaware {
 
 class ChildProcess {
@@ -23,25 +23,8 @@ class ChildProcess {
     std::string line;
     for (const auto& a : argv) line += a + " ";
     spdlog::debug("start: {}", line);
-    const pid_t parent = getpid();
-    pid_ = fork();
-    if (pid_ == 0) {
-      // A stage outlives no evaluation or bench that was killed: it gets SIGTERM (and saves, as
-      // at any stop) when the process that started it dies.
-      prctl(PR_SET_PDEATHSIG, SIGTERM);
-      if (getppid() != parent) _exit(127);
-      const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd >= 0) {
-        dup2(fd, 1);
-        dup2(fd, 2);
-        close(fd);
-      }
-      std::vector<char*> args;
-      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      execvp(args[0], args.data());
-      _exit(127);
-    }
+    // A stage outlives no evaluation or bench that was killed.
+    pid_ = spawnWithOutput(argv, output, true);
   }
   ~ChildProcess() { stop(std::chrono::milliseconds(2000)); }
   ChildProcess(const ChildProcess&) = delete;
