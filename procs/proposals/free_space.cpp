@@ -9,7 +9,10 @@ namespace slamaware {
 
 namespace {
 
-int64_t binKey(int64_t u, int64_t v) { return (u << 32) ^ (v & 0xFFFFFFFF); }
+// Shifted as unsigned: a left shift of a negative bin was undefined behaviour (UBSan).
+int64_t binKey(int64_t u, int64_t v) {
+  return static_cast<int64_t>((static_cast<uint64_t>(u) << 32) ^ (static_cast<uint64_t>(v) & 0xFFFFFFFFu));
+}
 
 // A keyframe's rays: per angular bin, the nearest point it seeded in that direction.
 struct Rays {

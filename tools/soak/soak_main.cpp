@@ -234,9 +234,10 @@ int main(int argc, char** argv) {
         if (running(pending->process, pending->old_pid)) {
           pending->back_s = t - pending->t;
           if (pending->process == "objectmap" && !pending->saved_objects.empty()) {
-            // Its first OBJECT_MAP after the restart must hold every object of the save it loaded.
+            // Its first OBJECT_MAP after the restart must hold every object of the save it loaded
+            // (its heartbeat goes on while it loads: the map may come some seconds later).
             const double since = t;
-            while (now_s() - t0 < since + 5 && !(last_map && last_map_t > since)) pump(0.05);
+            while (now_s() - t0 < since + 60 && !(last_map && last_map_t > since)) pump(0.05);
             if (last_map && last_map_t > since) {
               std::set<int32_t> now_ids;
               for (const auto& o : last_map->objects) now_ids.insert(o.id);
