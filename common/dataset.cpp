@@ -89,30 +89,6 @@ void readCsv(const std::string& path, const std::vector<std::string>& header, Fn
   }
 }
 
-}  // namespace
-
-namespace {
-SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path);
-}  // namespace
-
-SequenceInfo readSequenceInfo(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw DatasetError(path + ": cannot open (not a sequence folder?)");
-  } catch (const YAML::Exception& e) {
-    throw DatasetError(path + ": YAML error: " + e.what());
-  }
-  // Every value of the wrong type is refused naming the file (yaml-cpp's conversions throw).
-  try {
-    return sequenceInfoOf(root, path);
-  } catch (const YAML::Exception& e) {
-    throw DatasetError(path + ": a value of the wrong type: " + e.what());
-  }
-}
-
-namespace {
 SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path) {
   SequenceInfo info;
   info.name = required<std::string>(root, "name", path);
@@ -138,6 +114,24 @@ SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path) {
   return info;
 }
 }  // namespace
+
+SequenceInfo readSequenceInfo(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw DatasetError(path + ": cannot open (not a sequence folder?)");
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(path + ": YAML error: " + e.what());
+  }
+  // Every value of the wrong type is refused naming the file (yaml-cpp's conversions throw).
+  try {
+    return sequenceInfoOf(root, path);
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(path + ": a value of the wrong type: " + e.what());
+  }
+}
+
 
 void writeSequenceInfo(const std::string& path, const SequenceInfo& info) {
   YAML::Emitter e;

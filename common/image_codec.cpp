@@ -21,12 +21,16 @@ uint32_t bigEndian(const uint8_t* p, int n) {
   return v;
 }
 
-/// Refuses an image whose header is missing or asks for more than kMaxImagePixels, before any
-/// decoder allocates for it.
-void checkImageHeader(const uint8_t* data, size_t size, const std::string& what) {
+/// Refuses an image whose header is missing, asks for more than kMaxImagePixels or for another size
+/// than a non-empty `expected`, before any decoder allocates for it.
+void checkImageHeader(const uint8_t* data, size_t size, const std::string& what, cv::Size expected = cv::Size()) {
   int w = 0, h = 0;
   if (!peekImageSize(data, size, &w, &h))
     throw ImageError(what + ": no image header (JPEG frame header or PNG IHDR) found");
+  if (!expected.empty() && (w != expected.width || h != expected.height))
+    throw ImageError(what + ": the image header says " + std::to_string(w) + "x" + std::to_string(h) +
+                     " but the message says " + std::to_string(expected.width) + "x" +
+                     std::to_string(expected.height));
   if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > kMaxImagePixels)
     throw ImageError(what + ": the header says " + std::to_string(w) + "x" + std::to_string(h) +
                      " pixels (at most " + std::to_string(kMaxImagePixels / 1000000) +
@@ -91,7 +95,7 @@ std::vector<uint8_t> encodePng(const cv::Mat& image, int compression) {
   return out;
 }
 
-cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, bool grey) {
+cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, bool grey, cv::Size expected) {
   if (size == 0) throw ImageError(what + ": empty image data");
   if (!isJpeg(data, size) && !isPng(data, size))
     throw ImageError(what + ": not a JPEG or PNG image (" + std::to_string(size) + " bytes)");
@@ -107,7 +111,7 @@ cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, b
     if (size < 20 || !std::equal(iend, iend + 8, data + size - 8))
       throw ImageError(what + ": truncated PNG (no IEND chunk)");
   }
-  checkImageHeader(data, size, what);
+  checkImageHeader(data, size, what, expected);
   if (size > static_cast<size_t>(INT32_MAX)) throw ImageError(what + ": image file over 2 GB");
   cv::Mat img;
   try {

@@ -6,6 +6,7 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,7 @@ inline pid_t spawnWithOutput(const std::vector<std::string>& argv, const std::st
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   execvp(args[0], args.data());
+  std::perror(("exec " + argv[0]).c_str());  // into the output file
   _exit(127);
 }
 

@@ -39,16 +39,8 @@ cv::Mat decodeImageMessage(const image_t& msg, const std::string& what, bool gre
   switch (msg.pixel_format) {
     case image_t::PIXEL_FORMAT_JPEG: {
       // The header must agree with the message before anything is decoded (a small message must
-      // not make the decoder allocate for another size).
-      int w = 0, h = 0;
-      if (peekImageSize(msg.data.data(), msg.data.size(), &w, &h) && (w != msg.width || h != msg.height))
-        throw ImageError(what + ": JPEG header says " + std::to_string(w) + "x" + std::to_string(h) +
-                         " but the message says " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
-      out = decodeImage(msg.data.data(), msg.data.size(), what, grey);
-      if (out.cols != msg.width || out.rows != msg.height)
-        throw ImageError(what + ": JPEG is " + std::to_string(out.cols) + "x" + std::to_string(out.rows) +
-                         " but the message says " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
-      return out;
+      // not make the decoder allocate for another size); the decoder gives the header's size.
+      return decodeImage(msg.data.data(), msg.data.size(), what, grey, cv::Size(msg.width, msg.height));
     }
     case image_t::PIXEL_FORMAT_RGB8: {
       if (msg.data.size() != static_cast<size_t>(msg.width) * msg.height * 3)

@@ -75,7 +75,7 @@ class ObjectMapNode {
         options_(options),
         engine_(options),
         store_(options.persistence.dir) {
-    configureEngine();
+    deferRegrouping();
     const size_t max_msg = static_cast<size_t>(sys.bus.max_message_bytes);
     bus_.subscribe<camera_info_t>(
         ch_.camera_info,
@@ -139,7 +139,7 @@ class ObjectMapNode {
       return;
     }
     engine_ = std::move(*loaded.engine);
-    configureEngine();
+    deferRegrouping();
     saved_changes_ = engine_.changes();
     status_.setCounter("loaded_generation", report.generation);
     status_.setCounter("load_ms", static_cast<int64_t>(secondsSince(t0) * 1000));
@@ -242,8 +242,7 @@ class ObjectMapNode {
   }
 
   /// Real time, deferred: regroups what the inputs since the last regrouping changed.
-  /// Real time defers regrouping.
-  void configureEngine() {
+  void deferRegrouping() {
     deferred_ = !lockstep_ && options_.regroup_period_s > 0;
     engine_.deferRegrouping(deferred_);
   }

@@ -199,11 +199,7 @@ bool RecognizerModel::hasBackground() const {
   return !classifier.classes.empty() && classifier.classes.back() == "background";
 }
 
-void saveModel(const RecognizerModel& model, const std::string& path) {
-  model.check("model for " + path);
-  Writer w;
-  writeField(w, model);
-  const std::vector<uint8_t>& payload = w.bytes();
+std::vector<uint8_t> modelFileBytes(const std::vector<uint8_t>& payload) {
   uint8_t header[kHeaderSize] = {};
   std::memcpy(header, kMagic, 8);
   putU32(header + 8, kModelFormatVersion);
@@ -214,6 +210,14 @@ void saveModel(const RecognizerModel& model, const std::string& path) {
   std::vector<uint8_t> bytes(kHeaderSize + payload.size());
   std::memcpy(bytes.data(), header, kHeaderSize);
   if (!payload.empty()) std::memcpy(bytes.data() + kHeaderSize, payload.data(), payload.size());
+  return bytes;
+}
+
+void saveModel(const RecognizerModel& model, const std::string& path) {
+  model.check("model for " + path);
+  Writer w;
+  writeField(w, model);
+  const std::vector<uint8_t> bytes = modelFileBytes(w.bytes());
   try {
     writeFileAtomic(path, bytes.data(), bytes.size());
   } catch (const std::runtime_error& e) {

@@ -44,6 +44,9 @@ struct RecognizerModel {
   bool hasBackground() const;
 };
 
+/// The bytes of a model file holding `payload` (the fields of writeModel()): the header with the
+/// magic, the format version and both checksums, then the payload.
+std::vector<uint8_t> modelFileBytes(const std::vector<uint8_t>& payload);
 /// Writes the model atomically (temporary file, fsync, rename). Throws ModelError naming the
 /// file on failure.
 void saveModel(const RecognizerModel& model, const std::string& path);

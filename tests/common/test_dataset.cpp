@@ -117,7 +117,7 @@ TEST(Dataset, BadFoldersAreRefusedWithTheFileNamed) {
   fs::remove(dir + "/timestamps.txt");
   const SequenceFolder seq = SequenceFolder::open(dir);
   // Not numbers, numbers that are not finite, and frame numbers beyond int (were undefined
-  // behaviour in the conversion: found by fuzz_datasets).
+  // behaviour in the conversion: found while writing fuzz_datasets).
   for (const char* row : {"0,1,2,3,abc,bowl,bowl_1", "0,1,2,3,nan,bowl,bowl_1", "0,1,inf,3,4,bowl,bowl_1",
                           "1e300,1,2,3,4,bowl,bowl_1", "1.5,1,2,3,4,bowl,bowl_1"}) {
     std::ofstream(dir + "/boxes.csv") << "frame,x,y,w,h,class,instance\n" << row << "\n";

@@ -1,11 +1,7 @@
 #include "tools/eval/pipeline_run.h"
 
-#include <fcntl.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
-#include <sys/prctl.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -14,10 +10,10 @@
 #include <thread>
 
 #include "common/bus/log_reader.h"
-#include "tools/eval/child_process.h"
 #include "common/dataset.h"
 #include "slamaware/keyframe_t.hpp"
 #include "slamaware/point_cloud_t.hpp"
+#include "tools/eval/child_process.h"
 #include "slamaware/pose_t.hpp"
 
 namespace fs = std::filesystem;

@@ -98,7 +98,6 @@ double percentile(std::vector<double> v, double q) {
 /// Object ids of a saved generation's JSON (the content's "objects"); empty if unreadable.
 std::set<int32_t> savedObjects(const std::string& path) {
   std::ifstream in(path);
-  std::string header, rest;
   std::set<int32_t> ids;
   try {
     const json doc = json::parse(in);
