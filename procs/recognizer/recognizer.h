@@ -32,6 +32,8 @@ struct RecognizerOptions {
   int proposals_buffer = 30;       ///< PROPOSALS waiting for their frame
   double pending_timeout_s = 2.0;  ///< s a PROPOSALS message waits for its frame (wall clock)
   double model_retry_s = 5.0;      ///< s between attempts to load a missing or bad model
+  /// s between checks whether the model file was replaced (then it is reloaded live); 0: never.
+  double model_watch_s = 1.0;
   /// Frame size whose buffers are prepared when the model loads (FrameEncoder::warmUp); 0: none.
   int warm_up_width = 640, warm_up_height = 480;
 
@@ -53,6 +55,8 @@ struct RecognizerOptions {
     v("proposals_buffer", proposals_buffer, "PROPOSALS waiting for their frame");
     v("pending_timeout_s", pending_timeout_s, "s a PROPOSALS message waits for its CAMERA frame");
     v("model_retry_s", model_retry_s, "s between attempts to load a missing or unreadable model");
+    v("model_watch_s", model_watch_s,
+      "s between checks whether the model file was replaced (then it is reloaded live); 0: never");
     v("warm_up_width", warm_up_width,
       "px, frame width whose buffers are prepared when the model loads (0: none; the first frames pay)");
     v("warm_up_height", warm_up_height, "px, frame height of the same");

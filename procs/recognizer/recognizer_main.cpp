@@ -9,11 +9,19 @@
 // input (a proposal for a frame never seen, boxes outside the image or of zero size, a corrupt
 // JPEG, an unreadable model, classes the config names but the model lacks) is counted in
 // RECOGNIZER_STATUS and never stops the process.
+//
+// Live reload: when the model file is replaced (checked every model_watch_s) or a RELOAD command
+// names the process (`slamaware-ctl reload recognizer`), the new model is loaded and warmed up on a
+// second thread while the old one goes on classifying; it is swapped in between two frames, so no
+// frame waits for the load or is dropped because of it. A model that fails to load is refused
+// (counted in reload_failures, the reason in the status message) and the old one keeps running.
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <future>
 #include <memory>
 #include <sstream>
 
@@ -30,6 +38,7 @@
 #include "procs/recognizer/seq_joiner.h"
 #include "slamaware/detections_t.hpp"
 #include "slamaware/image_t.hpp"
+#include "slamaware/proc_command_t.hpp"
 #include "slamaware/proposals_t.hpp"
 
 using namespace slamaware;
@@ -41,10 +50,45 @@ double nowS() { return std::chrono::duration<double>(Clock::now().time_since_epo
 
 using Joiner = SeqJoiner<std::shared_ptr<const image_t>, proposals_t>;
 
+/// What tells that a file was replaced without reading it: a rename over it (as saveModel writes)
+/// changes the inode, an overwrite the size or the modification time.
+struct FileStamp {
+  bool exists = false;
+  dev_t dev = 0;
+  ino_t ino = 0;
+  off_t size = 0;
+  int64_t mtime_ns = 0;
+  bool operator==(const FileStamp& o) const {
+    return exists == o.exists && dev == o.dev && ino == o.ino && size == o.size && mtime_ns == o.mtime_ns;
+  }
+};
+
+FileStamp stampOf(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return {};
+  return {true, st.st_dev, st.st_ino, st.st_size,
+          static_cast<int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
+}
+
+/// Loads the model file and prepares a recognizer with it (buffers grown: `warm_up_ms`). Throws on
+/// a missing or bad model; a failed warm-up is only logged (the first frames grow the buffers).
+std::unique_ptr<Recognizer> loadRecognizer(const RecognizerOptions& options, double* warm_up_ms) {
+  auto model = std::make_shared<const RecognizerModel>(loadModel(options.model));
+  auto recognizer = std::make_unique<Recognizer>(model, options);
+  *warm_up_ms = 0;
+  try {
+    *warm_up_ms = recognizer->warmUp(options.warm_up_width, options.warm_up_height);
+  } catch (const std::exception& e) {
+    spdlog::warn("preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
+                 options.warm_up_width, options.warm_up_height, e.what());
+  }
+  return recognizer;
+}
+
 class RecognizerNode {
  public:
   RecognizerNode(Bus& bus, StatusReporter& status, const SystemConfig& sys,
-                 const RecognizerOptions& options)
+                 const RecognizerOptions& options, const std::string& name)
       : bus_(bus),
         status_(status),
         ch_(sys.channels),
@@ -60,6 +104,14 @@ class RecognizerNode {
     bus_.subscribe<proposals_t>(
         ch_.proposals, [this](const proposals_t& m) { joiner_.addProposals(m.seq, m, nowS()); },
         static_cast<size_t>(sys.bus.max_message_bytes));
+    bus_.subscribe<proc_command_t>(ch_.proc_command, [this, name](const proc_command_t& c) {
+      if (c.command == proc_command_t::COMMAND_RELOAD && (c.target == name || c.target == "all"))
+        requestReload("asked to");
+    });
+  }
+
+  ~RecognizerNode() {
+    if (loading_.valid()) loading_.wait();
   }
 
   /// Loads the model if there is none yet (at most every model_retry_s).
@@ -70,22 +122,11 @@ class RecognizerNode {
     tried_ = true;
     last_try_ = now;
     try {
-      auto model = std::make_shared<const RecognizerModel>(loadModel(options_.model));
-      recognizer_ = std::make_unique<Recognizer>(model, options_);
-      warmUp();
-      const auto missing = recognizer_->missingClasses();
-      status_.setCounter("classes_missing", static_cast<int64_t>(missing.size()));
-      spdlog::info("model {}: classes {}", options_.model, fmt::join(recognizer_->classes(), ", "));
-      if (!missing.empty()) {
-        const std::string msg = "model " + options_.model + " lacks classes named in the config: " +
-                                fmt::format("{}", fmt::join(missing, ", "));
-        spdlog::warn("{}", msg);
-        status_.setMessage(msg);
-        status_.setState(StatusReporter::State::kDegraded);
-      } else {
-        status_.setMessage("");
-        status_.setState(StatusReporter::State::kRunning);
-      }
+      const FileStamp stamp = stampOf(options_.model);
+      double warm_up_ms = 0;
+      recognizer_ = loadRecognizer(options_, &warm_up_ms);
+      loaded_stamp_ = stamp;
+      afterLoad(warm_up_ms);
     } catch (const std::exception& e) {
       status_.count("model_load_failures");
       status_.setMessage(e.what());
@@ -95,19 +136,53 @@ class RecognizerNode {
     }
   }
 
-  /// Grows the buffers of a whole frame before the first one arrives; without it the first frames
-  /// with boxes take several times as long (growing the memory of the features, codes and FLAIR
-  /// tables), and their latency is the stream's worst.
-  void warmUp() {
+  /// Live reload: starts loading the model file anew on a second thread (the current model keeps
+  /// classifying); one load at a time, a request during a load is served after it.
+  void requestReload(const std::string& why) {
+    if (!recognizer_) {
+      tried_ = false;  // no model yet: the next ensureModel() tries at once
+      return;
+    }
+    if (loading_.valid()) {
+      reload_again_ = true;
+      return;
+    }
+    spdlog::info("reloading the model {} ({})", options_.model, why);
+    loading_stamp_ = stampOf(options_.model);
+    loading_ = std::async(std::launch::async, [options = options_] {
+      Loaded l;
+      l.recognizer = loadRecognizer(options, &l.warm_up_ms);
+      return l;
+    });
+  }
+
+  /// Watches the model file (every model_watch_s) and swaps in a model whose load has finished.
+  /// Called between frames.
+  void pollReload() {
+    const auto now = Clock::now();
+    if (recognizer_ && options_.model_watch_s > 0 &&
+        now - last_watch_ >= std::chrono::duration<double>(options_.model_watch_s)) {
+      last_watch_ = now;
+      const FileStamp s = stampOf(options_.model);
+      // A stamp whose load failed is not tried again; the next change of the file is.
+      if (s.exists && !(s == loaded_stamp_) && !(s == refused_stamp_)) requestReload("the file was replaced");
+    }
+    if (!loading_.valid() || loading_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
     try {
-      const double ms = recognizer_->warmUp(options_.warm_up_width, options_.warm_up_height);
-      status_.setCounter("warm_up_ms", static_cast<int64_t>(ms));
-      if (ms > 0)
-        spdlog::info("buffers for {}x{} frames prepared in {:.0f} ms", options_.warm_up_width,
-                     options_.warm_up_height, ms);
+      Loaded l = loading_.get();
+      recognizer_ = std::move(l.recognizer);
+      loaded_stamp_ = loading_stamp_;
+      status_.count("reloads");
+      afterLoad(l.warm_up_ms);
     } catch (const std::exception& e) {
-      spdlog::warn("preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
-                   options_.warm_up_width, options_.warm_up_height, e.what());
+      refused_stamp_ = loading_stamp_;
+      status_.count("reload_failures");
+      status_.setMessage(std::string("new model refused: ") + e.what() + "; the previous model keeps running");
+      spdlog::error("new model refused: {}; the previous model keeps running", e.what());
+    }
+    if (reload_again_) {
+      reload_again_ = false;
+      requestReload("asked again during the load");
     }
   }
 
@@ -133,6 +208,34 @@ class RecognizerNode {
   }
 
  private:
+  struct Loaded {
+    std::unique_ptr<Recognizer> recognizer;
+    double warm_up_ms = 0;
+  };
+
+  /// Reports a model that was just put in place: its classes, those it lacks, its warm-up. The
+  /// buffers of a whole frame are grown before the first frame (warm-up); without it the first
+  /// frames with boxes take several times as long, and their latency is the stream's worst.
+  void afterLoad(double warm_up_ms) {
+    status_.setCounter("warm_up_ms", static_cast<int64_t>(warm_up_ms));
+    if (warm_up_ms > 0)
+      spdlog::info("buffers for {}x{} frames prepared in {:.0f} ms", options_.warm_up_width,
+                   options_.warm_up_height, warm_up_ms);
+    const auto missing = recognizer_->missingClasses();
+    status_.setCounter("classes_missing", static_cast<int64_t>(missing.size()));
+    spdlog::info("model {}: classes {}", options_.model, fmt::join(recognizer_->classes(), ", "));
+    if (!missing.empty()) {
+      const std::string msg = "model " + options_.model + " lacks classes named in the config: " +
+                              fmt::format("{}", fmt::join(missing, ", "));
+      spdlog::warn("{}", msg);
+      status_.setMessage(msg);
+      status_.setState(StatusReporter::State::kDegraded);
+    } else {
+      status_.setMessage("");
+      status_.setState(StatusReporter::State::kRunning);
+    }
+  }
+
   void handle(Joiner::Job& job) {
     const proposals_t& p = job.proposals;
     status_.noteInput(p.utime, p.seq);
@@ -219,6 +322,11 @@ class RecognizerNode {
   std::unique_ptr<Recognizer> recognizer_;
   bool tried_ = false;
   Clock::time_point last_try_;
+  // Live reload.
+  FileStamp loaded_stamp_, loading_stamp_, refused_stamp_;
+  std::future<Loaded> loading_;
+  bool reload_again_ = false;
+  Clock::time_point last_watch_;
 };
 
 }  // namespace
@@ -242,7 +350,7 @@ int main(int argc, char** argv) {
     checkOptions(options, node.config.empty() ? std::string("defaults") : node.config);
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("recognizer"), sys.channels.statusOf(node.nameOr("recognizer")));
-    RecognizerNode rec(bus, status, sys, options);
+    RecognizerNode rec(bus, status, sys, options, node.nameOr("recognizer"));
     rec.ensureModel();
     status.publish();
     spdlog::info("{} -> {}, {}", sys.channels.proposals, sys.channels.detections,
@@ -265,6 +373,7 @@ int main(int argc, char** argv) {
       for (int i = 0; i < 1000 && bus.handle(0) > 0; ++i) {
       }
       rec.ensureModel();
+      rec.pollReload();
       rec.process();
       status.tick();
     }

@@ -84,6 +84,7 @@ int main(int argc, char** argv) {
         case proc_command_t::COMMAND_START: cmd = Supervisor::Command::kStart; break;
         case proc_command_t::COMMAND_STOP: cmd = Supervisor::Command::kStop; break;
         case proc_command_t::COMMAND_RESTART: cmd = Supervisor::Command::kRestart; break;
+        case proc_command_t::COMMAND_RELOAD: return;  // for the process itself, not its supervisor
         default:
           bus.reject(ch.proc_command, "unknown command " + std::to_string(c.command));
           return;

@@ -1,4 +1,5 @@
-// slamaware-ctl status | start | stop | restart | wait | logs: the supervisors' view and commands.
+// slamaware-ctl status | start | stop | restart | reload | wait | logs: the supervisors' view and
+// commands (reload goes to the process itself).
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -15,6 +16,7 @@
 #include "procs/supervisor/process_spec.h"
 #include "slamaware/proc_command_t.hpp"
 #include "slamaware/proc_status_t.hpp"
+#include "slamaware/status_t.hpp"
 #include "tools/ctl/ctl_commands.h"
 
 namespace slamaware {
@@ -109,6 +111,59 @@ int runCommand(const NodeArgs& node, int8_t command, const std::string& target, 
   return ok ? 0 : 1;
 }
 
+int64_t statusCounter(const status_t& s, const std::string& name) {
+  for (size_t i = 0; i < s.counter_names.size() && i < s.counter_values.size(); ++i)
+    if (s.counter_names[i] == name) return s.counter_values[i];
+  return 0;
+}
+
+// RELOAD goes to the process (it reads its files anew, without a restart); the answer is in its
+// heartbeat: the counter "reloads" or "reload_failures" goes up (the reason is its message).
+int runReload(const NodeArgs& node, const std::string& target, double wait_s) {
+  const SystemConfig sys = loadSystem(node);
+  Bus bus(sys.bus.url);
+  const std::string channel = sys.channels.statusOf(target);
+  status_t last{};
+  bool have = false;
+  bus.subscribe<status_t>(channel, [&](const status_t& s) {
+    last = s;
+    have = true;
+  });
+  auto pump = [&](double seconds, const std::function<bool()>& done) {
+    const auto end = Clock::now() + std::chrono::duration<double>(seconds);
+    while (Clock::now() < end && !shutdownRequested()) {
+      bus.handle(50);
+      if (done()) return true;
+    }
+    return false;
+  };
+  // Its heartbeat comes once a second: know the counts before the command.
+  if (!pump(2.5, [&] { return have; })) {
+    std::fprintf(stderr, "no heartbeat from '%s' on %s: is it running?\n", target.c_str(), channel.c_str());
+    return 1;
+  }
+  const int64_t reloads = statusCounter(last, "reloads"), failures = statusCounter(last, "reload_failures");
+  proc_command_t cmd{};
+  cmd.utime = wallUtime();
+  cmd.target = target;
+  cmd.command = proc_command_t::COMMAND_RELOAD;
+  bus.publish(sys.channels.proc_command, cmd);
+  const bool answered = pump(wait_s, [&] {
+    return statusCounter(last, "reloads") > reloads || statusCounter(last, "reload_failures") > failures;
+  });
+  if (!answered) {
+    std::fprintf(stderr, "'%s' did not report a reload within %.0f s\n", target.c_str(), wait_s);
+    return 1;
+  }
+  if (statusCounter(last, "reload_failures") > failures) {
+    std::fprintf(stderr, "%s: %s\n", target.c_str(), last.message.c_str());
+    return 1;
+  }
+  std::printf("%s: reloaded\n", target.c_str());
+  if (!last.message.empty()) std::printf("%s: %s\n", target.c_str(), last.message.c_str());
+  return 0;
+}
+
 int runLogs(const NodeArgs& node, const std::string& name, int lines, bool follow) {
   if (node.system.empty()) {
     std::fprintf(stderr, "logs: --system FILE is needed to find the supervisor's log folder\n");
@@ -191,6 +246,18 @@ void addProcCommands(CLI::App& app, CtlContext& ctx) {
           runNode("ctl", ctx.node, [&] { return runCommand(ctx.node, c, args->target, args->host, args->wait); });
     });
   }
+
+  auto reload_args = std::make_shared<CmdArgs>();
+  reload_args->wait = 30;
+  auto* reload = app.add_subcommand(
+      "reload", "a process reads its files anew without a restart (the recognizer: its model); "
+                "the old ones stay if the new ones are refused");
+  reload->add_option("target", reload_args->target, "process name")->required();
+  reload->add_option("--wait", reload_args->wait, "s to wait for the process to report the reload");
+  reload->callback([&ctx, reload_args] {
+    ctx.exit_code =
+        runNode("ctl", ctx.node, [&] { return runReload(ctx.node, reload_args->target, reload_args->wait); });
+  });
 
   auto wait_args = std::make_shared<CmdArgs>();
   wait_args->wait = 3600;
