@@ -1,6 +1,7 @@
 #include "procs/objectmap/object_map.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -468,7 +469,15 @@ object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::
   m.last_seen_utime = o.last_seen_utime;
   m.candidate_ids = o.candidates;
   m.num_candidates = static_cast<int32_t>(o.candidates.size());
+  m.user_label = o.user_label;
   return m;
+}
+
+/// A user's class name must be usable as a category folder of an object set.
+bool validUserLabel(const std::string& l) {
+  return !l.empty() && l.size() <= 64 && std::all_of(l.begin(), l.end(), [](char ch) {
+    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+  });
 }
 
 }  // namespace
@@ -594,6 +603,36 @@ object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) const {
   return reply;
 }
 
+object_query_reply_t ObjectMapEngine::label(const object_query_t& q) {
+  object_query_reply_t reply;
+  reply.utime = 0;
+  reply.request_id = q.request_id;
+  reply.class_names = classes_;
+  reply.num_classes = static_cast<int32_t>(classes_.size());
+  reply.num_objects = 0;
+  const bool unlabel = q.kind == object_query_t::KIND_UNLABEL;
+  if (!unlabel && q.kind != object_query_t::KIND_LABEL) {
+    reply.error = "not a labelling request (kind " + std::to_string(q.kind) + ")";
+    return reply;
+  }
+  if (!unlabel && !validUserLabel(q.label)) {
+    reply.error = "bad class name '" + q.label + "': 1 to 64 letters, digits, _ or -";
+    return reply;
+  }
+  regroup();
+  for (auto& [sid, seg] : segments_) {
+    if (!seg->table.setUserLabel(q.object_id, unlabel ? std::string() : q.label)) continue;
+    ++changes_;
+    reply.objects.push_back(
+        objectMessage(seg->table.objects().at(q.object_id), sid, classes_, options_.fusion().views_exponent));
+    reply.num_objects = 1;
+    return reply;
+  }
+  reply.error = "no object " + std::to_string(q.object_id) + " in the map (" + std::to_string(numObjects()) +
+                " objects; slamaware-ctl query lists them)";
+  return reply;
+}
+
 MapSnapshot ObjectMapEngine::snapshot() const {
   MapSnapshot snap;
   json& c = snap.content;
@@ -641,6 +680,7 @@ MapSnapshot ObjectMapEngine::snapshot() const {
       jo["label"] = o.label >= 0 ? classes_[static_cast<size_t>(o.label)] : "";
       jo["num_views"] = o.num_views;
       jo["num_voxels"] = o.num_voxels;
+      if (!o.user_label.empty()) jo["user_label"] = o.user_label;
       if (o.has_position) {
         jo["centroid"] = vec3(o.centroid);
         jo["extent"] = vec3(o.extent);
@@ -662,6 +702,7 @@ MapSnapshot ObjectMapEngine::snapshot() const {
         jc["box_position_sum"] = vec3(cand.box_position_sum);
         jc["box_positions"] = cand.box_positions;
         jc["box_size"] = cand.box_size;
+        if (!cand.user_label.empty()) jc["user_label"] = cand.user_label;
         json views = json::array();  // utime, seq, area, log p per class
         for (const auto& [key, v] : cand.views) {
           json jv = {v.utime, v.seq, compactFloat(v.area)};
@@ -744,6 +785,9 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
         cand.box_position_sum = vec3From(jc.at("box_position_sum"));
         cand.box_positions = jc.at("box_positions").get<int32_t>();
         cand.box_size = jc.at("box_size").get<double>();
+        cand.user_label = jc.value("user_label", std::string());
+        if (!cand.user_label.empty() && !validUserLabel(cand.user_label))
+          throw std::runtime_error("bad user_label '" + cand.user_label + "'");
         for (const auto& jv : jc.at("views")) {
           if (!jv.is_array() || jv.size() != 3 + nc)
             throw std::runtime_error("a view is not 3 + classes numbers");

@@ -117,6 +117,10 @@ class ObjectMapEngine {
   object_detections_t frameDetections(const detections_t& detections) const;
   /// The reply to a query (error set for an unknown kind, label or map id, or a bad region).
   object_query_reply_t answer(const object_query_t& query) const;
+  /// KIND_LABEL / KIND_UNLABEL: gives (or takes back) a user's class for the object `object_id`
+  /// (ObjectTable::setUserLabel); the reply holds the object, or an error for an unknown id or a
+  /// name that cannot be a category folder (1-64 of A-Z a-z 0-9 _ -). Regroups first.
+  object_query_reply_t label(const object_query_t& query);
 
   /// Everything needed to continue after a restart (regroups first; colours the trees by label).
   MapSnapshot snapshot() const;

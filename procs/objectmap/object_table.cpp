@@ -186,6 +186,30 @@ void ObjectTable::restoreObject(int32_t id, std::vector<int32_t> candidates) {
   o.candidates = std::move(candidates);
 }
 
+bool ObjectTable::setUserLabel(int32_t object_id, const std::string& label) {
+  auto it = objects_.find(object_id);
+  if (it == objects_.end()) return false;
+  for (int32_t cid : it->second.candidates) candidates_.at(cid).user_label = label;
+  it->second.user_label = label;
+  return true;
+}
+
+std::string ObjectTable::userLabelOf(const std::vector<int32_t>& members) const {
+  std::map<std::string, int> count;
+  for (int32_t cid : members) {
+    const std::string& l = candidates_.at(cid).user_label;
+    if (!l.empty()) ++count[l];
+  }
+  std::string best;
+  int most = 0;
+  for (const auto& [l, n] : count)
+    if (n > most) {
+      best = l;
+      most = n;
+    }
+  return best;
+}
+
 void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size) {
   for (auto& [id, c] : candidates_)
     for (auto& [key, v] : c.views) {
@@ -387,6 +411,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
       o.first_seen_utime = views.begin()->first.first;
       o.last_seen_utime = views.rbegin()->first.first;
     }
+    o.user_label = userLabelOf(o.candidates);
     o.num_voxels = static_cast<int32_t>(voxels.size());
     if (!voxels.empty()) {
       Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo,

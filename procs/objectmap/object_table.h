@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -50,6 +51,9 @@ struct Candidate {
   int32_t box_positions = 0;
   double box_size = 0;
   std::vector<VoxelKey> voxels;  ///< derived by ObjectTable::update(), sorted
+  /// The class a user gave its object (ObjectTable::setUserLabel), "" if none. Held by the
+  /// candidates, so that it stays with them whatever the grouping does.
+  std::string user_label;
 };
 
 struct Object {
@@ -66,6 +70,9 @@ struct Object {
   Eigen::Vector3d extent = Eigen::Vector3d::Zero();    ///< map units, axis-aligned size
   int32_t num_voxels = 0;
   int64_t first_seen_utime = 0, last_seen_utime = 0;
+  /// The user's class: the user_label held by most of its candidates (ties: the first name in
+  /// order), "" if none holds one.
+  std::string user_label;
 };
 
 class ObjectTable {
@@ -106,11 +113,17 @@ class ObjectTable {
   /// view did not have get the view's lowest log-probability (see README).
   void remapClasses(const std::vector<int>& old_to_new, size_t new_size);
 
+  /// Gives (label "") or takes back a user's class for an object: every candidate it holds now
+  /// carries it. false: no object has this id.
+  bool setUserLabel(int32_t object_id, const std::string& label);
+
   /// Restores a candidate and a previous grouping (loading a saved map); update() follows.
   Candidate& restoreCandidate(int32_t id) { return candidates_[id]; }
   void restoreObject(int32_t id, std::vector<int32_t> candidates);
 
  private:
+  /// The user_label most of `members` (candidate ids) hold (ties: the first in order), "" if none.
+  std::string userLabelOf(const std::vector<int32_t>& members) const;
   /// Merges groups that `label_of` gives the same object class (not `background`) and that share
   /// same_label_overlap of the smaller's voxels (parts and wholes of one object); order kept.
   std::vector<std::vector<int32_t>> mergeSameLabel(std::vector<std::vector<int32_t>> groups,

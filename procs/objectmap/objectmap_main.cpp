@@ -215,7 +215,18 @@ class ObjectMapNode {
 
   void onQuery(const object_query_t& q) {
     regroup();  // the answer holds everything fused so far
-    object_query_reply_t reply = engine_.answer(q);
+    const bool labelling = q.kind == object_query_t::KIND_LABEL || q.kind == object_query_t::KIND_UNLABEL;
+    object_query_reply_t reply = labelling ? engine_.label(q) : engine_.answer(q);
+    if (labelling && reply.error.empty()) {
+      // A user's label is saved before the reply: once answered, it survives a SIGKILL.
+      save("label");
+      if (!can_save_ || save_failed_)
+        reply.error = std::string("object ") + std::to_string(q.object_id) + " labelled in memory but not saved: " +
+                      (can_save_ ? "the save failed (see the status message)" : "this object map has no map folder");
+      else
+        spdlog::info("object {} {}", q.object_id,
+                     q.kind == object_query_t::KIND_LABEL ? "labelled '" + q.label + "'" : "unlabelled");
+    }
     reply.utime = wallUtime();
     status_.count("queries");
     if (!reply.error.empty()) {
@@ -344,6 +355,7 @@ int exportMap(const ObjectMapOptions& options, const std::string& dir, const std
     for (size_t c = 0; c < map.class_names.size(); ++c) posterior[map.class_names[c]] = o.posterior[c];
     nlohmann::json jo = {{"id", o.id},          {"segment", o.map_id},       {"label", o.label},
                          {"posterior", posterior}, {"num_views", o.num_views}, {"num_voxels", o.num_voxels}};
+    if (!o.user_label.empty()) jo["user_label"] = o.user_label;
     if (std::isfinite(o.centroid[0])) {
       jo["centroid"] = {o.centroid[0], o.centroid[1], o.centroid[2]};
       jo["extent"] = {o.extent[0], o.extent[1], o.extent[2]};

@@ -4,6 +4,8 @@
 // over two replays, with saves going on.
 #include <gtest/gtest.h>
 
+#include <csignal>
+
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
@@ -230,6 +232,75 @@ TEST(ObjectMapNode, AnswersQueriesByLabelAndRegionOverLcm) {
     EXPECT_EQ(r->num_objects, fresh ? 0 : 3) << (fresh ? "--fresh" : "reloaded");
     EXPECT_EQ(again.stop(), 0) << again.log();
   }
+}
+
+// A user's label (slamaware-ctl label): refused for an unknown id or a bad name, saved before the
+// reply (the periodic save is 60 s away here), so it survives a SIGKILL; shown by ctl query, the
+// restarted map's OBJECT_MAP and --export's objects.json; --unlabel takes it back.
+TEST(ObjectMapNode, AUserLabelIsSavedAtOnceAndSurvivesASigkill) {
+  const std::string dir = test::tempDir("objectmap_node_label");
+  Client c;
+  const std::string config = writeConfig(dir, 60);
+  auto node = std::make_unique<test::ChildProcess>(
+      std::vector<std::string>{test::binPath("slamaware-objectmap"), "--config", config, "--lcm-url", test::testUrl()},
+      dir + "/node.log");
+  ASSERT_TRUE(c.waitRunning()) << node->log();
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  c.sendFrames(w, 30);
+  ASSERT_TRUE(c.pump([&] { return !c.maps.empty() && c.maps.back().num_objects == 3; }, 10s)) << node->log();
+  object_query_t q = query(object_query_t::KIND_BY_LABEL);
+  q.label = "coffee_mug";
+  auto r = c.ask(q);
+  ASSERT_TRUE(r && r->num_objects == 1) << node->log();
+  const int32_t mug = r->objects[0].id;
+
+  const std::string ctl = test::binPath("slamaware-ctl") + " --lcm-url '" + test::testUrl() + "' ";
+  int rc = -1;
+  std::string out = run(ctl + "label 9999 my_mug", &rc);
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("no object 9999"), std::string::npos) << out;
+  out = run(ctl + "label " + std::to_string(mug) + " 'my mug!'", &rc);
+  EXPECT_EQ(rc, 1) << out;
+  EXPECT_NE(out.find("bad class name"), std::string::npos) << out;
+  out = run(ctl + "label " + std::to_string(mug) + " my_mug", &rc);
+  EXPECT_EQ(rc, 0) << out << node->log();
+  EXPECT_NE(out.find("my_mug"), std::string::npos) << out;
+  out = run(ctl + "query", &rc);
+  EXPECT_NE(out.find("USER LABEL"), std::string::npos) << out;
+  EXPECT_NE(out.find("my_mug"), std::string::npos) << out;
+
+  node->signal(SIGKILL);
+  node->wait(5s);
+  node = std::make_unique<test::ChildProcess>(
+      std::vector<std::string>{test::binPath("slamaware-objectmap"), "--config", config, "--lcm-url", test::testUrl()},
+      dir + "/node2.log");
+  c.status.reset();
+  ASSERT_TRUE(c.pump([&] { return c.status && c.status->pid == node->pid() && c.status->state == status_t::STATE_RUNNING; },
+                     10s))
+      << node->log();
+  r = c.ask(query(object_query_t::KIND_ALL));
+  ASSERT_TRUE(r) << node->log();
+  ASSERT_EQ(r->num_objects, 3);
+  for (const auto& o : r->objects) EXPECT_EQ(o.user_label, o.id == mug ? "my_mug" : "") << "object " << o.id;
+
+  q = query(object_query_t::KIND_UNLABEL);
+  q.object_id = mug;
+  r = c.ask(q);
+  ASSERT_TRUE(r && r->error.empty() && r->num_objects == 1) << (r ? r->error : "no reply");
+  EXPECT_EQ(r->objects[0].user_label, "");
+  q = query(object_query_t::KIND_LABEL);
+  q.object_id = mug;
+  q.label = "my_cup";
+  r = c.ask(q);
+  ASSERT_TRUE(r && r->error.empty()) << (r ? r->error : "no reply");
+  EXPECT_EQ(node->stop(), 0) << node->log();
+
+  out = run(test::binPath("slamaware-objectmap") + " --config " + config + " --export " + dir + "/export", &rc);
+  ASSERT_EQ(rc, 0) << out;
+  std::ifstream f(dir + "/export/objects.json");
+  const std::string table((std::istreambuf_iterator<char>(f)), {});
+  EXPECT_NE(table.find("\"user_label\": \"my_cup\""), std::string::npos) << table;
+  EXPECT_EQ(table.find("my_mug"), std::string::npos) << table;
 }
 
 // Real time: frames only add evidence and votes; the objects are regrouped at most every

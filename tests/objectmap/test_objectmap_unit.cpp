@@ -414,6 +414,43 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   EXPECT_NEAR(t.objects().begin()->second.log_evidence[1], want_c1, 1e-5);
 }
 
+// A user's label is held by the candidates of the object it was given to: a split leaves it on
+// both parts, a merge with an unlabelled object keeps it, and an unknown id is refused.
+TEST(ObjectTable, AUserLabelStaysWithTheCandidatesThroughSplitsAndMerges) {
+  VotingOptions vo;
+  vo.min_votes = 2;
+  vo.min_vote_share = 0.5;
+  GroupingOptions half;
+  half.merge_overlap = 0.5;
+  half.merge_size_ratio = 0.5;
+  ObjectTable t(0.01);
+  for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
+  t.addView(1, View{100, 1, 50, logs({0.7, 0.2, 0.1})});
+  t.addView(2, View{200, 2, 80, logs({0.1, 0.8, 0.1})});
+  int32_t next = 7;
+  auto new_id = [&] { return next++; };
+  std::set<VoxelKey> free;
+  auto occupied = [&](VoxelKey k) { return !free.count(k); };
+  t.update(occupied, vo, half, 3, new_id);
+  ASSERT_EQ(t.objects().size(), 1u);
+  EXPECT_FALSE(t.setUserLabel(99, "temple"));
+  ASSERT_TRUE(t.setUserLabel(7, "temple"));
+  EXPECT_EQ(t.objects().at(7).user_label, "temple");
+
+  for (VoxelKey k : lineOfVoxels(10, 20)) free.insert(k);  // split
+  t.update(occupied, vo, half, 3, new_id);
+  ASSERT_EQ(t.objects().size(), 2u);
+  EXPECT_EQ(t.objects().at(7).user_label, "temple");
+  EXPECT_EQ(t.objects().at(8).user_label, "temple");
+  ASSERT_TRUE(t.setUserLabel(8, ""));  // taken back from one part
+  t.update(occupied, vo, half, 3, new_id);
+  EXPECT_EQ(t.objects().at(8).user_label, "");
+  free.clear();  // merged again: the labelled candidate carries it into the whole
+  t.update(occupied, vo, half, 3, new_id);
+  ASSERT_EQ(t.objects().size(), 1u);
+  EXPECT_EQ(t.objects().begin()->second.user_label, "temple");
+}
+
 // One object, two candidates: the object alone and the object with its neighbour (the can and the
 // mug beside it). In a frame that boxed both, the view that counts is the one that takes its box
 // for an object most surely, not the larger box; on a tie, the larger.

@@ -112,6 +112,8 @@ struct FrameAnnotations {
 struct DrawOptions {
   bool single_view = false;  ///< the recognizer's labels of every box instead of the map's
   bool background = false;   ///< also the background candidates and the objects' other boxes, faint
+  /// Objects a user labelled (slamaware-ctl label), by id, as the session's last OBJECT_MAP has them.
+  std::map<int32_t, std::string> user_labels;
 };
 
 struct Session {
@@ -213,7 +215,11 @@ int drawObjects(cv::Mat& img, const object_detections_t& d, const DrawOptions& o
     }
     const cv::Scalar colour = labelColour(d.labels[k]);
     cv::rectangle(img, r, colour, 2);
-    const std::string text = objectLabelText(d, k);
+    std::string text = objectLabelText(d, k);
+    if (k < d.object_ids.size()) {
+      auto user = options.user_labels.find(d.object_ids[k]);
+      if (user != options.user_labels.end()) text = "[" + user->second + "] " + text;
+    }
     putLabel(img, text, freeLabelPlace(text, r, &taken), colour);
     ++drawn;
   }
@@ -315,7 +321,7 @@ bool drawTopDown(const Session& s, const std::string& path) {
   if (s.last_objects) {
     for (const auto& o : s.last_objects->objects) {
       // The labelled objects only: background candidates (most of them) would hide the map.
-      if (o.map_id != s.map_id || o.label == "background" || o.label.empty()) continue;
+      if (o.map_id != s.map_id || ((o.label == "background" || o.label.empty()) && o.user_label.empty())) continue;
       // An object with evidence but no position yet (NaN centroid, object_t.lcm): not drawn.
       bool placed = true;
       for (int k = 0; k < 3; ++k) placed = placed && std::isfinite(o.centroid[k]) && std::isfinite(o.extent[k]);
@@ -333,7 +339,8 @@ bool drawTopDown(const Session& s, const std::string& path) {
       const cv::Scalar colour = labelColour(o.label);
       const cv::Rect box(lo, hi);
       cv::rectangle(img, box, colour, 2);
-      const std::string text = "#" + std::to_string(o.id) + " " + o.label + " (" + std::to_string(o.num_views) + " views)";
+      const std::string text = "#" + std::to_string(o.id) + " " + (o.user_label.empty() ? "" : "[" + o.user_label + "] ") +
+                               o.label + " (" + std::to_string(o.num_views) + " views)";
       const cv::Point at = freeLabelPlace(text, box, &taken);
       const cv::Rect label = putLabel(img, text, at, colour);
       // A label moved away from its box gets a line to it.
@@ -372,6 +379,9 @@ int main(int argc, char** argv) {
     fs::create_directories(out_dir);
     const Session s = readSession(log, ch);
     if (s.undecodable) spdlog::warn("{} undecodable messages skipped", s.undecodable);
+    if (s.last_objects)
+      for (const auto& o : s.last_objects->objects)
+        if (!o.user_label.empty()) draw.user_labels[o.id] = o.user_label;
 
     const std::string video = out_dir + "/annotated.mp4";
     cv::VideoWriter writer;

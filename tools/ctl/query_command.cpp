@@ -1,5 +1,7 @@
 // slamaware-ctl query [--label L | --region x0 y0 z0 x1 y1 z1] [--map-id N] [--timeout s]: asks the
 // object map server (OBJECT_QUERY) and prints its answer (OBJECT_QUERY_REPLY) as a table.
+// slamaware-ctl label OBJECT_ID CLASS | label --unlabel OBJECT_ID: gives an object the user's class
+// (kept with it and saved at once), or takes it back.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -24,6 +26,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct QueryArgs {
+  int8_t kind = object_query_t::KIND_ALL;
+  int32_t object_id = -1;
   std::string label;
   std::vector<double> region;
   int map_id = -1;
@@ -38,8 +42,8 @@ void printReply(const object_query_reply_t& r, bool hide_background) {
     std::printf("no objects%s\n", hidden ? (" (" + std::to_string(hidden) + " background candidates)").c_str() : "");
     return;
   }
-  std::printf("%6s  %-16s %6s %6s  %-26s %-20s %7s %4s\n", "ID", "LABEL", "P", "VIEWS",
-              "CENTROID (x y z)", "EXTENT (x y z)", "VOXELS", "MAP");
+  std::printf("%6s  %-16s %6s %6s  %-26s %-20s %7s %4s  %s\n", "ID", "LABEL", "P", "VIEWS",
+              "CENTROID (x y z)", "EXTENT (x y z)", "VOXELS", "MAP", "USER LABEL");
   for (const auto& o : r.objects) {
     if (hide_background && o.label == "background") continue;
     float p = 0;
@@ -55,8 +59,8 @@ void printReply(const object_query_reply_t& r, bool hide_background) {
       std::snprintf(centroid, sizeof(centroid), "(not localised)");
       std::snprintf(extent, sizeof(extent), "-");
     }
-    std::printf("%6d  %-16s %6.3f %6d  %-26s %-20s %7d %4d\n", o.id, o.label.c_str(), p,
-                o.num_views, centroid, extent, o.num_voxels, o.map_id);
+    std::printf("%6d  %-16s %6.3f %6d  %-26s %-20s %7d %4d  %s\n", o.id, o.label.c_str(), p,
+                o.num_views, centroid, extent, o.num_voxels, o.map_id, o.user_label.c_str());
   }
   if (hidden) std::printf("(and %zu background candidates)\n", hidden);
 }
@@ -68,8 +72,11 @@ int runQuery(const NodeArgs& node, const QueryArgs& args) {
   std::random_device rd;
   q.request_id = (static_cast<int64_t>(::getpid()) << 32) ^ static_cast<int64_t>(rd());
   q.map_id = args.map_id;
-  q.kind = object_query_t::KIND_ALL;
-  if (!args.label.empty()) {
+  q.kind = args.kind;
+  q.object_id = args.object_id;
+  if (args.kind == object_query_t::KIND_LABEL || args.kind == object_query_t::KIND_UNLABEL) {
+    q.label = args.label;  // idempotent too: sent again until answered
+  } else if (!args.label.empty()) {
     q.kind = object_query_t::KIND_BY_LABEL;
     q.label = args.label;
   } else if (!args.region.empty()) {
@@ -104,7 +111,8 @@ int runQuery(const NodeArgs& node, const QueryArgs& args) {
     return 1;
   }
   if (!reply->error.empty()) {
-    std::fprintf(stderr, "query refused: %s\n", reply->error.c_str());
+    std::fprintf(stderr, "%s refused: %s\n", args.kind >= object_query_t::KIND_LABEL ? "label" : "query",
+                 reply->error.c_str());
     return 1;
   }
   printReply(*reply, args.hide_background);
@@ -129,6 +137,25 @@ void addQueryCommand(CLI::App& app, CtlContext& ctx) {
                 "leave out the candidates whose fused label is background (counted at the end)");
   sub->callback([&ctx, args] {
     ctx.exit_code = runNode("ctl", ctx.node, [&] { return runQuery(ctx.node, *args); });
+  });
+
+  auto largs = std::make_shared<QueryArgs>();
+  auto unlabel = std::make_shared<bool>(false);
+  auto* lab = app.add_subcommand(
+      "label", "give an object of the map your class name (saved with the map; slamaware-harvest "
+               "collects its views), or take it back with --unlabel");
+  lab->add_option("object_id", largs->object_id, "the object's id (slamaware-ctl query)")->required();
+  lab->add_option("class", largs->label, "class name: letters, digits, _ or -");
+  lab->add_flag("--unlabel", *unlabel, "take the object's label back");
+  lab->add_option("--timeout", largs->timeout_s, "s to wait for the answer");
+  lab->callback([&ctx, largs, unlabel] {
+    if (*unlabel == !largs->label.empty()) {
+      std::fprintf(stderr, "label: give OBJECT_ID CLASS, or --unlabel OBJECT_ID\n");
+      ctx.exit_code = 2;
+      return;
+    }
+    largs->kind = *unlabel ? object_query_t::KIND_UNLABEL : object_query_t::KIND_LABEL;
+    ctx.exit_code = runNode("ctl", ctx.node, [&] { return runQuery(ctx.node, *largs); });
   });
 }
 
