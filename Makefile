@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test test-sanitize fuzz soak chaos demo eval eval-random bench record synth sample model spy clean
+.PHONY: all deps build test test-sanitize fuzz soak chaos demo teach eval eval-random bench record synth sample model spy clean
 
 all: build
 
@@ -48,6 +48,12 @@ SOURCE ?= logs/sample.lcm
 NETNS ?= 1
 demo: deps build
 	scripts/demo "$(SOURCE)" $(NETNS)
+
+# Teaching a new object on real data: the pipeline on views 0-23 of the temple ring, the temple
+# labelled in the map, its views harvested, the class added to the model, and the temple's views
+# 24-46 and the real UW frames classified before and after (scripts/teach): $(BUILD)/teach/report.md.
+teach: deps build
+	scripts/teach $(BUILD)
 
 # Evaluation on the default suite or SEQUENCES="dir ..." (MODEL=file: another recognizer model):
 # build/eval/report.{json,md} + plots.

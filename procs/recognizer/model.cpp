@@ -1,5 +1,6 @@
 #include "procs/recognizer/model.h"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -33,6 +34,10 @@ class Writer {
   void ints(const std::vector<int>& v) {
     pod<uint64_t>(v.size());
     for (int x : v) pod<int32_t>(x);
+  }
+  void raw(const void* p, size_t n) {
+    const auto* b = reinterpret_cast<const uint8_t*>(p);
+    bytes_.insert(bytes_.end(), b, b + n);
   }
   std::vector<uint8_t>& bytes() { return bytes_; }
 
@@ -78,6 +83,12 @@ class Reader {
     return v;
   }
   bool done() const { return p_ == end_; }
+  const uint8_t* raw(uint64_t n, const char* field) {
+    need(n, field);
+    const uint8_t* at = p_;
+    p_ += n;
+    return at;
+  }
 
  private:
   void need(uint64_t n, const char* field) const {
@@ -114,9 +125,70 @@ void writeField(Writer& w, const RecognizerModel& m) {
   w.pod<float>(c.temperature);
   w.pod<float>(c.uniform_mix);
   w.str(m.provenance);
+  // Exemplars (version 2): per row label, domain, weight, its non-zero blocks' indices, and per
+  // block a scale and block_dims signed bytes (as ExampleSet holds them: re-quantising its values
+  // gives the same bytes).
+  const ExampleSet& e = m.exemplars;
+  const int64_t bd = m.params.pca_dims;
+  w.pod<uint64_t>(static_cast<uint64_t>(e.size()));
+  std::vector<int32_t> index;
+  std::vector<float> values;
+  std::vector<int8_t> q(static_cast<size_t>(bd));
+  for (int64_t i = 0; i < e.size(); ++i) {
+    const int nb = e.blocks(i, &index, &values);
+    w.pod<int32_t>(e.label(i));
+    w.pod<int32_t>(e.domain(i));
+    w.pod<float>(e.weight(i));
+    w.pod<int32_t>(nb);
+    w.raw(index.data(), static_cast<size_t>(nb) * sizeof(int32_t));
+    for (int k = 0; k < nb; ++k) {
+      const float* v = values.data() + k * bd;
+      float top = 0;
+      for (int64_t j = 0; j < bd; ++j) top = std::max(top, std::fabs(v[j]));
+      const float scale = top / 127.f;
+      for (int64_t j = 0; j < bd; ++j)
+        q[static_cast<size_t>(j)] = static_cast<int8_t>(scale > 0 ? std::lround(v[j] / scale) : 0);
+      w.pod<float>(scale);
+      w.raw(q.data(), q.size());
+    }
+  }
 }
 
-RecognizerModel readFields(Reader& r, const std::string& what) {
+// Reads the exemplars written by writeField into m->exemplars (labels checked against the classes).
+void readExemplars(Reader& r, const std::string& what, RecognizerModel* m) {
+  const int64_t dims = m->params.vladDims(), bd = m->params.pca_dims, blocks = dims / bd;
+  m->exemplars = ExampleSet(dims, bd);
+  const uint64_t n = r.pod<uint64_t>("exemplar_count");
+  if (n > 1000000) throw ModelError(what + ": implausible number of exemplars " + std::to_string(n));
+  std::vector<float> row(static_cast<size_t>(dims));
+  for (uint64_t i = 0; i < n; ++i) {
+    const int32_t label = r.pod<int32_t>("exemplar_label");
+    const int32_t domain = r.pod<int32_t>("exemplar_domain");
+    const float weight = r.pod<float>("exemplar_weight");
+    const int32_t nb = r.pod<int32_t>("exemplar_blocks");
+    if (label < 0 || label >= m->classifier.numClasses() || domain < 0 || domain > 1 ||
+        !(weight >= 0) || !std::isfinite(weight) || nb < 0 || nb > blocks)
+      throw ModelError(what + ": exemplar " + std::to_string(i) + " is malformed");
+    std::vector<int32_t> index(static_cast<size_t>(nb));
+    std::memcpy(index.data(), r.raw(static_cast<uint64_t>(nb) * sizeof(int32_t), "exemplar_index"),
+                index.size() * sizeof(int32_t));
+    std::fill(row.begin(), row.end(), 0.f);
+    for (int32_t k = 0; k < nb; ++k) {
+      if (index[static_cast<size_t>(k)] < 0 || index[static_cast<size_t>(k)] >= blocks ||
+          (k > 0 && index[static_cast<size_t>(k)] <= index[static_cast<size_t>(k - 1)]))
+        throw ModelError(what + ": exemplar " + std::to_string(i) + " has bad block indices");
+      const float scale = r.pod<float>("exemplar_scale");
+      if (!(scale >= 0) || !std::isfinite(scale))
+        throw ModelError(what + ": exemplar " + std::to_string(i) + " has a bad scale");
+      const auto* q = reinterpret_cast<const int8_t*>(r.raw(static_cast<uint64_t>(bd), "exemplar_values"));
+      float* out = row.data() + static_cast<int64_t>(index[static_cast<size_t>(k)]) * bd;
+      for (int64_t j = 0; j < bd; ++j) out[j] = scale * static_cast<float>(q[j]);
+    }
+    m->exemplars.add(row.data(), label, -1, domain, weight);
+  }
+}
+
+RecognizerModel readFields(Reader& r, const std::string& what, uint32_t version) {
   RecognizerModel m;
   FeatureParams& f = m.params.features;
   f.step_px = r.pod<int32_t>("step_px");
@@ -160,6 +232,10 @@ RecognizerModel readFields(Reader& r, const std::string& what) {
   m.classifier.temperature = r.pod<float>("temperature");
   m.classifier.uniform_mix = r.pod<float>("uniform_mix");
   m.provenance = r.str("provenance");
+  if (version >= 2)
+    readExemplars(r, what, &m);
+  else
+    m.exemplars = ExampleSet(m.params.vladDims(), m.params.pca_dims);
   if (!r.done()) throw ModelError(what + ": unexpected bytes after the last field");
   return m;
 }
@@ -190,6 +266,10 @@ void RecognizerModel::check(const std::string& what) const {
       classifier.dims() != params.vladDims())
     fail("classifier weights are not " + std::to_string(C) + " x " +
          std::to_string(params.vladDims()));
+  if (exemplars.size() > 0 && (exemplars.dims() != params.vladDims() || exemplars.blockDims() != params.pca_dims))
+    fail("exemplars are not encoded vectors of this model");
+  for (int64_t i = 0; i < exemplars.size(); ++i)
+    if (exemplars.label(i) < 0 || exemplars.label(i) >= C) fail("an exemplar's class is out of range");
   if (!(classifier.temperature > 0) || !(classifier.uniform_mix >= 0) ||
       !(classifier.uniform_mix < 1))
     fail("calibration out of range");
@@ -245,9 +325,9 @@ RecognizerModel loadModel(const std::string& path) {
   std::memcpy(&payload_crc, bytes.data() + 24, 4);
   if (headerCrc(bytes.data()) != header_crc)
     throw ModelError(what + ": header checksum mismatch (file is corrupt)");
-  if (version != kModelFormatVersion)
+  if (version < 1 || version > kModelFormatVersion)
     throw ModelError(what + ": format version " + std::to_string(version) +
-                     ", this build reads version " + std::to_string(kModelFormatVersion) +
+                     ", this build reads versions 1 to " + std::to_string(kModelFormatVersion) +
                      " (retrain with slamaware-train)");
   const uint64_t have = bytes.size() - kHeaderSize;
   if (have < payload_size)
@@ -259,7 +339,7 @@ RecognizerModel loadModel(const std::string& path) {
   if (crc32(bytes.data() + kHeaderSize, payload_size) != payload_crc)
     throw ModelError(what + ": payload checksum mismatch (file is corrupt)");
   Reader r(bytes.data() + kHeaderSize, static_cast<size_t>(payload_size), what);
-  RecognizerModel m = readFields(r, what);
+  RecognizerModel m = readFields(r, what, version);
   m.check(what);
   return m;
 }

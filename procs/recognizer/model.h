@@ -9,7 +9,8 @@
 //  16  uint64   payload size in bytes
 //  24  uint32   payload CRC-32 (IEEE 802.3 polynomial)
 //  28  payload: the fields in the order of writeModel() (model.cpp), each array preceded by its
-//      element count.
+//      element count. Version 2 adds the exemplars after the provenance; version 1 files (no
+//      exemplars) are still read.
 // Written to a temporary file beside the target, fsync'ed, then renamed over it, so that a reader
 // sees the old file or the new one, never a half-written one.
 #include <cstdint>
@@ -19,11 +20,12 @@
 
 #include "procs/recognizer/classifier.h"
 #include "procs/recognizer/encoding_params.h"
+#include "procs/recognizer/example_set.h"
 #include "procs/recognizer/pca_vocabulary.h"
 
 namespace slamaware {
 
-constexpr uint32_t kModelFormatVersion = 1;
+constexpr uint32_t kModelFormatVersion = 2;
 
 class ModelError : public std::runtime_error {
  public:
@@ -37,6 +39,10 @@ struct RecognizerModel {
   LinearClassifier classifier;
   /// Free text (JSON) about how the model was made: data, options, validation results.
   std::string provenance;
+  /// A few encoded training examples of every class (labels index classifier.classes; domain 1:
+  /// photographed), kept so that classes can be added later without the original training data
+  /// (slamaware-train --base). Empty in a version-1 file.
+  ExampleSet exemplars;
 
   /// Throws ModelError (prefixed with `what`) when the parts do not fit together.
   void check(const std::string& what) const;

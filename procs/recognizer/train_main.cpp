@@ -1,6 +1,8 @@
 // slamaware-train: trains the recognizer's model (PCA, vocabulary, classifiers) from object sets
 // and scene sequences with ground-truth boxes (their objects as positives or background, the rest
-// as background); prints a validation summary on held-out data and writes one model file.
+// as background); prints a validation summary on held-out data and writes one model file. With
+// --base MODEL, adds the classes of --objects to an existing model instead (seconds, without the
+// base's training data: addClasses in trainer.h).
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -23,10 +25,15 @@ int main(int argc, char** argv) {
   std::vector<std::string> objects, scenes, background_objects;
   std::string out, config, report_path, proposals_dir, log_level = "info";
   int64_t seed = -1;
-  std::string show;
+  std::string show, base;
+  bool replace = false;
   app.add_option("--report", show,
                  "prints what the model file was trained on (object sets, scenes, options, validation) and exits");
   app.add_option("--objects", objects, "object set folders (category/category_N/..._crop.png)");
+  app.add_option("--base", base,
+                 "adds the categories of --objects (e.g. slamaware-harvest's sets) to this model, keeping its "
+                 "classes, encoding and calibration; --scenes and --proposals are not used");
+  app.add_flag("--replace", replace, "with --base: a category the base model has is trained again from the new views");
   app.add_option("--scenes,--negatives", scenes,
                  "sequence folders with boxes.csv: their objects (jittered boxes) and background boxes");
   app.add_option("--background-objects", background_objects,
@@ -56,6 +63,19 @@ int main(int argc, char** argv) {
   if (objects.empty() || out.empty()) {
     std::cerr << "slamaware-train: --objects and --out are required to train (or --report MODEL to describe one)\n";
     return 2;
+  }
+  if (!base.empty()) {
+    try {
+      const TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
+      AddClassesReport report;
+      const RecognizerModel model = addClasses(loadModel(base), objects, options, replace, &report);
+      saveModel(model, out);
+      std::cout << report.toText() << "model written to " << out << "\n";
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 1;
+    }
+    return 0;
   }
   size_t example_kb = 0;
   try {

@@ -319,6 +319,21 @@ ValidationSummary summarize(const LinearClassifier& clf, const ExampleSet& val, 
 
 }  // namespace
 
+ExampleSet pickExemplars(const ExampleSet& set, int classes, int background, int per_class) {
+  std::vector<std::vector<int64_t>> of(static_cast<size_t>(std::max(classes, 0)));
+  for (int64_t i = 0; i < set.size(); ++i)
+    if (set.label(i) >= 0 && set.label(i) < classes) of[static_cast<size_t>(set.label(i))].push_back(i);
+  std::vector<char> keep(static_cast<size_t>(set.size()), 0);
+  for (int l = 0; l < classes; ++l) {
+    const auto& idx = of[static_cast<size_t>(l)];
+    const size_t want = std::min(idx.size(), static_cast<size_t>(std::max(0, per_class * (l == background ? 4 : 1))));
+    for (size_t k = 0; k < want; ++k) keep[static_cast<size_t>(idx[(2 * k + 1) * idx.size() / (2 * want)])] = 1;
+  }
+  ExampleSet picked = set.select([&](int64_t i) { return keep[static_cast<size_t>(i)] != 0; });
+  for (int64_t i = 0; i < picked.size(); ++i) picked.setWeight(i, 1.f);
+  return picked;
+}
+
 void balanceDomains(ExampleSet* set, int classes, double real_share) {
   if (real_share <= 0 || real_share >= 1) return;
   std::vector<double> count[2];
@@ -1048,6 +1063,9 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     clf.uniform_mix = 0.01f;  // nothing to fit on: keep a floor so that views can still be summed
   }
   model.classifier = std::move(clf);
+  model.exemplars = pickExemplars(train, static_cast<int>(classes.size()), bg, options.exemplars_per_class);
+  spdlog::info("{} exemplars kept in the model ({:.1f} MB)", model.exemplars.size(),
+               static_cast<double>(model.exemplars.bytes()) / 1e6);
 
   TrainReport local;
   TrainReport& r = report ? *report : local;
@@ -1179,6 +1197,125 @@ HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const Tra
                        options, progress, r);
 }
 
+RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
+                           const TrainOptions& options, bool replace, AddClassesReport* report) {
+  const auto started = Clock::now();
+  AddClassesReport local;
+  AddClassesReport& r = report ? *report : local;
+  if (!base.hasBackground()) throw std::runtime_error("the base model has no background class");
+  if (base.exemplars.size() == 0)
+    throw std::runtime_error(
+        "the base model holds no exemplars (trained before models kept them): train it again (make model, "
+        "slamaware-train) to add classes to it");
+  std::vector<LabeledCrop> crops;
+  for (const auto& dir : object_dirs) {
+    auto c = collectNamedCrops(dir, 0);
+    crops.insert(crops.end(), c.begin(), c.end());
+  }
+  std::set<std::string> categories;
+  for (const auto& c : crops)
+    if (c.category != "background") categories.insert(c.category);
+  if (categories.empty())
+    throw DatasetError(fmt::format("{}: no views of any class (only background)", fmt::join(object_dirs, ", ")));
+  const std::vector<std::string>& old = base.classifier.classes;
+  std::vector<std::string> classes(old.begin(), old.end() - 1);  // background last, below
+  r.added.clear();
+  r.replaced.clear();
+  for (const auto& c : categories) {
+    if (std::find(classes.begin(), classes.end(), c) == classes.end()) {
+      r.added.push_back(c);
+    } else if (!replace) {
+      throw std::runtime_error("class '" + c + "' is already in the base model (--replace trains it from these views instead)");
+    } else {
+      r.replaced.push_back(c);
+    }
+  }
+  classes.insert(classes.end(), r.added.begin(), r.added.end());
+  classes.push_back("background");
+  const int C = static_cast<int>(classes.size()), bg = C - 1;
+  const auto isReplaced = [&](const std::string& c) {
+    return std::find(r.replaced.begin(), r.replaced.end(), c) != r.replaced.end();
+  };
+  std::vector<int> old_to_new(old.size());
+  for (size_t i = 0; i < old.size(); ++i) old_to_new[i] = indexOf(classes, old[i]);
+
+  const int64_t dims = base.params.vladDims();
+  ExampleSet set(dims, base.params.pca_dims);
+  {
+    std::vector<float> row(static_cast<size_t>(dims));
+    for (int64_t i = 0; i < base.exemplars.size(); ++i) {
+      const std::string& name = old[static_cast<size_t>(base.exemplars.label(i))];
+      if (isReplaced(name)) continue;
+      base.exemplars.get(i, row.data());
+      set.add(row.data(), old_to_new[static_cast<size_t>(base.exemplars.label(i))], -1, base.exemplars.domain(i));
+    }
+  }
+  r.exemplars = set.size();
+  ExampleSet fresh;
+  {
+    std::vector<std::string> instances;
+    for (const auto& c : crops)
+      if (indexOf(instances, c.instance) < 0) instances.push_back(c.instance);
+    FrameEncoder encoder(base.params, base.pca, base.vocabulary);
+    ProgressBar bar("encode views", static_cast<int64_t>(crops.size()));
+    fresh = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
+                        [&](int64_t done, int64_t) { bar.update(done); }, bg);
+    bar.finish();
+  }
+  r.views = static_cast<int64_t>(crops.size());
+  r.positives = r.background = 0;
+  for (int64_t i = 0; i < fresh.size(); ++i) (fresh.label(i) == bg ? r.background : r.positives) += 1;
+  set.append(fresh);
+
+  LinearClassifier start;
+  start.classes = classes;
+  start.weights = MatrixRM::Zero(C, dims);
+  start.bias = Eigen::VectorXf::Zero(C);
+  for (size_t i = 0; i < old.size(); ++i) {
+    if (isReplaced(old[i])) continue;
+    start.weights.row(old_to_new[i]) = base.classifier.weights.row(static_cast<int64_t>(i));
+    start.bias[old_to_new[i]] = base.classifier.bias[static_cast<int64_t>(i)];
+  }
+  ProgressBar bar("train classifiers", options.sgd.epochs);
+  LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); }, &start);
+  bar.finish();
+  clf.temperature = base.classifier.temperature;
+  clf.uniform_mix = base.classifier.uniform_mix;
+
+  RecognizerModel model;
+  model.params = base.params;
+  model.pca = base.pca;
+  model.vocabulary = base.vocabulary;
+  model.classifier = std::move(clf);
+  model.exemplars = set.select([&](int64_t i) { return i < r.exemplars; });
+  model.exemplars.append(pickExemplars(fresh, C, bg, options.exemplars_per_class));
+  r.seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  nlohmann::json j;
+  j["kind"] = "classes added";
+  j["added_classes"] = r.added;
+  j["replaced_classes"] = r.replaced;
+  j["object_sets"] = object_dirs;
+  j["views"] = r.views;
+  j["examples"] = {{"classes", r.positives}, {"background", r.background}, {"base_exemplars", r.exemplars}};
+  j["seconds"] = r.seconds;
+  try {
+    j["base"] = nlohmann::json::parse(base.provenance);
+  } catch (const nlohmann::json::exception&) {
+    j["base"] = base.provenance;
+  }
+  model.provenance = j.dump();
+  model.check("model with added classes");
+  return model;
+}
+
+std::string AddClassesReport::toText() const {
+  return fmt::format(
+      "added classes: {}{}{}\n{} views read; trained on {} examples of the classes, {} background, {} exemplars of "
+      "the base model, in {:.1f} s\n",
+      added.empty() ? "none" : fmt::format("{}", fmt::join(added, ", ")), replaced.empty() ? "" : "; retrained: ",
+      fmt::format("{}", fmt::join(replaced, ", ")), views, positives, background, exemplars, seconds);
+}
+
 std::string provenanceText(const RecognizerModel& model) {
   nlohmann::json j;
   try {
@@ -1188,6 +1325,21 @@ std::string provenanceText(const RecognizerModel& model) {
   }
   std::ostringstream o;
   o << "classes: " << fmt::format("{}", fmt::join(model.classifier.classes, ", ")) << "\n";
+  // Classes added to a base model (addClasses), possibly several times: each step, then the base.
+  while (j.is_object() && j.value("kind", std::string()) == "classes added") {
+    o << fmt::format("classes {} added{} from {} views of {} (slamaware-train --base), to a model:\n",
+                     fmt::join(j["added_classes"].get<std::vector<std::string>>(), ", "),
+                     j["replaced_classes"].empty()
+                         ? std::string()
+                         : fmt::format(" ({} retrained)", fmt::join(j["replaced_classes"].get<std::vector<std::string>>(), ", ")),
+                     j.value("views", int64_t{0}), fmt::join(j["object_sets"].get<std::vector<std::string>>(), ", "));
+    const nlohmann::json next = j["base"];
+    j = next;
+  }
+  if (!j.is_object()) {
+    o << "provenance (not JSON):\n" << j.dump() << "\n";
+    return o.str();
+  }
   if (!j.contains("format")) {  // a model trained before the provenance named sets and options
     o << "provenance (older format):\n" << j.dump(2) << "\n";
     return o.str();

@@ -62,6 +62,9 @@ struct TrainOptions {
   int context_copies = 1;          ///< crops also encoded pasted into scene frames
   int real_copies = 0;             ///< photographed crops also pasted varied (scale, colour, blur)
   bool mirror_crops = true;        ///< crops also encoded mirrored left-right
+  /// Encoded training examples kept in the model per object class (background: 4 times as many),
+  /// evenly spread over the training data, so that `slamaware-train --base` can add classes later.
+  int exemplars_per_class = 40;
   SgdOptions sgd;
   int negatives_per_frame = 4;
   int mining_rounds = 2;
@@ -105,6 +108,8 @@ struct TrainOptions {
     v("real_copies", real_copies,
       "copies of each photographed crop pasted into scene frames scaled, mirrored, recoloured and blurred");
     v("mirror_crops", mirror_crops, "training crops also encoded mirrored left-right");
+    v("exemplars_per_class", exemplars_per_class,
+      "encoded examples kept in the model per object class (background: 4x) for adding classes later");
     v.section("sgd", sgd);
     v("negatives_per_frame", negatives_per_frame, "initial background boxes per scene frame");
     v("mining_rounds", mining_rounds, "rounds of hard-negative mining");
@@ -189,6 +194,11 @@ std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::
 /// for real_share outside (0, 1).
 void balanceDomains(ExampleSet* set, int classes, double real_share);
 
+/// The exemplars a model keeps (RecognizerModel::exemplars): of each label below `classes`,
+/// `per_class` examples (label `background`: 4 times as many) evenly spread over the set's order,
+/// each with weight 1.
+ExampleSet pickExemplars(const ExampleSet& set, int classes, int background, int per_class);
+
 /// `count` boxes around `object` (scaled and shifted at random) that overlap it by IoU >= min_iou
 /// and lie in the image.
 std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count, double min_iou,
@@ -243,6 +253,28 @@ struct TrainReport {
 /// classes, the object sets and scenes with what was used of them, the validation on held-out data,
 /// the training time and peak memory, and the options as a config file that trains it again.
 std::string provenanceText(const RecognizerModel& model);
+
+/// What addClasses() did.
+struct AddClassesReport {
+  std::vector<std::string> added, replaced;  ///< classes new to the model, and retrained ones
+  int64_t views = 0;                         ///< crops read (each also mirrored: train.mirror_crops)
+  int64_t positives = 0, background = 0;     ///< encoded examples of the classes, of background
+  int64_t exemplars = 0;                     ///< the base model's exemplars trained on
+  double seconds = 0;
+  std::string toText() const;
+};
+
+/// A model that knows the categories of `object_dirs` (object sets, e.g. harvested by
+/// slamaware-harvest; their category "background" is background) besides the classes of `base`,
+/// made without the base's training data: the base's encoding (PCA, vocabulary) and calibration are
+/// kept; every classifier is trained again, from the base's weights and regularised towards them
+/// (new classes from zero), on the base's exemplars (RecognizerModel::exemplars) and the new views,
+/// so that the old classes learn the new ones as negatives and the new ones learn the old.
+/// A category the base already has is refused unless `replace` (then its exemplars are dropped and
+/// its classifier starts from zero). Throws std::runtime_error (DatasetError for unreadable sets)
+/// for a base without exemplars or background, or sets without views of a class.
+RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
+                           const TrainOptions& options, bool replace, AddClassesReport* report);
 
 /// Category accuracy of an object set on instances unseen in training. Each fold holds out a set of
 /// instances: PCA, vocabulary and classifiers are trained on the other instances only (no

@@ -8,6 +8,9 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "common/config.h"
 #include "common/dataset.h"
@@ -587,4 +590,98 @@ TEST(EvalObjectsCommandLine, EveryBoxedFrameOfASequenceOfSeparateViewsIsClassifi
   EXPECT_FALSE(j["sequences"]["kitchen"].contains("single_view_ss")) << "a rendered video has the pipeline's mAP";
   ASSERT_TRUE(j["sequences"]["kitchen_views"].contains("single_view_ss"));
   EXPECT_EQ(j["sequences"]["kitchen_views"]["single_view_ss"]["frames_evaluated"].get<int>(), 7);
+}
+
+namespace {
+
+// A third category for adding classes: yellow-violet checkerboards (corners, no curves).
+std::string writeCheckerSet(const std::string& dir, int first_instance, int instances, int views) {
+  for (int i = first_instance; i < first_instance + instances; ++i) {
+    const std::string folder = dir + "/checker/checker_" + std::to_string(i);
+    fs::create_directories(folder);
+    for (int v = 0; v < views; ++v) {
+      std::mt19937 rng(static_cast<uint32_t>(7000 * i + v));
+      std::uniform_real_distribution<double> u(0, 1);
+      cv::Mat img(72, 72, CV_8UC3, cv::Scalar(150 + 20 * u(rng), 150 + 20 * u(rng), 150 + 20 * u(rng)));
+      const int cell = 7 + (i % 3) + static_cast<int>(3 * u(rng));
+      const cv::Scalar a(30 + 20 * u(rng), 200 + 30 * u(rng), 220), b(160, 40 + 30 * u(rng), 120 + 40 * u(rng));
+      const int x0 = 8 + static_cast<int>(8 * u(rng)), y0 = 8 + static_cast<int>(8 * u(rng));
+      for (int y = 0; y * cell + y0 < 64; ++y)
+        for (int x = 0; x * cell + x0 < 64; ++x)
+          cv::rectangle(img, cv::Rect(x0 + x * cell, y0 + y * cell, cell, cell), (x + y) % 2 ? a : b, cv::FILLED);
+      cv::Mat noise(72, 72, CV_8UC3);
+      cv::randn(noise, 0, 6);
+      img += noise;
+      cv::imwrite(folder + "/checker_" + std::to_string(i) + "_1_" + std::to_string(v) + "_crop.png", img);
+    }
+  }
+  return dir;
+}
+
+// Share of `images` the recognizer calls `want` (each image one box covering it).
+double calledAs(Recognizer& r, const std::vector<cv::Mat>& images, const std::string& want) {
+  int right = 0;
+  for (const cv::Mat& img : images) {
+    const FrameDetections d = r.recognize(img, {{0, 0, static_cast<float>(img.cols), static_cast<float>(img.rows), 0}});
+    if (d.boxes.empty()) continue;
+    const auto& lp = d.boxes[0].log_prob;
+    right += d.classes[static_cast<size_t>(std::max_element(lp.begin(), lp.end()) - lp.begin())] == want;
+  }
+  return 100.0 * right / static_cast<double>(images.size());
+}
+
+}  // namespace
+
+// slamaware-train --base: a class is added from its views alone (the base model's exemplars stand in
+// for its training data). The new class is recognised on unseen instances, the old ones stay as
+// good as they were, a class the base has is refused without --replace, and a model without
+// exemplars (an older file) is refused with what to do.
+TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
+  const Trained& t = synthetic();
+  ASSERT_GT(t.model.exemplars.size(), 0);
+  const std::string dir = test::tempDir("recognizer_add_classes");
+  writeCheckerSet(dir + "/new", 1, 3, 10);
+  AddClassesReport report;
+  TrainOptions o = testOptions();
+  const RecognizerModel added = addClasses(t.model, {dir + "/new"}, o, false, &report);
+  EXPECT_EQ(added.classifier.classes, (std::vector<std::string>{"bar", "disc", "checker", "background"}));
+  EXPECT_EQ(report.added, (std::vector<std::string>{"checker"}));
+  EXPECT_EQ(report.positives, 60);  // 30 views, mirrored
+  EXPECT_GT(added.exemplars.size(), t.model.exemplars.size());
+  saveModel(added, dir + "/added.model");
+  EXPECT_NE(provenanceText(loadModel(dir + "/added.model")).find("classes checker added"), std::string::npos);
+
+  std::vector<cv::Mat> checkers, bars, discs;
+  writeCheckerSet(dir + "/unseen", 11, 3, 6);
+  for (const auto& c : collectNamedCrops(dir + "/unseen", 0)) checkers.push_back(cv::imread(c.path));
+  for (int i = 4; i < 6; ++i)  // instances the base model did not see (it has 1-3)
+    for (int v = 0; v < 9; ++v) {
+      bars.push_back(test::syntheticObjectView("bar", i, v, 72));
+      discs.push_back(test::syntheticObjectView("disc", i, v, 72));
+    }
+  Recognizer before(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions());
+  Recognizer after(std::make_shared<const RecognizerModel>(added), RecognizerOptions());
+  EXPECT_GE(calledAs(after, checkers, "checker"), 90.0);
+  for (const auto& [name, views] : {std::pair{"bar", &bars}, std::pair{"disc", &discs}}) {
+    const double was = calledAs(before, *views, name), is = calledAs(after, *views, name);
+    std::printf("%s: %.1f %% before, %.1f %% after; checker %.1f %%\n", name, was, is, calledAs(after, checkers, "checker"));
+    EXPECT_GE(is, was - 10.0) << name;
+    EXPECT_GE(is, 80.0) << name;
+  }
+
+  const std::string again = test::makeSyntheticObjectSet(dir + "/discs", 1, 4);
+  try {
+    addClasses(added, {again}, o, false, nullptr);
+    ADD_FAILURE() << "a class the model has was added again";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("already in the base model"), std::string::npos) << e.what();
+  }
+  RecognizerModel old = t.model;
+  old.exemplars = ExampleSet(old.params.vladDims(), old.params.pca_dims);
+  try {
+    addClasses(old, {dir + "/new"}, o, false, nullptr);
+    ADD_FAILURE() << "a model without exemplars was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no exemplars"), std::string::npos) << e.what();
+  }
 }

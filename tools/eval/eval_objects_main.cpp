@@ -107,6 +107,13 @@ struct BoxTally {
       for (int64_t v : confusion[c]) out << fmt::format(" {:>4}", v);
       out << "\n";
     }
+    out << "  called:";  // the columns' sums: what the boxes were taken for
+    for (size_t p = 0; p < classes.size(); ++p) {
+      int64_t n = 0;
+      for (const auto& row : confusion) n += row[p];
+      out << fmt::format(" {} {}", classes[p], n);
+    }
+    out << "\n";
   }
 };
 
