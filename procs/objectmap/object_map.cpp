@@ -264,8 +264,10 @@ std::vector<int> ObjectMapEngine::mapClasses(const std::vector<std::string>& nam
     for (size_t i = 0; i < classes_.size(); ++i)
       old_to_new[i] =
           static_cast<int>(std::find(list.begin(), list.end(), classes_[i]) - list.begin());
+    const auto old_bg = std::find(classes_.begin(), classes_.end(), std::string(kBackgroundClass));
+    const int old_background = old_bg == classes_.end() ? -1 : static_cast<int>(old_bg - classes_.begin());
     for (auto& [id, seg] : segments_) {
-      seg->table.remapClasses(old_to_new, list.size());
+      seg->table.remapClasses(old_to_new, list.size(), old_background);
       seg->dirty = true;
     }
     classes_ = std::move(list);
@@ -311,6 +313,8 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
     return true;
   }
   const std::vector<int> to_map = mapClasses(d.class_names);
+  const auto msg_bg = std::find(d.class_names.begin(), d.class_names.end(), std::string(kBackgroundClass));
+  const int msg_background = msg_bg == d.class_names.end() ? -1 : static_cast<int>(msg_bg - d.class_names.begin());
   Segment& seg = segmentFor(d.map_id);
   r.segment = seg.id;
   current_segment_ = seg.id;
@@ -361,8 +365,11 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
     v.seq = d.seq;
     v.area = b.w * b.h;
     const auto& row = d.log_prob[i];
-    const float floor = std::max(kMinLogProb, *std::min_element(row.begin(), row.end()));
-    v.log_prob.assign(classes_.size(), floor);
+    // A class of the map that the message's model lacks was part of that model's background: it
+    // gets the box's background log-probability (no evidence for or against it beside background).
+    const float missing = std::max(kMinLogProb, msg_background >= 0 ? row[static_cast<size_t>(msg_background)]
+                                                                    : *std::min_element(row.begin(), row.end()));
+    v.log_prob.assign(classes_.size(), missing);
     for (size_t k = 0; k < nc; ++k)
       v.log_prob[static_cast<size_t>(to_map[k])] = std::max(kMinLogProb, row[k]);
     seg.table.addView(cid, std::move(v));
@@ -473,6 +480,17 @@ object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::
   return m;
 }
 
+/// A reply to `q` with the map's classes and no objects yet.
+object_query_reply_t emptyReply(const object_query_t& q, const std::vector<std::string>& classes) {
+  object_query_reply_t reply;
+  reply.utime = 0;
+  reply.request_id = q.request_id;
+  reply.class_names = classes;
+  reply.num_classes = static_cast<int32_t>(classes.size());
+  reply.num_objects = 0;
+  return reply;
+}
+
 /// A user's class name must be usable as a category folder of an object set.
 bool validUserLabel(const std::string& l) {
   return !l.empty() && l.size() <= 64 && std::all_of(l.begin(), l.end(), [](char ch) {
@@ -545,12 +563,7 @@ object_map_t ObjectMapEngine::objectMap() const {
 }
 
 object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) const {
-  object_query_reply_t reply;
-  reply.utime = 0;
-  reply.request_id = q.request_id;
-  reply.class_names = classes_;
-  reply.num_classes = static_cast<int32_t>(classes_.size());
-  reply.num_objects = 0;
+  object_query_reply_t reply = emptyReply(q, classes_);
   auto fail = [&](const std::string& why) {
     reply.error = why;
     return reply;
@@ -604,12 +617,7 @@ object_query_reply_t ObjectMapEngine::answer(const object_query_t& q) const {
 }
 
 object_query_reply_t ObjectMapEngine::label(const object_query_t& q) {
-  object_query_reply_t reply;
-  reply.utime = 0;
-  reply.request_id = q.request_id;
-  reply.class_names = classes_;
-  reply.num_classes = static_cast<int32_t>(classes_.size());
-  reply.num_objects = 0;
+  object_query_reply_t reply = emptyReply(q, classes_);
   const bool unlabel = q.kind == object_query_t::KIND_UNLABEL;
   if (!unlabel && q.kind != object_query_t::KIND_LABEL) {
     reply.error = "not a labelling request (kind " + std::to_string(q.kind) + ")";

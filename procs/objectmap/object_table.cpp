@@ -210,11 +210,13 @@ std::string ObjectTable::userLabelOf(const std::vector<int32_t>& members) const 
   return best;
 }
 
-void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size) {
+void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size, int old_background) {
   for (auto& [id, c] : candidates_)
     for (auto& [key, v] : c.views) {
-      const float floor =
-          v.log_prob.empty() ? 0.f : *std::min_element(v.log_prob.begin(), v.log_prob.end());
+      const float floor = old_background >= 0 && static_cast<size_t>(old_background) < v.log_prob.size()
+                              ? v.log_prob[static_cast<size_t>(old_background)]
+                          : v.log_prob.empty() ? 0.f
+                                               : *std::min_element(v.log_prob.begin(), v.log_prob.end());
       std::vector<float> out(new_size, floor);
       for (size_t i = 0; i < v.log_prob.size() && i < old_to_new.size(); ++i)
         if (old_to_new[i] >= 0 && static_cast<size_t>(old_to_new[i]) < new_size)

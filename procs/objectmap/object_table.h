@@ -109,9 +109,10 @@ class ObjectTable {
   /// object holds (unknown, or added since).
   const Object* objectOfCandidate(int32_t candidate) const;
 
-  /// Classes changed: the view value of old class i moves to index old_to_new[i]; classes a
-  /// view did not have get the view's lowest log-probability (see README).
-  void remapClasses(const std::vector<int>& old_to_new, size_t new_size);
+  /// Classes changed: the view value of old class i moves to index old_to_new[i]; a class a view
+  /// did not have was part of its background: it gets the view's log p of old class
+  /// `old_background` (without one, the view's lowest log-probability; see README).
+  void remapClasses(const std::vector<int>& old_to_new, size_t new_size, int old_background = -1);
 
   /// Gives (label "") or takes back a user's class for an object: every candidate it holds now
   /// carries it. false: no object has this id.

@@ -830,6 +830,9 @@ TEST(ObjectMapEngine, ANewClassFromAnotherModelIsAddedBeforeBackground) {
   for (const auto& o : m.objects) {
     EXPECT_EQ(o.num_classes, 6);
     EXPECT_EQ(o.num_views, 2);
+    // Frame 0's model had no giraffe: that view gives it its background's log p (the old model's
+    // background held giraffes), frame 1's view log 0.1; so giraffe's evidence is background's.
+    EXPECT_FLOAT_EQ(o.log_evidence[4], o.log_evidence[5]) << "object " << o.id;
   }
 }
 

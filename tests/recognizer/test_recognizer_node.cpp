@@ -85,18 +85,23 @@ struct Listener {
   }
 };
 
+// A small model of the synthetic object set (quick options; seed and epochs tell two apart).
+RecognizerModel smallModel(const std::string& objects, int seed = 7, int epochs = 5) {
+  TrainOptions o;
+  o.vocabulary_descriptors = 5000;
+  o.kmeans_iterations = 10;
+  o.sgd.epochs = epochs;
+  o.seed = seed;
+  o.validation = false;
+  return trainModel({objects}, {}, o, nullptr);
+}
+
 }  // namespace
 
 TEST(RecognizerNode, SurvivesBadInputAndCountsIt) {
   const std::string dir = test::tempDir("recognizer_node");
   // A small model of "bar" and "disc" (no background class: the node appends it).
-  TrainOptions o;
-  o.vocabulary_descriptors = 5000;
-  o.kmeans_iterations = 10;
-  o.sgd.epochs = 5;
-  o.validation = false;
-  const std::string objects = test::makeSyntheticObjectSet(dir + "/objects", 2, 6);
-  const RecognizerModel model = trainModel({objects}, {}, o, nullptr);
+  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
   saveModel(model, dir + "/model.bin");
   const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar, mug]");
 
@@ -237,16 +242,8 @@ void replaceFile(const std::string& path, const std::string& bytes) {
 // `slamaware-ctl reload recognizer` reloads on demand and says so.
 TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
   const std::string dir = test::tempDir("recognizer_node_reload");
-  TrainOptions o;
-  o.vocabulary_descriptors = 5000;
-  o.kmeans_iterations = 10;
-  o.sgd.epochs = 5;
-  o.validation = false;
   const std::string objects = test::makeSyntheticObjectSet(dir + "/objects", 2, 6);
-  const RecognizerModel a = trainModel({objects}, {}, o, nullptr);
-  o.seed = 11;
-  o.sgd.epochs = 3;
-  const RecognizerModel b = trainModel({objects}, {}, o, nullptr);
+  const RecognizerModel a = smallModel(objects), b = smallModel(objects, 11, 3);
   const std::string model = dir + "/model.bin";
   saveModel(a, model);
   saveModel(b, dir + "/b.model");
