@@ -59,21 +59,10 @@ int LinearClassifier::classIndex(const std::string& name) const {
 
 LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std::string>& classes,
                                const SgdOptions& options,
-                               const std::function<void(int)>& progress, const LinearClassifier* start) {
+                               const std::function<void(int)>& progress) {
   const int C = static_cast<int>(classes.size());
   const int64_t n = examples.size(), dims = examples.dims();
   if (C < 1 || n < 1) throw std::invalid_argument("trainOneVsAll: no classes or no examples");
-  if (start && (start->numClasses() != C || start->dims() != dims || start->bias.size() != C))
-    throw std::invalid_argument("trainOneVsAll: the start classifier does not fit the classes and examples");
-  // The start's scores of every example (fine-tuning learns the change from them).
-  MatrixRM start_scores = MatrixRM::Zero(start ? n : 0, C);
-  if (start) {
-    MatrixRM x(1, dims), row;
-    for (int64_t i = 0; i < n; ++i) {
-      examples.get(i, x.data());
-      start_scores.row(i).noalias() = x * start->weights.transpose();
-    }
-  }
   // Class balance from the examples' weights: the positives of a class weigh as much as the rest.
   std::vector<double> positives(static_cast<size_t>(C), 0.0);
   double total = 0;
@@ -97,8 +86,6 @@ LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std
   // example touches only its non-zero blocks.
   MatrixRM v = MatrixRM::Zero(C, dims);
   std::vector<double> scale(static_cast<size_t>(C), 1.0), bias(static_cast<size_t>(C), 0.0);
-  if (start)
-    for (int c = 0; c < C; ++c) bias[static_cast<size_t>(c)] = start->bias[c];
   std::vector<int64_t> order(static_cast<size_t>(n));
   for (int64_t i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
   std::mt19937 rng(static_cast<uint32_t>(options.seed));
@@ -124,8 +111,7 @@ LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std
         for (int k = 0; k < nb; ++k)
           dot += Eigen::Map<const Eigen::VectorXf>(vc + index[static_cast<size_t>(k)] * bd, bd)
                      .dot(Eigen::Map<const Eigen::VectorXf>(values.data() + k * bd, bd));
-        const double s = scale[cc] * static_cast<double>(dot) + bias[cc] +
-                         (start ? static_cast<double>(start_scores(idx, c)) : 0.0);
+        const double s = scale[cc] * static_cast<double>(dot) + bias[cc];
         const double z = label == c ? 1.0 : -1.0;
         const double weight = example_weight * (z > 0 ? w_pos[cc] : w_neg[cc]);
         const double g = -z * weight * sigmoid(-z * s);  // d loss / d s
@@ -152,8 +138,7 @@ LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std
   model.bias.resize(C);
   for (int c = 0; c < C; ++c) {
     model.weights.row(c) = v.row(c) * static_cast<float>(scale[static_cast<size_t>(c)]);
-    if (start) model.weights.row(c) += start->weights.row(c);
-    model.bias[c] = positives[static_cast<size_t>(c)] > 0 || start
+    model.bias[c] = positives[static_cast<size_t>(c)] > 0
                         ? static_cast<float>(bias[static_cast<size_t>(c)])
                         : -20.f;
   }

@@ -61,13 +61,10 @@ void calibratedLogProbabilities(const float* scores, int C, float temperature, f
 
 /// Trains one logistic regression per class (label == c against all other examples) by SGD with
 /// L2 regularisation. Deterministic for given examples and options. `progress(epoch)` is called
-/// after each epoch when set. With `start` (C classes, the examples' dims), training starts from its
-/// weights and biases and the L2 term pulls towards its weights instead of zero: a fine-tuning that
-/// keeps what the start learnt from data the examples no longer hold.
+/// after each epoch when set.
 LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std::string>& classes,
                                const SgdOptions& options,
-                               const std::function<void(int)>& progress = {},
-                               const LinearClassifier* start = nullptr);
+                               const std::function<void(int)>& progress = {});
 
 /// Fits temperature and floor on held-out scores (B x C) with labels; returns the mean negative
 /// log-likelihood reached.

@@ -1217,7 +1217,7 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
     if (c.category != "background") categories.insert(c.category);
   if (categories.empty())
     throw DatasetError(fmt::format("{}: no views of any class (only background)", fmt::join(object_dirs, ", ")));
-  const std::vector<std::string>& old = base.classifier.classes;
+  const std::vector<std::string>& old = base.classifier.classes;  // background last
   std::vector<std::string> classes(old.begin(), old.end() - 1);  // background last, below
   r.added.clear();
   r.replaced.clear();
@@ -1267,18 +1267,17 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   for (int64_t i = 0; i < fresh.size(); ++i) (fresh.label(i) == bg ? r.background : r.positives) += 1;
   set.append(fresh);
 
-  LinearClassifier start;
-  start.classes = classes;
-  start.weights = MatrixRM::Zero(C, dims);
-  start.bias = Eigen::VectorXf::Zero(C);
+  // One-vs-all rows are independent: every row is trained on this small set, then the base's
+  // classes take back the rows the base learnt from all its data (the new rows learnt them as
+  // negatives from their exemplars; a replaced class keeps its new row).
+  ProgressBar bar("train classifiers", options.sgd.epochs);
+  LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); });
+  bar.finish();
   for (size_t i = 0; i < old.size(); ++i) {
     if (isReplaced(old[i])) continue;
-    start.weights.row(old_to_new[i]) = base.classifier.weights.row(static_cast<int64_t>(i));
-    start.bias[old_to_new[i]] = base.classifier.bias[static_cast<int64_t>(i)];
+    clf.weights.row(old_to_new[i]) = base.classifier.weights.row(static_cast<int64_t>(i));
+    clf.bias[old_to_new[i]] = base.classifier.bias[static_cast<int64_t>(i)];
   }
-  ProgressBar bar("train classifiers", options.sgd.epochs);
-  LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); }, &start);
-  bar.finish();
   clf.temperature = base.classifier.temperature;
   clf.uniform_mix = base.classifier.uniform_mix;
 

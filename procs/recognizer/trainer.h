@@ -266,12 +266,11 @@ struct AddClassesReport {
 
 /// A model that knows the categories of `object_dirs` (object sets, e.g. harvested by
 /// slamaware-harvest; their category "background" is background) besides the classes of `base`,
-/// made without the base's training data: the base's encoding (PCA, vocabulary) and calibration are
-/// kept; every classifier is trained again, from the base's weights and regularised towards them
-/// (new classes from zero), on the base's exemplars (RecognizerModel::exemplars) and the new views,
-/// so that the old classes learn the new ones as negatives and the new ones learn the old.
-/// A category the base already has is refused unless `replace` (then its exemplars are dropped and
-/// its classifier starts from zero). Throws std::runtime_error (DatasetError for unreadable sets)
+/// made without the base's training data: the base's encoding (PCA, vocabulary), calibration and
+/// classifiers are kept as they are; a classifier for each new category is trained on its views
+/// against the base's exemplars (RecognizerModel::exemplars) and the sets' background. A category
+/// the base already has is refused unless `replace` (then its exemplars are dropped and its
+/// classifier is trained anew the same way). Throws std::runtime_error (DatasetError for unreadable sets)
 /// for a base without exemplars or background, or sets without views of a class.
 RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
                            const TrainOptions& options, bool replace, AddClassesReport* report);

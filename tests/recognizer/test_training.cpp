@@ -633,8 +633,8 @@ double calledAs(Recognizer& r, const std::vector<cv::Mat>& images, const std::st
 }  // namespace
 
 // slamaware-train --base: a class is added from its views alone (the base model's exemplars stand in
-// for its training data). The new class is recognised on unseen instances, the old ones stay as
-// good as they were, a class the base has is refused without --replace, and a model without
+// for its training data as negatives). The new class is recognised on unseen instances, the old
+// classifiers are kept as they were (and their classes recognised as well as before), a class the base has is refused without --replace, and a model without
 // exemplars (an older file) is refused with what to do.
 TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
   const Trained& t = synthetic();
@@ -648,6 +648,11 @@ TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
   EXPECT_EQ(report.added, (std::vector<std::string>{"checker"}));
   EXPECT_EQ(report.positives, 60);  // 30 views, mirrored
   EXPECT_GT(added.exemplars.size(), t.model.exemplars.size());
+  for (int c = 0; c < 2; ++c) {  // the base's classifiers are kept as they were
+    EXPECT_EQ(added.classifier.weights.row(c), t.model.classifier.weights.row(c)) << c;
+    EXPECT_EQ(added.classifier.bias[c], t.model.classifier.bias[c]) << c;
+  }
+  EXPECT_EQ(added.classifier.weights.row(3), t.model.classifier.weights.row(2)) << "background";
   saveModel(added, dir + "/added.model");
   EXPECT_NE(provenanceText(loadModel(dir + "/added.model")).find("classes checker added"), std::string::npos);
 
