@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
@@ -123,6 +124,14 @@ TEST(Harvest, TheLabelledObjectsViewsAreCutWithTheirMasksAndReadBackAsAnObjectSe
                                                           << projectedBox(w, truth, seq);
   }
   EXPECT_GE(mugs, frames * 3 / 4) << printed;
+  // Every 4th frame of the recording: a quarter of the views (frames 0, 4, ..., 36).
+  const std::string sparse = dir + "/every4";
+  ASSERT_EQ(std::system((test::binPath("slamaware-harvest") + " " + dir + "/session.lcm --map " + dir + "/map --out " +
+                         sparse + " --every 4 > /dev/null 2>&1").c_str()),
+            0);
+  int sparse_mugs = 0;
+  for (const LabeledCrop& c : collectNamedCrops(sparse, 0)) sparse_mugs += c.category == "my_mug";
+  EXPECT_EQ(sparse_mugs * 4, mugs) << "all 40 frames give a view, so every 4th gives 10";
   std::ifstream set(out + "/set.yaml");
   const std::string yaml((std::istreambuf_iterator<char>(set)), {});
   EXPECT_NE(yaml.find("source: harvest"), std::string::npos) << yaml;

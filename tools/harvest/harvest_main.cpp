@@ -53,6 +53,7 @@ struct HarvestOptions {
   double margin = 0.05;           ///< the crop grows by this share of the box on every side
   int border_px = 2;              ///< the box of all the object's voxels must stay this far inside
   bool background = true;         ///< also the objects the map fused as background
+  int every = 1;                  ///< only every n-th camera frame of the recording (30 Hz repeats itself)
 };
 
 /// One object to harvest: its folder names and its voxels' centres.
@@ -306,6 +307,7 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
     while (auto ev = reader.next()) {
       if (ev->channel != ch.camera) continue;
       bar.update(++seen);
+      if ((seen - 1) % o.every != 0) continue;
       image_t msg;
       if (!decodeRecord(*ev, &msg)) continue;
       auto pose = rec.poses.find(msg.seq);
@@ -392,6 +394,8 @@ int main(int argc, char** argv) {
   app.add_option("--min-visible", o.min_visible, "share of the object's silhouette that must be visible");
   app.add_option("--margin", o.margin, "crop margin, share of the box on every side");
   app.add_flag("--no-background", no_background, "do not harvest the objects fused as background");
+  app.add_option("--every", o.every, "only every n-th camera frame (a 30 Hz session repeats itself)")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   o.background = !no_background;
   try {
