@@ -326,7 +326,7 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
         ++t.frames;
         if (!depth.count(t.segment)) depth[t.segment] = depthBuffer(seg, *rec.camera, T_cw);
         const View v = viewOf(t, static_cast<int>(ti), seg, depth[t.segment], *rec.camera, T_cw, o);
-        if (t.labelled && v.result != ViewResult::kOutOfView) labelled_boxes.push_back(cv::boundingRect(v.mask));
+        if (t.labelled && !v.mask.empty()) labelled_boxes.push_back(cv::boundingRect(v.mask));
         if (!t.labelled && v.result == ViewResult::kWritten &&
             std::any_of(labelled_boxes.begin(), labelled_boxes.end(),
                         [&](const cv::Rect& l) { return 2 * (l & v.box).area() > v.box.area(); })) {
