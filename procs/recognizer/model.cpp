@@ -1,5 +1,6 @@
 #include "procs/recognizer/model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -125,31 +126,37 @@ void writeField(Writer& w, const RecognizerModel& m) {
   w.pod<float>(c.temperature);
   w.pod<float>(c.uniform_mix);
   w.str(m.provenance);
-  // Exemplars (version 2): per row label, domain, weight, its non-zero blocks' indices, and per
-  // block a scale and block_dims signed bytes (as ExampleSet holds them: re-quantising its values
-  // gives the same bytes).
+  // Exemplars (version 2): per row label, domain, weight, the number of its non-zero blocks, their
+  // indices (uint16), and per block a scale and block_dims values of 4 bits (q in -7..7 stored as
+  // q + 8, two per byte, low nibble first; value = scale * q). They only stand for the base's data
+  // as negatives of a class added later: 4 bits keep a file of 360 of them under 5 MB.
   const ExampleSet& e = m.exemplars;
   const int64_t bd = m.params.pca_dims;
+  if (e.size() > 0 && m.params.vladDims() / bd > 65535)
+    throw ModelError("exemplars of more than 65535 blocks cannot be stored");
   w.pod<uint64_t>(static_cast<uint64_t>(e.size()));
   std::vector<int32_t> index;
   std::vector<float> values;
-  std::vector<int8_t> q(static_cast<size_t>(bd));
+  std::vector<uint8_t> packed(static_cast<size_t>((bd + 1) / 2));
   for (int64_t i = 0; i < e.size(); ++i) {
     const int nb = e.blocks(i, &index, &values);
     w.pod<int32_t>(e.label(i));
     w.pod<int32_t>(e.domain(i));
     w.pod<float>(e.weight(i));
     w.pod<int32_t>(nb);
-    w.raw(index.data(), static_cast<size_t>(nb) * sizeof(int32_t));
+    for (int k = 0; k < nb; ++k) w.pod<uint16_t>(static_cast<uint16_t>(index[static_cast<size_t>(k)]));
     for (int k = 0; k < nb; ++k) {
       const float* v = values.data() + k * bd;
       float top = 0;
       for (int64_t j = 0; j < bd; ++j) top = std::max(top, std::fabs(v[j]));
-      const float scale = top / 127.f;
-      for (int64_t j = 0; j < bd; ++j)
-        q[static_cast<size_t>(j)] = static_cast<int8_t>(scale > 0 ? std::lround(v[j] / scale) : 0);
+      const float scale = top / 7.f;
+      std::fill(packed.begin(), packed.end(), uint8_t{0});
+      for (int64_t j = 0; j < bd; ++j) {
+        const long q = scale > 0 ? std::clamp(std::lround(v[j] / scale), -7L, 7L) : 0;
+        packed[static_cast<size_t>(j / 2)] |= static_cast<uint8_t>((q + 8) << (4 * (j % 2)));
+      }
       w.pod<float>(scale);
-      w.raw(q.data(), q.size());
+      w.raw(packed.data(), packed.size());
     }
   }
 }
@@ -169,20 +176,24 @@ void readExemplars(Reader& r, const std::string& what, RecognizerModel* m) {
     if (label < 0 || label >= m->classifier.numClasses() || domain < 0 || domain > 1 ||
         !(weight >= 0) || !std::isfinite(weight) || nb < 0 || nb > blocks)
       throw ModelError(what + ": exemplar " + std::to_string(i) + " is malformed");
-    std::vector<int32_t> index(static_cast<size_t>(nb));
-    std::memcpy(index.data(), r.raw(static_cast<uint64_t>(nb) * sizeof(int32_t), "exemplar_index"),
-                index.size() * sizeof(int32_t));
+    std::vector<uint16_t> index(static_cast<size_t>(nb));
+    std::memcpy(index.data(), r.raw(static_cast<uint64_t>(nb) * sizeof(uint16_t), "exemplar_index"),
+                index.size() * sizeof(uint16_t));
     std::fill(row.begin(), row.end(), 0.f);
     for (int32_t k = 0; k < nb; ++k) {
-      if (index[static_cast<size_t>(k)] < 0 || index[static_cast<size_t>(k)] >= blocks ||
+      if (index[static_cast<size_t>(k)] >= blocks ||
           (k > 0 && index[static_cast<size_t>(k)] <= index[static_cast<size_t>(k - 1)]))
         throw ModelError(what + ": exemplar " + std::to_string(i) + " has bad block indices");
       const float scale = r.pod<float>("exemplar_scale");
       if (!(scale >= 0) || !std::isfinite(scale))
         throw ModelError(what + ": exemplar " + std::to_string(i) + " has a bad scale");
-      const auto* q = reinterpret_cast<const int8_t*>(r.raw(static_cast<uint64_t>(bd), "exemplar_values"));
+      const uint8_t* packed = r.raw(static_cast<uint64_t>((bd + 1) / 2), "exemplar_values");
       float* out = row.data() + static_cast<int64_t>(index[static_cast<size_t>(k)]) * bd;
-      for (int64_t j = 0; j < bd; ++j) out[j] = scale * static_cast<float>(q[j]);
+      for (int64_t j = 0; j < bd; ++j) {
+        const int q = ((packed[j / 2] >> (4 * (j % 2))) & 0xF) - 8;
+        if (q < -7) throw ModelError(what + ": exemplar " + std::to_string(i) + " has a bad value");
+        out[j] = scale * static_cast<float>(q);
+      }
     }
     m->exemplars.add(row.data(), label, -1, domain, weight);
   }
