@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/nearest_depths.h"
+
 namespace slamaware {
 
 double boxIou(const ProposalBox& a, const ProposalBox& b) { return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h); }
@@ -17,22 +19,7 @@ struct Projected {
 };
 
 // Per depth-buffer cell: the two nearest depths with different candidates.
-struct Cell {
-  float d1 = std::numeric_limits<float>::infinity(), d2 = std::numeric_limits<float>::infinity();
-  int32_t c1 = -1;
-  void add(float d, int32_t c) {
-    if (c == c1) {
-      d1 = std::min(d1, d);
-    } else if (d < d1) {
-      d2 = d1;
-      d1 = d;
-      c1 = c;
-    } else if (d < d2) {
-      d2 = d;
-    }
-  }
-  float nearestOther(int32_t c) const { return c == c1 ? d2 : d1; }
-};
+using Cell = NearestDepths;
 
 // The range of v (reordered here) without the outer trim_pct % on each side, grown again over the
 // trimmed values while each lies within gap times the mean spacing of the values inside (gap > 0;

@@ -34,6 +34,7 @@ class ExampleSet {
   int domain(int64_t i) const { return rows_[static_cast<size_t>(i)].domain; }
   float weight(int64_t i) const { return rows_[static_cast<size_t>(i)].weight; }
   void setWeight(int64_t i, float w) { rows_[static_cast<size_t>(i)].weight = w; }
+  void setLabel(int64_t i, int label) { rows_[static_cast<size_t>(i)].label = label; }
   /// Row i as dense floats (dims of them).
   void get(int64_t i, float* out) const;
   /// The non-zero blocks of row i: their indices (ascending) into *index and their values,

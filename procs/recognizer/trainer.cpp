@@ -1267,16 +1267,38 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   for (int64_t i = 0; i < fresh.size(); ++i) (fresh.label(i) == bg ? r.background : r.positives) += 1;
   set.append(fresh);
 
-  // One-vs-all rows are independent: every row is trained on this small set, then the base's
-  // classes take back the rows the base learnt from all its data (the new rows learnt them as
-  // negatives from their exemplars; a replaced class keeps its new row).
+  // The base's classifiers stay as the base learnt them from all its data. Only the new (and
+  // replaced) classes are trained: one-vs-all rows are independent, so each is trained against
+  // every other example of this small set (the exemplars, the sets' background, the other new
+  // classes), which all take one label here.
+  std::vector<std::string> trained;
+  for (const auto& c : classes)
+    if (std::find(r.added.begin(), r.added.end(), c) != r.added.end() || isReplaced(c)) trained.push_back(c);
+  ExampleSet relabelled = set.select([](int64_t) { return true; });
+  const int rest = static_cast<int>(trained.size());
+  for (int64_t i = 0; i < relabelled.size(); ++i) {
+    const int t = indexOf(trained, classes[static_cast<size_t>(relabelled.label(i))]);
+    relabelled.setLabel(i, t >= 0 ? t : rest);
+  }
+  std::vector<std::string> trained_and_rest = trained;
+  trained_and_rest.push_back("(every other)");
   ProgressBar bar("train classifiers", options.sgd.epochs);
-  LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); });
+  const LinearClassifier fresh_rows =
+      trainOneVsAll(relabelled, trained_and_rest, options.sgd, [&](int e) { bar.update(e); });
   bar.finish();
+  LinearClassifier clf;
+  clf.classes = classes;
+  clf.weights.resize(C, dims);
+  clf.bias.resize(C);
   for (size_t i = 0; i < old.size(); ++i) {
     if (isReplaced(old[i])) continue;
     clf.weights.row(old_to_new[i]) = base.classifier.weights.row(static_cast<int64_t>(i));
     clf.bias[old_to_new[i]] = base.classifier.bias[static_cast<int64_t>(i)];
+  }
+  for (int t = 0; t < rest; ++t) {
+    const int c = indexOf(classes, trained[static_cast<size_t>(t)]);
+    clf.weights.row(c) = fresh_rows.weights.row(t);
+    clf.bias[c] = fresh_rows.bias[t];
   }
   clf.temperature = base.classifier.temperature;
   clf.uniform_mix = base.classifier.uniform_mix;

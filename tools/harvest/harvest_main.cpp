@@ -35,6 +35,7 @@
 #include "common/camera_model.h"
 #include "common/config.h"
 #include "common/geometry.h"
+#include "common/nearest_depths.h"
 #include "common/progress.h"
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
@@ -77,10 +78,11 @@ struct Segment3d {
 /// Per pixel: the nearest depth and its owner (target index, -1: no target), and the nearest depth
 /// of any other owner.
 struct DepthBuffer {
-  cv::Mat d1, d2, o1;  // CV_32F, CV_32F, CV_32S
+  int width = 0;
+  std::vector<NearestDepths> cells;
   /// The depth in front of which a voxel of `owner` at (x, y) is visible.
   float occluder(int x, int y, int owner) const {
-    return o1.at<int>(y, x) == owner ? d2.at<float>(y, x) : d1.at<float>(y, x);
+    return cells[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)].nearestOther(owner);
   }
 };
 
@@ -98,10 +100,8 @@ int splatRadius(const CameraModel& cam, double resolution, double z) {
 }
 
 DepthBuffer depthBuffer(const Segment3d& seg, const CameraModel& cam, const SE3& T_cw) {
-  const float inf = std::numeric_limits<float>::infinity();
-  DepthBuffer b{cv::Mat(cam.height(), cam.width(), CV_32F, cv::Scalar(inf)),
-                cv::Mat(cam.height(), cam.width(), CV_32F, cv::Scalar(inf)),
-                cv::Mat(cam.height(), cam.width(), CV_32S, cv::Scalar(-2))};
+  DepthBuffer b{cam.width(), std::vector<NearestDepths>(static_cast<size_t>(cam.width()) *
+                                                        static_cast<size_t>(cam.height()))};
   Eigen::Vector2d px;
   for (size_t i = 0; i < seg.occupied.size(); ++i) {
     const Eigen::Vector3d q = T_cw * seg.occupied[i];
@@ -112,20 +112,8 @@ DepthBuffer depthBuffer(const Segment3d& seg, const CameraModel& cam, const SE3&
     const float d = static_cast<float>(q.z());
     const int o = seg.owner[i];
     for (int y = std::max(0, v - r); y <= std::min(cam.height() - 1, v + r); ++y)
-      for (int x = std::max(0, u - r); x <= std::min(cam.width() - 1, u + r); ++x) {
-        float& d1 = b.d1.at<float>(y, x);
-        float& d2 = b.d2.at<float>(y, x);
-        int& o1 = b.o1.at<int>(y, x);
-        if (o == o1) {
-          d1 = std::min(d1, d);
-        } else if (d < d1) {
-          d2 = d1;
-          d1 = d;
-          o1 = o;
-        } else {
-          d2 = std::min(d2, d);
-        }
-      }
+      for (int x = std::max(0, u - r); x <= std::min(cam.width() - 1, u + r); ++x)
+        b.cells[static_cast<size_t>(y) * static_cast<size_t>(cam.width()) + static_cast<size_t>(x)].add(d, o);
   }
   return b;
 }
