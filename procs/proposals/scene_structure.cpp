@@ -304,14 +304,15 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
     planeAxes(f.plane.n, &f.u, &f.v);
     f.patches = structurePatches(&f, points, in, cell, o.structure_min_points, static_cast<float>(o.structure_extent));
     // The next plane is searched among the points that are not on this one; the points of this
-    // plane that are not structure are kept (they go back to the output below).
+    // plane that are not structure are kept (they go back to the output below). A plane without
+    // structure is kept too: it may be the support (a small table top, below), never removed.
     rest.swap(out);
-    if (!f.patches.empty()) found.push_back(std::move(f));
+    found.push_back(std::move(f));
   }
 
-  // The support: a near-horizontal structure plane (when up is known) and its region: its
-  // dense cells within support_radius of where the views look. With a look-at point, of the
-  // planes with points there from support_below over it to max_height under it, the nearest to
+  // The support: a near-horizontal plane (structure, or any plane when up is known) and its
+  // region: its dense cells within support_radius of where the views look. With a look-at
+  // point, of the planes with points there from support_below over it to max_height under it, the nearest to
   // it: what the views aim at stands on it. Not the one with most points there: the floor around
   // a small table seen from afar holds more than the table top. Else the plane the
   // optical axes hit first, where it has points, most often, around the mean of those hits.
@@ -345,6 +346,11 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
       for (size_t k = 0; k < found.size(); ++k) {
         const float h = found[k].plane.distance(priors.look_at);
         if (!horizontal(found[k]) || h < -o.support_below || h > o.max_height) continue;
+        // A plane with no patch larger than an object (a small round table seen from a metre
+        // away) is a support only when up is known: then it is level, under where the views
+        // look, and the nearest such is what the objects stand on. Without up it may be any
+        // face of the object itself (the Middlebury temple, on a black ground).
+        if (found[k].patches.empty() && !priors.up_known) continue;
         std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, radius, cell);
         if (cells.empty()) continue;
         nearest = std::min(nearest, std::abs(h));
@@ -419,7 +425,7 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
         }
   for (size_t k = 0; k < found.size(); ++k) {
     const bool remove = best < 0 || std::abs(found[k].plane.n.dot(support->plane.n)) < 0.5f;
-    if (!remove) continue;
+    if (!remove || found[k].patches.empty()) continue;
     ++stats->structure_planes;
     for (const auto& patch : found[k].patches) mark(patch.points);
   }

@@ -64,8 +64,9 @@ struct StructureStats {
 /// Splits `points` (filtered, lengths of `o` already scaled) into structure and the rest: up to
 /// o.max_planes planes by RANSAC (on o.ransac_points of them); the parts of a plane whose connected
 /// patch is larger than an object (o.structure_extent) are structure and removed. The support is
-/// the near-horizontal structure plane (normal within o.support_max_tilt_deg of the views' up)
-/// nearest under the point the views' optical axes meet (else the one they hit first most
+/// the near-horizontal plane (normal within o.support_max_tilt_deg of the views' up; a plane
+/// without structure only when up is known: a small table top) nearest under the point the
+/// views' optical axes meet (else the structure plane they hit first most
 /// often); `support` is set when there is one. Returns the points that are not structure.
 /// `band`, when given, receives the support's own points (its band of o.support_distance),
 /// which are removed.

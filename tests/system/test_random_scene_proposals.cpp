@@ -3,7 +3,10 @@
 // network namespace, scored against the rendered ground truth. Seed 4 is a small table seen from
 // above: the support used to be the plane with most points around the views' look-at point, there
 // the floor, and the boxes ran in strips across the table top (recall a third over the whole
-// sequence); the support is now the plane nearest under that point.
+// sequence); the support is now the plane nearest under that point. Seed 9 is a small round
+// table seen from a metre away (the bistro table): its top forms no plane patch larger than an
+// object, it was never the support, and the floor was; a level plane under where the views look
+// is now the support when the views know which way is up.
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -46,7 +49,8 @@ double recallOfRandomScene(uint64_t seed) {
 
 /// A seed and the recall its first 120 frames must reach. Measured 2026-12-02 with the support
 /// as now chosen / as it was: seed 4 95.6 / 78.9 %; seeds 5 and 7 (guards) 80.8 and 81.6 % under
-/// both.
+/// both. Seed 9 (the bistro table), with a level plane without structure admitted as the support
+/// / without: 78.5 / 42.6 %.
 struct Floor {
   int seed;
   double recall;
@@ -63,5 +67,5 @@ TEST_P(RandomSceneProposals, ObjectsOfARandomTableAreProposed) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, RandomSceneProposals,
-                         ::testing::Values(Floor{4, 88.0}, Floor{5, 75.0}, Floor{7, 75.0}),
+                         ::testing::Values(Floor{4, 88.0}, Floor{5, 75.0}, Floor{7, 75.0}, Floor{9, 70.0}),
                          [](const auto& info) { return "seed" + std::to_string(info.param.seed); });
