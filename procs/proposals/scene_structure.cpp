@@ -310,16 +310,22 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
     found.push_back(std::move(f));
   }
 
-  // The support: a near-horizontal plane (structure, or any plane when up is known) and its
-  // region: its dense cells within support_radius of where the views look. With a look-at
-  // point, of the planes with points there from support_below over it to max_height under it, the nearest to
-  // it: what the views aim at stands on it. Not the one with most points there: the floor around
-  // a small table seen from afar holds more than the table top. Else the plane the
-  // optical axes hit first, where it has points, most often, around the mean of those hits.
+  // The support: a level plane and its region: its dense cells within support_radius of where
+  // the views look. With a look-at point, of the planes with points there from support_below
+  // over it to max_height under it, the nearest to it: what the views aim at stands on it. Not
+  // the one with most points there: the floor around a small table seen from afar holds more
+  // than the table top. Else the structure plane the optical axes hit first, where it has
+  // points, most often, around the mean of those hits.
   // Without views (the algorithm alone, in tests), the largest patch of the largest plane.
   const float cos_tilt = static_cast<float>(std::cos(o.support_max_tilt_deg * M_PI / 180.0));
   const float radius = static_cast<float>(o.support_radius);
-  auto horizontal = [&](const FoundPlane& f) { return !priors.up_known || f.plane.n.dot(priors.up) >= cos_tilt; };
+  // Level: within support_max_tilt_deg of up. Without up that cannot be told, and only a plane
+  // with structure (larger than any object) can be a support: a smaller one may be a face of the
+  // object itself (the Middlebury temple, whose views never turn about up). With up, a plane
+  // without structure is a small table top (a round table seen from a metre away).
+  auto level = [&](const FoundPlane& f) {
+    return priors.up_known ? f.plane.n.dot(priors.up) >= cos_tilt : !f.patches.empty();
+  };
   int best = -1;
   std::vector<CellKey> region;
   if (!priors.valid) {
@@ -345,12 +351,7 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
       float nearest = std::numeric_limits<float>::infinity();
       for (size_t k = 0; k < found.size(); ++k) {
         const float h = found[k].plane.distance(priors.look_at);
-        if (!horizontal(found[k]) || h < -o.support_below || h > o.max_height) continue;
-        // A plane with no patch larger than an object (a small round table seen from a metre
-        // away) is a support only when up is known: then it is level, under where the views
-        // look, and the nearest such is what the objects stand on. Without up it may be any
-        // face of the object itself (the Middlebury temple, on a black ground).
-        if (found[k].patches.empty() && !priors.up_known) continue;
+        if (!level(found[k]) || h < -o.support_below || h > o.max_height) continue;
         std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, radius, cell);
         if (cells.empty()) continue;
         nearest = std::min(nearest, std::abs(h));
@@ -376,7 +377,7 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
         for (size_t k = 0; k < found.size(); ++k) {
           const Plane& pl = found[k].plane;
           const float along = pl.n.dot(w.forward);
-          if (!horizontal(found[k]) || along >= 0) continue;  // looking away from its upper side
+          if (!level(found[k]) || along >= 0) continue;  // looking away from its upper side
           const float t = -pl.distance(w.centre) / along;
           if (!(t > 0) || t >= nearest) continue;
           const Eigen::Vector3f at = w.centre + t * w.forward;
