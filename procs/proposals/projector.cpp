@@ -122,6 +122,8 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     std::vector<float> d = p.depths;
     std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
     b.median_depth = d[d.size() / 2];
+    const Eigen::Vector3d to_camera = T_world_camera.translation() - c.centroid.cast<double>();
+    if (to_camera.allFinite() && to_camera.norm() > 0) b.view_direction = to_camera.normalized().cast<float>();
     b.scale = c.scale;
     b.stability = c.stability;
     b.by_colour = c.by_colour;

@@ -15,6 +15,9 @@ struct ProposalBox {
   int32_t candidate_id = -1;
   float x = 0, y = 0, w = 0, h = 0;  ///< px, top-left corner and size
   float median_depth = 0;            ///< map units
+  /// Unit vector from the candidate's centroid to the camera centre, world frame: where the
+  /// candidate is seen from (the recognizer classifies a candidate again when it changes).
+  Eigen::Vector3f view_direction = Eigen::Vector3f::Zero();
   int scale = 0;
   int stability = 1;
   bool by_colour = false;            ///< the candidate was found only on position and colour

@@ -112,6 +112,7 @@ proposals_t ProposalEngine::project(const CandidateMap& map, int64_t utime, int3
     m.boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
     m.candidate_ids.push_back(b.candidate_id);
     m.median_depth.push_back(b.median_depth);
+    m.view_direction.push_back({b.view_direction.x(), b.view_direction.y(), b.view_direction.z()});
   }
   m.num_boxes = static_cast<int32_t>(m.boxes.size());
   return m;

@@ -34,6 +34,7 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
   FrameDetections out;
   out.classes = classes_;
   std::vector<PyramidBox> snapped;
+  std::vector<size_t> classified;  // the boxes of `out` that are encoded, in the order of `snapped`
   const double W = bgr.cols, H = bgr.rows;
   for (size_t i = 0; i < requests.size(); ++i) {
     const BoxRequest& r = requests[i];
@@ -52,7 +53,7 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
       ++out.rejected_outside;
       continue;
     }
-    if (static_cast<int>(snapped.size()) >= options_.max_boxes) {
+    if (static_cast<int>(out.boxes.size()) >= options_.max_boxes) {
       ++out.rejected_over_limit;
       continue;
     }
@@ -64,8 +65,15 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
     d.y = static_cast<float>(y0);
     d.w = static_cast<float>(x1 - x0);
     d.h = static_cast<float>(y1 - y0);
+    if (r.carried && r.carried->log_prob.size() == classes_.size()) {
+      d.log_prob = r.carried->log_prob;
+      d.carried_seq = r.carried->seq;
+      ++out.carried;
+    } else {
+      classified.push_back(out.boxes.size());
+      snapped.push_back(pb);
+    }
     out.boxes.push_back(std::move(d));
-    snapped.push_back(pb);
   }
   if (snapped.empty()) return out;
 
@@ -77,8 +85,8 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
       append_background_
           ? static_cast<float>(std::log1p(-std::exp(options_.missing_background_log_prob)))
           : 0.f;
-  for (size_t b = 0; b < out.boxes.size(); ++b) {
-    auto& lp = out.boxes[b].log_prob;
+  for (size_t b = 0; b < classified.size(); ++b) {
+    auto& lp = out.boxes[classified[b]].log_prob;
     lp.resize(static_cast<size_t>(C));
     for (int c = 0; c < static_cast<int>(log_p_.cols()); ++c)
       lp[static_cast<size_t>(c)] = log_p_(b, c) + log_objects;
@@ -98,6 +106,13 @@ void checkOptions(const RecognizerOptions& options, const std::string& source) {
   if (!(options.nms_iou > 0))
     throw ConfigError(source + ": key 'recognizer.nms_iou': must be above 0 (1 or more: no suppression), got " +
                       std::to_string(options.nms_iou));
+  const ViewSelectionOptions& v = options.view_selection;
+  if (!(v.angle_deg >= 0 && v.angle_deg <= 180))
+    throw ConfigError(source + ": key 'recognizer.view_selection.angle_deg': degrees from 0 to 180, got " +
+                      std::to_string(v.angle_deg));
+  if (!(v.scale >= 0 && std::isfinite(v.scale)))
+    throw ConfigError(source + ": key 'recognizer.view_selection.scale': a factor of 0 or more, got " +
+                      std::to_string(v.scale));
   const auto size_ok = [](int px) { return px >= 0 && px <= kMaxWarmUpPx; };
   if (!size_ok(options.warm_up_width) || !size_ok(options.warm_up_height) ||
       (options.warm_up_width == 0) != (options.warm_up_height == 0))

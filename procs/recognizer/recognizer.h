@@ -8,6 +8,7 @@
 
 #include "procs/recognizer/frame_encoder.h"
 #include "procs/recognizer/model.h"
+#include "procs/recognizer/view_selector.h"
 
 namespace slamaware {
 
@@ -27,6 +28,8 @@ struct RecognizerOptions {
   /// no background class); the object classes share the rest.
   double missing_background_log_prob = -13.8;
   EncoderCostModel cost;
+  /// The node: which boxes are classified and which carry their candidate's last result.
+  ViewSelectionOptions view_selection;
   // Node: joining CAMERA and PROPOSALS.
   int frame_buffer = 30;           ///< CAMERA frames kept for joining (oldest dropped)
   int proposals_buffer = 30;       ///< PROPOSALS waiting for their frame
@@ -51,6 +54,7 @@ struct RecognizerOptions {
     v("missing_background_log_prob", missing_background_log_prob,
       "log p(background) published when the model has no background class");
     v.section("cost", cost);
+    v.section("view_selection", view_selection);
     v("frame_buffer", frame_buffer, "CAMERA frames kept for joining with PROPOSALS");
     v("proposals_buffer", proposals_buffer, "PROPOSALS waiting for their frame");
     v("pending_timeout_s", pending_timeout_s, "s a PROPOSALS message waits for its CAMERA frame");
@@ -67,13 +71,16 @@ struct RecognizerOptions {
 constexpr int kMaxWarmUpPx = 4096;
 
 /// Throws ConfigError naming `source` (the file) and the key for an unknown encoder, an
-/// `nms_iou` that is not positive, or a warm-up size that is not a frame size (or 0 x 0).
+/// `nms_iou` that is not positive, a view-selection angle outside 0-180 degrees or a negative
+/// scale, or a warm-up size that is not a frame size (or 0 x 0).
 void checkOptions(const RecognizerOptions& options, const std::string& source);
 
-/// A proposal box: pixels, (x, y) = top-left corner.
+/// A proposal box: pixels, (x, y) = top-left corner. With `carried`, the box is checked and
+/// clipped like any other but not classified: it gets the carried result (ViewSelector).
 struct BoxRequest {
   double x = 0, y = 0, w = 0, h = 0;
   int32_t candidate_id = -1;
+  const CarriedView* carried = nullptr;
 };
 
 struct BoxDetection {
@@ -81,6 +88,7 @@ struct BoxDetection {
   int32_t candidate_id = -1;
   float x = 0, y = 0, w = 0, h = 0;  ///< the box clipped to the image
   std::vector<float> log_prob;       ///< per class of FrameDetections::classes
+  int32_t carried_seq = -1;          ///< >= 0: log_prob carried from the view of that frame
 };
 
 struct FrameDetections {
@@ -89,6 +97,7 @@ struct FrameDetections {
   int rejected_not_finite = 0, rejected_empty = 0, rejected_outside = 0, rejected_over_limit = 0;
   int clipped = 0;
   int suppressed = 0;  ///< boxes removed by suppressOverlaps()
+  int carried = 0;     ///< valid boxes that carried a result instead of being classified
   FrameEncoder::Stats stats;
   double total_ms = 0;  ///< encoding + scoring
   int rejected() const {
@@ -119,9 +128,10 @@ class Recognizer {
   std::vector<std::string> missingClasses() const;
   const RecognizerModel& model() const { return *model_; }
 
-  /// Classifies the valid boxes of one 8-bit BGR frame. Boxes that are not finite, have no area,
-  /// or lie outside the image are rejected (counted); boxes partly outside are clipped.
-  /// Deterministic for a given input.
+  /// Classifies the valid boxes of one 8-bit BGR frame (those with a `carried` result take it,
+  /// when it has one log-probability per class). Boxes that are not finite, have no area, or lie
+  /// outside the image are rejected (counted); boxes partly outside are clipped. Deterministic for
+  /// a given input.
   FrameDetections recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& boxes);
 
   /// Prepares the buffers of frames of this size with the configured encoder

@@ -1,5 +1,8 @@
-// slamaware-recognizer: joins CAMERA frames and PROPOSALS on seq, classifies every proposal box
-// (dense SIFT + RGB, PCA, VLAD with FLAIR, linear classifiers) and publishes DETECTIONS.
+// slamaware-recognizer: joins CAMERA frames and PROPOSALS on seq, classifies the proposal boxes
+// (dense SIFT + RGB, PCA, VLAD with FLAIR, linear classifiers) and publishes DETECTIONS. A box
+// whose candidate is seen from about the same view as when it was last classified carries that
+// result instead (view_selector.h; DETECTIONS.classified_seq says which frame's view it is), so
+// every box of every handled frame is labelled and only new views cost features.
 //
 // Lockstep (bus.lockstep or --lockstep): every PROPOSALS message is answered by exactly one
 // DETECTIONS message, in order, empty when it has no usable boxes or no frame. Real time: after
@@ -94,6 +97,7 @@ class RecognizerNode {
         ch_(sys.channels),
         lockstep_(sys.bus.lockstep),
         options_(options),
+        selector_(options.view_selection),
         joiner_(static_cast<size_t>(std::max(1, options.frame_buffer)),
                 static_cast<size_t>(std::max(1, options.proposals_buffer)),
                 options.pending_timeout_s) {
@@ -171,6 +175,7 @@ class RecognizerNode {
     try {
       Loaded l = loading_.get();
       recognizer_ = std::move(l.recognizer);
+      selector_.clear();  // results of the old model are not carried into the new one's frames
       loaded_stamp_ = loading_stamp_;
       status_.count("reloads");
       afterLoad(l.warm_up_ms);
@@ -271,11 +276,30 @@ class RecognizerNode {
       publish(out);
       return;
     }
-    std::vector<BoxRequest> requests(static_cast<size_t>(p.num_boxes));
-    for (int32_t i = 0; i < p.num_boxes; ++i) {
-      const box_t& b = p.boxes[static_cast<size_t>(i)];
-      requests[static_cast<size_t>(i)] =
-          BoxRequest{b.x, b.y, b.w, b.h, p.candidate_ids[static_cast<size_t>(i)]};
+    const size_t n = static_cast<size_t>(p.num_boxes);
+    std::vector<CandidateView> views(n);
+    for (size_t i = 0; i < n; ++i) {
+      const box_t& b = p.boxes[i];
+      const auto& dir = p.view_direction[i];
+      views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]), p.median_depth[i], b.w, b.h};
+    }
+    // Proposals sent late for an older frame (a map's reference keyframe, procs/proposals) are
+    // classified in full and leave the selection alone: it holds the views of the newest frames.
+    if (joiner_.restarts() != restarts_seen_) {
+      restarts_seen_ = joiner_.restarts();
+      selected_seq_.reset();
+      selector_.clear();
+    }
+    const bool late = selected_seq_ && p.seq < *selected_seq_;
+    std::vector<const CarriedView*> carried(n, nullptr);
+    if (!late) {
+      carried = selector_.select(p.map_id, views);
+      selected_seq_ = p.seq;
+    }
+    std::vector<BoxRequest> requests(n);
+    for (size_t i = 0; i < n; ++i) {
+      const box_t& b = p.boxes[i];
+      requests[i] = BoxRequest{b.x, b.y, b.w, b.h, p.candidate_ids[i], carried[i]};
     }
     status_.addProcessed();
     FrameDetections d;
@@ -288,6 +312,8 @@ class RecognizerNode {
       publish(out);
       return;
     }
+    for (const auto& b : d.boxes)
+      if (b.carried_seq < 0 && !late) selector_.remember(p.map_id, views[static_cast<size_t>(b.input_index)], p.seq, b.log_prob);
     suppressOverlaps(&d, options_.nms_iou, options_.nms_per_class);
     status_.count("boxes_rejected", d.rejected());
     if (d.rejected_not_finite) status_.count("boxes_rejected.not_finite", d.rejected_not_finite);
@@ -295,9 +321,11 @@ class RecognizerNode {
     if (d.rejected_outside) status_.count("boxes_rejected.outside_image", d.rejected_outside);
     if (d.rejected_over_limit) status_.count("boxes_rejected.over_limit", d.rejected_over_limit);
     if (d.clipped) status_.count("boxes_clipped", d.clipped);
-    status_.count("boxes_classified", static_cast<int64_t>(d.boxes.size()) + d.suppressed);
+    const int64_t valid = static_cast<int64_t>(d.boxes.size()) + d.suppressed;
+    status_.count("boxes_classified", valid - d.carried);
+    if (d.carried) status_.count("boxes_carried", d.carried);
     if (d.suppressed) status_.count("boxes_suppressed", d.suppressed);
-    if (!d.boxes.empty()) status_.count(std::string("encoder.") + encoderName(d.stats.used));
+    if (valid > d.carried) status_.count(std::string("encoder.") + encoderName(d.stats.used));
     const double ms = d.stats.features_ms + d.stats.coding_ms + d.stats.encode_ms;
     status_.setCounter("encode_us_last", static_cast<int64_t>(ms * 1000));
     // Timing is not reproducible: lockstep outputs carry 0 so that replays are byte-identical.
@@ -307,6 +335,7 @@ class RecognizerNode {
       out.boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
       out.candidate_ids.push_back(b.candidate_id);
       out.log_prob.push_back(b.log_prob);
+      out.classified_seq.push_back(b.carried_seq >= 0 ? b.carried_seq : p.seq);
     }
     publish(out);
   }
@@ -318,6 +347,9 @@ class RecognizerNode {
   Channels ch_;
   bool lockstep_;
   RecognizerOptions options_;
+  ViewSelector selector_;
+  std::optional<int32_t> selected_seq_;  ///< seq of the newest frame the selection saw
+  int64_t restarts_seen_ = 0;            ///< camera restarts when it last looked
   Joiner joiner_;
   std::unique_ptr<Recognizer> recognizer_;
   bool tried_ = false;

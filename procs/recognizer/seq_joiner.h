@@ -40,6 +40,7 @@ class SeqJoiner {
     if (newest_frame_ && seq < *newest_frame_) {
       frames_.clear();
       taken_seq_.reset();
+      ++restarts_;
     }
     newest_frame_ = seq;
     frames_[seq] = std::move(frame);
@@ -110,6 +111,8 @@ class SeqJoiner {
   std::deque<Job>& ready() { return ready_; }
   size_t pending() const { return pending_.size(); }
   size_t frames() const { return frames_.size(); }
+  /// Times the camera stream restarted (a frame's seq below the newest one's).
+  int64_t restarts() const { return restarts_; }
 
  private:
   struct Pending {
@@ -120,7 +123,8 @@ class SeqJoiner {
   double timeout_s_;
   std::map<int32_t, Frame> frames_;
   std::optional<int32_t> newest_frame_;
-  std::optional<int32_t> taken_seq_;  ///< the newest seq of the jobs ready at markRealTimeDrops
+  std::optional<int32_t> taken_seq_;
+  int64_t restarts_ = 0;  ///< the newest seq of the jobs ready at markRealTimeDrops
   std::deque<Pending> pending_;
   std::deque<Job> ready_;
 };

@@ -32,6 +32,7 @@ detections_t sampleDetections() {
   d.boxes[0].x = 1;
   d.boxes[0].w = 30;
   d.candidate_ids = {7, 9};
+  d.classified_seq = {d.seq, d.seq - 3};
   d.log_prob = {{-0.1f, -2.f, -3.f}, {-1.f, -0.5f, -2.f}};
   d.encode_ms = 12.5f;
   return d;

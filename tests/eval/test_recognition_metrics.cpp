@@ -74,6 +74,7 @@ detections_t detections(int32_t seq, int32_t map_id, const std::vector<std::stri
     b.x = x, b.y = 100, b.w = 50, b.h = 50;
     d.boxes.push_back(b);
     d.candidate_ids.push_back(cid);
+    d.classified_seq.push_back(seq);
     d.log_prob.push_back(row);
     x += 100;
   }

@@ -189,6 +189,11 @@ proposals_t SyntheticWorld::proposals(int frame, int32_t map_id, int32_t seq_off
     m.boxes.push_back(b);
     m.candidate_ids.push_back(objects_[i].candidate);
     m.median_depth.push_back(static_cast<float>(depths[depths.size() / 2]));
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : object_points_[i]) centre += p;
+    centre /= static_cast<double>(object_points_[i].size());
+    const Eigen::Vector3f to_camera = (pose(frame).translation() - centre).normalized().cast<float>();
+    m.view_direction.push_back({to_camera.x(), to_camera.y(), to_camera.z()});
   }
   m.num_boxes = static_cast<int32_t>(m.boxes.size());
   return m;
@@ -205,6 +210,7 @@ detections_t SyntheticWorld::detections(int frame, int32_t map_id, int32_t seq_o
   d.num_boxes = p.num_boxes;
   d.boxes = p.boxes;
   d.candidate_ids = p.candidate_ids;
+  d.classified_seq.assign(p.candidate_ids.size(), p.seq);
   d.encode_ms = 0;
   const int nc = d.num_classes;
   for (int32_t b = 0; b < p.num_boxes; ++b) {

@@ -332,6 +332,7 @@ TEST(MapFiles, SaveAndLoadTimesOfLargeMaps) {
         p.boxes.push_back(box_t{static_cast<float>(20 * b), static_cast<float>(10 * b), 60, 80});
         p.candidate_ids.push_back(b);
         p.median_depth.push_back(1.0f);
+        p.view_direction.push_back({0.f, 0.f, -1.f});
       }
       p.num_boxes = 30;
       detections_t d{};
@@ -343,6 +344,7 @@ TEST(MapFiles, SaveAndLoadTimesOfLargeMaps) {
       d.num_boxes = 30;
       d.boxes = p.boxes;
       d.candidate_ids = p.candidate_ids;
+      d.classified_seq.assign(30, p.seq);
       d.log_prob.assign(30, std::vector<float>(5, std::log(0.2f)));
       ASSERT_TRUE(e.onPose(pose, &why));
       ASSERT_TRUE(e.onProposals(p, &why));

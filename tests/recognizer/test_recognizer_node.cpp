@@ -33,7 +33,10 @@ std::string writeConfig(const std::string& dir, const std::string& model,
   return path;
 }
 
-proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxes) {
+// PROPOSALS of frame `seq`: every candidate seen from `degrees` round the vertical axis; by default
+// 34 degrees further round at every seq, so that every frame is a new view of every candidate.
+proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxes, float degrees = NAN) {
+  const float a = (std::isnan(degrees) ? 34.4f * static_cast<float>(seq) : degrees) * static_cast<float>(M_PI) / 180.f;
   proposals_t p;
   p.utime = 1000000 + seq * 33333;
   p.seq = seq;
@@ -48,6 +51,7 @@ proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxe
     p.boxes.push_back(b);
     p.candidate_ids.push_back(100 + static_cast<int32_t>(i));
     p.median_depth.push_back(1.f);
+    p.view_direction.push_back({std::sin(a), 0.f, std::cos(a)});
   }
   return p;
 }
@@ -328,4 +332,99 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
   EXPECT_NE(bytesOf(live.at(0)), bytesOf(l.detections.at(0))) << "models a and b answer alike";
   for (int32_t seq : {2, 3, 4}) EXPECT_EQ(bytesOf(live.at(seq)), bytesOf(l.detections.at(seq))) << "seq " << seq;
   EXPECT_EQ(fresh->stop(), 0) << fresh->log();
+}
+
+// View selection in the process: a candidate seen again from about the same view carries the
+// result of the frame it was classified in (same log-probabilities, classified_seq of that frame)
+// even though the frame's pixels changed; a new view, a returning candidate and a node started
+// without selection classify.
+TEST(RecognizerNode, ARepeatedViewCarriesItsResultAndANewViewIsClassified) {
+  const std::string dir = test::tempDir("recognizer_node_views");
+  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
+  saveModel(model, dir + "/model.bin");
+  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
+  std::ofstream(dir + "/off.yaml") << "recognizer:\n  model: " << dir + "/model.bin"
+                                   << "\n  view_selection:\n    enabled: false\n";
+  // Frame s shows the disc at 200 + 8 s px on its own background (made once: texturedFrame
+  // draws from OpenCV's global RNG).
+  std::vector<image_t> frames;
+  for (int32_t s = 0; s < 4; ++s) {
+    cv::Mat frame = test::texturedFrame(10 + s);
+    test::syntheticObjectView("disc", 1, 3, 96).copyTo(frame(cv::Rect(200 + 8 * s, 150, 96, 96)));
+    frames.push_back(makeImageMessage(frame, 1000000 + s * 33333, s, image_t::PIXEL_FORMAT_JPEG));
+  }
+  struct Run {
+    std::map<int32_t, detections_t> detections;
+    status_t last_status;
+  };
+  const auto run = [&](const std::string& cfg, const std::string& log) {
+    Listener l;
+    test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", cfg, "--lcm-url", test::testUrl(),
+                             "--lockstep"},
+                            log);
+    EXPECT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
+    // The view of candidate 100 (the disc) is 0, 3, 40, 42 degrees; 101 is out of view in frame 2.
+    const float deg[] = {0, 3, 40, 42};
+    for (int32_t s = 0; s < 4; ++s) {
+      l.bus.publish("CAMERA", frames[static_cast<size_t>(s)]);
+      l.bus.handle(20);
+      std::vector<std::array<float, 4>> boxes{{200.f + 8 * s, 150, 96, 96}};
+      if (s != 2) boxes.push_back({40, 300, 120, 90});
+      l.bus.publish("PROPOSALS", proposals(s, boxes, deg[s]));
+      EXPECT_TRUE(l.pump([&] { return l.answers >= s + 1; }, 10s)) << node.log();
+    }
+    EXPECT_TRUE(l.pump([&] { return counter(l.last_status, "boxes_classified") + counter(l.last_status, "boxes_carried") >= 7; }, 5s));
+    EXPECT_EQ(node.stop(), 0) << node.log();
+    return Run{l.detections, l.last_status};
+  };
+  const Run on = run(config, dir + "/on.log");
+  ASSERT_EQ(on.detections.size(), 4u);
+  const auto& d = on.detections;
+  ASSERT_EQ(d.at(1).num_boxes, 2);
+  EXPECT_EQ(d.at(0).classified_seq, (std::vector<int32_t>{0, 0}));
+  EXPECT_EQ(d.at(1).classified_seq, (std::vector<int32_t>{0, 0}));  // 3 degrees on: both carried
+  EXPECT_EQ(d.at(1).log_prob, d.at(0).log_prob);
+  EXPECT_FLOAT_EQ(d.at(1).boxes[0].x, 208.f);  // in this frame's box
+  EXPECT_EQ(d.at(2).classified_seq, (std::vector<int32_t>{2}));     // 40 degrees: a new view
+  EXPECT_EQ(d.at(3).classified_seq, (std::vector<int32_t>{2, 3}));  // 101 came back: classified
+  EXPECT_EQ(counter(on.last_status, "boxes_carried"), 3);
+  EXPECT_EQ(counter(on.last_status, "boxes_classified"), 4);
+
+  const Run off = run(dir + "/off.yaml", dir + "/off.log");
+  ASSERT_EQ(off.detections.size(), 4u);
+  for (int32_t s = 0; s < 4; ++s) {
+    std::vector<int32_t> own(static_cast<size_t>(off.detections.at(s).num_boxes), s);
+    EXPECT_EQ(off.detections.at(s).classified_seq, own) << "seq " << s;
+  }
+  EXPECT_NE(off.detections.at(1).log_prob, d.at(1).log_prob);  // classified anew: other pixels
+  EXPECT_EQ(off.detections.at(0).log_prob, d.at(0).log_prob);
+  EXPECT_EQ(counter(off.last_status, "boxes_carried"), 0);
+}
+
+// Proposals sent late for an older frame (a map's reference keyframe) are classified in full and
+// leave the selection alone: the next frame still carries the view of the frame before them.
+TEST(RecognizerNode, LateProposalsAreClassifiedWithoutChangingWhatIsCarried) {
+  const std::string dir = test::tempDir("recognizer_node_late");
+  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
+  saveModel(model, dir + "/model.bin");
+  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
+  Listener l;
+  test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url", test::testUrl(),
+                           "--lockstep"},
+                          dir + "/node.log");
+  ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
+  for (int32_t s = 0; s < 4; ++s)
+    l.bus.publish("CAMERA", makeImageMessage(test::texturedFrame(20 + s), 1000000 + s * 33333, s,
+                                             image_t::PIXEL_FORMAT_JPEG));
+  l.bus.handle(20);
+  const std::array<float, 4> box{200, 150, 96, 96};
+  for (int32_t s : {0, 2, 1, 3}) {  // 1 comes late
+    l.bus.publish("PROPOSALS", proposals(s, {box}, 0.f));
+    ASSERT_TRUE(l.pump([&] { return l.detections.count(s) > 0; }, 10s)) << "seq " << s << "\n" << node.log();
+  }
+  EXPECT_EQ(l.detections.at(0).classified_seq, (std::vector<int32_t>{0}));
+  EXPECT_EQ(l.detections.at(2).classified_seq, (std::vector<int32_t>{0}));
+  EXPECT_EQ(l.detections.at(1).classified_seq, (std::vector<int32_t>{1}));  // late: classified
+  EXPECT_EQ(l.detections.at(3).classified_seq, (std::vector<int32_t>{0}));  // still frame 0's view
+  EXPECT_EQ(node.stop(), 0) << node.log();
 }

@@ -148,6 +148,14 @@ TEST(RecognizerConfig, AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSiz
   o = RecognizerOptions{};
   o.encoder = "fast";
   EXPECT_THROW(checkOptions(o, "my.yaml"), ConfigError);
+  for (const double bad : {-1.0, 181.0, std::nan("")}) {
+    o = RecognizerOptions{};
+    o.view_selection.angle_deg = bad;
+    EXPECT_THROW(checkOptions(o, "my.yaml"), ConfigError) << "angle " << bad;
+    o = RecognizerOptions{};
+    o.view_selection.scale = bad == 181.0 ? HUGE_VAL : bad;
+    EXPECT_THROW(checkOptions(o, "my.yaml"), ConfigError) << "scale " << bad;
+  }
   // The warm-up frame: a size, or none.
   o = RecognizerOptions{};
   o.warm_up_width = o.warm_up_height = 0;

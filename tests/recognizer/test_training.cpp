@@ -215,6 +215,44 @@ TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
   }
 }
 
+// A box that carries its candidate's last result is checked and clipped like any other but not
+// classified; the boxes classified beside it get the same scores as in a frame where every box is
+// classified; a carried row of another model's class count is not taken (the box is classified).
+TEST(Recognizer, CarriedBoxesTakeTheirResultAndTheOthersAreClassifiedAsAlways) {
+  const Trained& t = synthetic();
+  Recognizer rec(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions{});
+  cv::Mat frame = test::texturedFrame(901, 640, 480);
+  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
+  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  const FrameDetections all = rec.recognize(frame, {{100, 100, 72, 72, 1}, {400, 250, 72, 72, 2}});
+  ASSERT_EQ(all.boxes.size(), 2u);
+  CarriedView earlier{41, std::vector<float>(all.classes.size(), std::log(1.f / static_cast<float>(all.classes.size())))};
+  CarriedView foreign{40, {-0.1f, -2.5f}};  // two classes: another model's
+  const FrameDetections d = rec.recognize(frame, {{-30, 100, 72, 72, 1, &earlier},   // clipped, carried
+                                                  {400, 250, 72, 72, 2},
+                                                  {700, 10, 50, 50, 3, &earlier},    // outside: rejected
+                                                  {100, 100, 72, 72, 4, &foreign}}); // classified
+  ASSERT_EQ(d.boxes.size(), 3u);
+  EXPECT_EQ(d.carried, 1);
+  EXPECT_EQ(d.rejected_outside, 1);
+  EXPECT_EQ(d.clipped, 1);
+  EXPECT_EQ(d.boxes[0].carried_seq, 41);
+  EXPECT_EQ(d.boxes[0].log_prob, earlier.log_prob);
+  EXPECT_FLOAT_EQ(d.boxes[0].x, 0.f);
+  EXPECT_FLOAT_EQ(d.boxes[0].w, 42.f);
+  EXPECT_EQ(d.boxes[1].carried_seq, -1);
+  EXPECT_EQ(d.boxes[2].carried_seq, -1);
+  for (size_t c = 0; c < all.classes.size(); ++c) {
+    EXPECT_NEAR(d.boxes[1].log_prob[c], all.boxes[1].log_prob[c], 1e-4);
+    EXPECT_NEAR(d.boxes[2].log_prob[c], all.boxes[0].log_prob[c], 1e-4);
+  }
+  // Every box carried: nothing is encoded.
+  const FrameDetections none = rec.recognize(frame, {{100, 100, 72, 72, 1, &earlier}});
+  ASSERT_EQ(none.boxes.size(), 1u);
+  EXPECT_EQ(none.carried, 1);
+  EXPECT_EQ(none.stats.features_ms, 0.0);  // no features computed
+}
+
 // Suppression after classification: of two boxes overlapping by IoU > 0.5 the one surer of an
 // object class stays, whatever the order of the request; the background's probability does not
 // count; IoU 0.5 itself is not suppressed; the survivors keep the request's order.

@@ -6,8 +6,12 @@
 //   real time: the camera plays the recording at its own rate (30 Hz) and every stage keeps up as
 //              it can -> realtime_slam_fps (frames SLAM answered per second of camera stream),
 //              realtime_slam_located_pct (its poses that are located, not lost),
-//              realtime_recognizer_hz (frames classified per second; the recognizer takes the
-//              newest frame and drops the rest), latency_ms_p95 (CAMERA to the frame's DETECTIONS),
+//              realtime_recognizer_hz (frames answered per second; the recognizer takes the
+//              newest frame and drops the rest), realtime_frames_labelled_pct (frames with boxes
+//              whose DETECTIONS came), realtime_boxes_classified_pct (published boxes classified in
+//              their frame; the others carried an earlier view's result),
+//              latency_ms_p95 (CAMERA to the frame's DETECTIONS; _new_views: frames with a box
+//              classified in them),
 //              rss_mb_total (sum of the processes' peak resident memory), realtime_cpu_cores
 //              (each process's CPU time, start-up included, per second of stream);
 // and lockstep_slam_work / realtime_slam_work: SLAM's keyframes, bundle adjustments, semi-dense
@@ -18,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "common/bus/log_reader.h"
@@ -37,6 +42,10 @@ namespace {
 /// What the recording of one run says, on the logger's clock (µs).
 struct RunTimes {
   std::map<int32_t, int64_t> camera, pose, proposals, detections;  ///< seq -> first receive time
+  std::map<int32_t, int64_t> new_views;  ///< seq -> receive time, DETECTIONS with a box classified in it
+  int64_t proposals_with_boxes = 0;      ///< PROPOSALS messages with at least one box
+  int64_t labelled = 0;                  ///< of them, frames whose DETECTIONS came
+  int64_t boxes_classified = 0, boxes_carried = 0;  ///< published boxes classified in their frame / carried
   int64_t poses_located = 0;  ///< SLAM_POSE in TRACKING or RELOCALIZED
   int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
   std::map<std::string, int64_t> slam_counters;  ///< of SLAM's last SLAM_STATUS
@@ -44,6 +53,7 @@ struct RunTimes {
 
 RunTimes readRun(const std::string& log_path, const Channels& ch) {
   RunTimes t;
+  std::set<int32_t> with_boxes;
   LogReader reader(log_path);
   const std::string slam_status = ch.statusOf("slam");
   while (auto r = reader.next()) {
@@ -67,14 +77,24 @@ RunTimes readRun(const std::string& log_path, const Channels& ch) {
       t.poses_located += m.state == pose_t::STATE_TRACKING || m.state == pose_t::STATE_RELOCALIZED;
     } else if (r->channel == ch.proposals) {
       proposals_t m;
-      if (decodeRecord(*r, &m)) t.proposals.emplace(m.seq, r->timestamp);
+      if (!decodeRecord(*r, &m)) continue;
+      t.proposals.emplace(m.seq, r->timestamp);
+      if (m.num_boxes > 0) with_boxes.insert(m.seq);
     } else if (r->channel == ch.detections) {
       detections_t m;
-      if (decodeRecord(*r, &m)) t.detections.emplace(m.seq, r->timestamp);
+      if (!decodeRecord(*r, &m)) continue;
+      t.detections.emplace(m.seq, r->timestamp);
+      t.labelled += with_boxes.count(m.seq) > 0;
+      int classified = 0;
+      for (int32_t s : m.classified_seq) classified += s == m.seq;
+      t.boxes_classified += classified;
+      t.boxes_carried += m.num_boxes - classified;
+      if (classified > 0) t.new_views.emplace(m.seq, r->timestamp);
     } else if (r->channel == ch.object_map) {
       t.last_object_map = r->timestamp;
     }
   }
+  t.proposals_with_boxes = static_cast<int64_t>(with_boxes.size());
   return t;
 }
 
@@ -86,6 +106,13 @@ std::vector<double> delays(const std::map<int32_t, int64_t>& from, const std::ma
     if (f != from.end()) ms.push_back(1e-3 * static_cast<double>(t - f->second));
   }
   return ms;
+}
+
+/// Of the published boxes, the share classified in their own frame (the others carried the
+/// result of an earlier view: procs/recognizer/view_selector.h).
+double classifiedPct(const RunTimes& t) {
+  const int64_t n = t.boxes_classified + t.boxes_carried;
+  return n > 0 ? 100.0 * static_cast<double>(t.boxes_classified) / static_cast<double>(n) : 0;
 }
 
 /// What SLAM built in a run: a real-time run starved of CPU skips depth-filter frames (fewer
@@ -149,6 +176,7 @@ int main(int argc, char** argv) {
   j["system_frames"] = lock.camera.size();
   j["pipeline_lockstep_fps"] = lock_s > 0 ? static_cast<double>(lock.camera.size()) / lock_s : 0;
   j["lockstep_slam_work"] = slamWork(lock);
+  j["lockstep_boxes_classified_pct"] = classifiedPct(lock);
 
   // Real time.
   options.realtime = true;
@@ -178,6 +206,12 @@ int main(int argc, char** argv) {
   j["realtime_recognizer_hz"] = stream_s > 0 ? static_cast<double>(rt.detections.size()) / stream_s : 0;
   j["latency_ms_p95"] = percentile(latency, 0.95);
   j["latency_ms_median"] = percentile(latency, 0.5);
+  // Every frame with boxes should get its labels (classified or carried), and a new view its
+  // classification promptly.
+  j["realtime_frames_labelled_pct"] =
+      rt.proposals_with_boxes > 0 ? 100.0 * static_cast<double>(rt.labelled) / static_cast<double>(rt.proposals_with_boxes) : 0;
+  j["realtime_boxes_classified_pct"] = classifiedPct(rt);
+  j["latency_ms_p95_new_views"] = percentile(delays(rt.camera, rt.new_views), 0.95);
   // Where the latency goes (median and p95 of each hop).
   const std::vector<std::pair<std::string, std::vector<double>>> hops = {
       {"camera_to_slam_pose", delays(rt.camera, rt.pose)},

@@ -94,6 +94,13 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
     return res;
   }
   out["single_view"] = recognitionSection(res.single);
+  // The recognizer's work: the published boxes classified in their own frame (the others carried
+  // an earlier view's scores: procs/recognizer/view_selector.h).
+  int64_t published = 0, carried = 0;
+  for (const auto& [seq, boxes] : rr.frames)
+    for (const auto& b : boxes) ++published, carried += b.carried;
+  out["single_view"]["boxes_classified_pct"] =
+      published > 0 ? 100.0 * static_cast<double>(published - carried) / static_cast<double>(published) : 0.0;
   out["multi_view_online"] = recognitionSection(res.online);
   out["multi_view_final"] = recognitionSection(res.final);
   out["multi_view_final"]["hindsight"] =

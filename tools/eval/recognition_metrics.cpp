@@ -400,6 +400,7 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
       b.single.log_p = byName(m.class_names, m.log_prob[i], run.classes);
       b.map_id = m.map_id;
       b.candidate = m.candidate_ids[i];
+      b.carried = i < m.classified_seq.size() && m.classified_seq[i] != m.seq;
       b.online.box = b.final.box = b.single.box;
       if (have) {
         const object_detections_t& d = od->second;

@@ -143,6 +143,7 @@ struct RecognitionRecording {
     int32_t map_id = -1, candidate = -1;
     int32_t object = -1;  ///< OBJECT_DETECTIONS' object id (-1: none)
     int role = -1;        ///< object_detections_t role; -1: no OBJECT_DETECTIONS for the frame
+    bool carried = false; ///< DETECTIONS carried its scores from an earlier view (classified_seq)
   };
   std::vector<std::string> classes;  ///< DETECTIONS' class names (the model's, background last)
   std::map<int32_t, std::vector<Box>> frames;
