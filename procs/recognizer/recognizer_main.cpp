@@ -283,13 +283,14 @@ class RecognizerNode {
       const auto& dir = p.view_direction[i];
       views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]), p.median_depth[i], b.w, b.h};
     }
-    // Proposals sent late for an older frame (a map's reference keyframe, procs/proposals) are
-    // classified in full and leave the selection alone: it holds the views of the newest frames.
+    // A restarted camera stream starts the selection afresh (its seqs start again).
     if (joiner_.restarts() != restarts_seen_) {
       restarts_seen_ = joiner_.restarts();
       selected_seq_.reset();
       selector_.clear();
     }
+    // Proposals sent late for an older frame (a map's reference keyframe, procs/proposals) are
+    // classified in full and leave the selection alone: it holds the views of the newest frames.
     const bool late = selected_seq_ && p.seq < *selected_seq_;
     std::vector<const CarriedView*> carried(n, nullptr);
     if (!late) {
