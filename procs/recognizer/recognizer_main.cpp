@@ -283,20 +283,13 @@ class RecognizerNode {
       const auto& dir = p.view_direction[i];
       views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]), p.median_depth[i], b.w, b.h};
     }
-    // A restarted camera stream starts the selection afresh (its seqs start again).
+    // A restarted camera stream starts the selection afresh (its seqs start again). Proposals
+    // sent late for an older frame (a map's reference keyframe) are classified in full.
     if (joiner_.restarts() != restarts_seen_) {
       restarts_seen_ = joiner_.restarts();
-      selected_seq_.reset();
       selector_.clear();
     }
-    // Proposals sent late for an older frame (a map's reference keyframe, procs/proposals) are
-    // classified in full and leave the selection alone: it holds the views of the newest frames.
-    const bool late = selected_seq_ && p.seq < *selected_seq_;
-    std::vector<const CarriedView*> carried(n, nullptr);
-    if (!late) {
-      carried = selector_.select(p.map_id, views);
-      selected_seq_ = p.seq;
-    }
+    const std::vector<const CarriedView*> carried = selector_.select(p.map_id, p.seq, views);
     std::vector<BoxRequest> requests(n);
     for (size_t i = 0; i < n; ++i) {
       const box_t& b = p.boxes[i];
@@ -314,7 +307,7 @@ class RecognizerNode {
       return;
     }
     for (const auto& b : d.boxes)
-      if (b.carried_seq < 0 && !late) selector_.remember(p.map_id, views[static_cast<size_t>(b.input_index)], p.seq, b.log_prob);
+      if (b.carried_seq < 0) selector_.remember(p.map_id, p.seq, views[static_cast<size_t>(b.input_index)], b.log_prob);
     suppressOverlaps(&d, options_.nms_iou, options_.nms_per_class);
     status_.count("boxes_rejected", d.rejected());
     if (d.rejected_not_finite) status_.count("boxes_rejected.not_finite", d.rejected_not_finite);
@@ -349,8 +342,7 @@ class RecognizerNode {
   bool lockstep_;
   RecognizerOptions options_;
   ViewSelector selector_;
-  std::optional<int32_t> selected_seq_;  ///< seq of the newest frame the selection saw
-  int64_t restarts_seen_ = 0;            ///< camera restarts when it last looked
+  int64_t restarts_seen_ = 0;  ///< camera restarts when the selection last looked
   Joiner joiner_;
   std::unique_ptr<Recognizer> recognizer_;
   bool tried_ = false;

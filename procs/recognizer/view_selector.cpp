@@ -24,8 +24,13 @@ bool ViewSelector::isNewView(const CandidateView& now, const CandidateView& then
          changed(double{now.h} * now.depth, double{then.h} * then.depth);
 }
 
-std::vector<const CarriedView*> ViewSelector::select(int32_t map_id, const std::vector<CandidateView>& views) {
+bool ViewSelector::isLate(int32_t seq) const { return newest_seq_ && seq < *newest_seq_; }
+
+std::vector<const CarriedView*> ViewSelector::select(int32_t map_id, int32_t seq,
+                                                     const std::vector<CandidateView>& views) {
   std::vector<const CarriedView*> out(views.size(), nullptr);
+  if (isLate(seq)) return out;
+  newest_seq_ = seq;
   // A candidate boxed twice in one frame is classified both times (the proposals never do that).
   std::map<int32_t, int> boxes_of;
   for (const auto& v : views) ++boxes_of[v.candidate_id];
@@ -46,9 +51,9 @@ std::vector<const CarriedView*> ViewSelector::select(int32_t map_id, const std::
   return out;
 }
 
-void ViewSelector::remember(int32_t map_id, const CandidateView& view, int32_t seq,
+void ViewSelector::remember(int32_t map_id, int32_t seq, const CandidateView& view,
                             const std::vector<float>& log_prob) {
-  if (!options_.enabled || !known(view)) return;
+  if (!options_.enabled || !known(view) || isLate(seq)) return;
   last_[std::make_pair(map_id, view.candidate_id)] = Remembered{view, CarriedView{seq, log_prob}};
 }
 

@@ -11,10 +11,12 @@
 //     farther, or the candidate itself grew or shrank as the map grew);
 // otherwise the result of its last classified view is carried to it. Only the candidates of the
 // last handled frame are remembered: the state is bounded by construction, and a candidate that
-// left the view is classified afresh when it returns.
+// left the view is classified afresh when it returns. A frame older than the newest one selected
+// (proposals sent late for a map's reference keyframe) is classified in full and changes nothing.
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -53,15 +55,21 @@ class ViewSelector {
  public:
   explicit ViewSelector(const ViewSelectionOptions& options) : options_(options) {}
 
-  /// Decides for each box of one frame of `map_id`: nullptr = classify it, else the result to
-  /// carry (valid until the next call). Forgets the candidates that are not in this frame.
-  std::vector<const CarriedView*> select(int32_t map_id, const std::vector<CandidateView>& views);
+  /// Decides for each box of frame `seq` of `map_id`: nullptr = classify it, else the result to
+  /// carry (valid until the next call). Forgets the candidates that are not in this frame. A
+  /// frame older than the newest one selected gets nullptr for every box and changes nothing.
+  std::vector<const CarriedView*> select(int32_t map_id, int32_t seq, const std::vector<CandidateView>& views);
 
-  /// Remembers `view` (a box of the last select()) as classified in frame `seq` with `log_prob`.
-  void remember(int32_t map_id, const CandidateView& view, int32_t seq, const std::vector<float>& log_prob);
+  /// Remembers `view` (a box of frame `seq`'s select()) as classified with `log_prob`; nothing for
+  /// a frame older than the newest one selected.
+  void remember(int32_t map_id, int32_t seq, const CandidateView& view, const std::vector<float>& log_prob);
 
-  /// Forgets every result (another model was loaded: its classes or scores differ).
-  void clear() { last_.clear(); }
+  /// Forgets every result and frame (another model was loaded, or the camera stream restarted
+  /// and its seqs start again).
+  void clear() {
+    last_.clear();
+    newest_seq_.reset();
+  }
 
   /// Candidates remembered (those of the last frame that were classified or carried).
   size_t size() const { return last_.size(); }
@@ -71,11 +79,14 @@ class ViewSelector {
     CandidateView view;  ///< the last classified view
     CarriedView result;
   };
+  /// Whether frame `seq` is older than the newest one selected.
+  bool isLate(int32_t seq) const;
   /// Whether `now` differs from the classified view `then` enough to be classified again.
   bool isNewView(const CandidateView& now, const CandidateView& then) const;
 
   ViewSelectionOptions options_;
   std::map<std::pair<int32_t, int32_t>, Remembered> last_;  ///< (map id, candidate id)
+  std::optional<int32_t> newest_seq_;                       ///< newest frame selected
 };
 
 }  // namespace slamaware

@@ -25,9 +25,9 @@ ViewSelectionOptions options(double angle_deg = 10, double scale = 0.15) {
 
 // One frame: select, then remember what was classified with a row naming the frame.
 std::vector<const CarriedView*> frame(ViewSelector& s, int32_t map_id, int32_t seq, const std::vector<CandidateView>& views) {
-  auto carried = s.select(map_id, views);
+  auto carried = s.select(map_id, seq, views);
   for (size_t i = 0; i < views.size(); ++i)
-    if (!carried[i]) s.remember(map_id, views[i], seq, {static_cast<float>(-seq), -1.f});
+    if (!carried[i]) s.remember(map_id, seq, views[i], {static_cast<float>(-seq), -1.f});
   return carried;
 }
 
@@ -80,6 +80,20 @@ TEST(ViewSelector, CandidatesOfAnotherMapOrWithoutGeometryAreClassified) {
   const auto twice = frame(s, 2, 8, {seen(7, 0), seen(7, 0)});
   EXPECT_EQ(twice[0], nullptr);
   EXPECT_EQ(twice[1], nullptr);
+}
+
+TEST(ViewSelector, AnOlderFrameIsClassifiedInFullAndChangesNothing) {
+  ViewSelector s(options());
+  frame(s, 1, 5, {seen(5, 0)});
+  EXPECT_EQ(frame(s, 1, 3, {seen(5, 0)})[0], nullptr);  // late: classified, not remembered
+  const auto next = frame(s, 1, 6, {seen(5, 0)});
+  ASSERT_NE(next[0], nullptr);
+  EXPECT_EQ(next[0]->seq, 5);
+  s.clear();  // a restarted camera: its seqs start again
+  frame(s, 1, 0, {seen(5, 0)});
+  const auto after = frame(s, 1, 1, {seen(5, 0)});
+  ASSERT_NE(after[0], nullptr);
+  EXPECT_EQ(after[0]->seq, 0);
 }
 
 TEST(ViewSelector, DisabledOrClearedEveryBoxIsClassified) {
