@@ -47,7 +47,8 @@ FrameEncoder::FrameEncoder(const EncodingParams& params, const Pca& pca,
       pca_(pca),
       vocabulary_(vocabulary),
       cost_(cost),
-      extractor_(params.features) {
+      extractor_(params.features),
+      coder_(pca, vocabulary) {
   params_.validate();
   if (pca.inDims() != kFeatureDims || pca.outDims() != params.pca_dims ||
       vocabulary.dims() != params.pca_dims || vocabulary.size() != params.vocabulary_size)
@@ -109,7 +110,7 @@ void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& box
   st.region = region;
 
   t0 = Clock::now();
-  codeFeatures(grid_, params_.features.stepsPerCell(), pca_, vocabulary_, &codes_, &box_cells_);
+  coder_.code(grid_, params_.features.stepsPerCell(), &codes_, &box_cells_);
   st.coding_ms = msSince(t0);
 
   t0 = Clock::now();

@@ -1,7 +1,7 @@
 #pragma once
-// Encodes the boxes of one frame: raw features over the cells the boxes span only, PCA and
-// codeword assignment as matrix products, then one VLAD vector per box by the direct encoder or
-// FLAIR, whichever the cost model expects to be cheaper for this set of boxes.
+// Encodes the boxes of one frame: raw features over the cells the boxes span only, codeword
+// assignment and PCA as matrix products (FeatureCoder), then one VLAD vector per box by the
+// direct encoder or FLAIR, whichever the cost model expects to be cheaper for this set of boxes.
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
@@ -15,15 +15,15 @@ enum class EncoderKind { kAuto, kDirect, kFlair };
 EncoderKind parseEncoderKind(const std::string& name);
 const char* encoderName(EncoderKind kind);
 
-/// Time model of the two encoders (defaults measured by slamaware-bench-recognizer on a
-/// 640x480 frame; see README). Direct: per box a fixed part plus a part per descriptor inside
+/// Time model of the two encoders (defaults: the medians of slamaware-bench-recognizer on
+/// 640x480 frames, 2-core reference machine, 2026-12-03; see README). Direct: per box a fixed part plus a part per descriptor inside
 /// the box. FLAIR: a table build per corner of the region the boxes span, plus a fixed time per
 /// box whatever its size.
 struct EncoderCostModel {
-  double direct_us_per_box = 55.0;
-  double direct_ns_per_descriptor = 16.0;
-  double flair_ns_per_corner = 3500.0;
-  double flair_us_per_box = 110.0;
+  double direct_us_per_box = 130.0;
+  double direct_ns_per_descriptor = 2.7;
+  double flair_ns_per_corner = 4300.0;
+  double flair_us_per_box = 150.0;
   /// FLAIR is not used when its tables would need more memory than this (the direct encoder then
   /// handles the frame).
   double flair_max_table_mb = 200.0;
@@ -84,6 +84,7 @@ class FrameEncoder {
   EncoderCostModel cost_;
   DenseFeatureExtractor extractor_;
   FeatureGrid grid_;
+  FeatureCoder coder_;
   FrameCodes codes_;
   std::vector<CellRect> box_cells_;
   FlairEncoder flair_;

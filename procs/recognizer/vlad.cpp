@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 #ifdef __AVX2__
 #include <immintrin.h>
@@ -66,50 +67,169 @@ PyramidBox pyramidFromCells(const CellRect& c) {
   return b;
 }
 
-void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
-                  const Vocabulary& vocabulary, FrameCodes* out, const std::vector<CellRect>* only) {
-  if (pca.outDims() != vocabulary.dims())
-    throw std::invalid_argument("codeFeatures: PCA and vocabulary dimensions differ");
-  out->region = grid.region;
-  out->nx = grid.nx;
-  out->ny = grid.ny;
-  out->scales = grid.scales;
-  out->steps_per_cell = steps_per_cell;
-  out->projected.resize(grid.features.rows(), pca.outDims());
-  if (!only) {
-    pca.project(grid.features.map(), out->projected.map());
-    vocabulary.assign(out->projected.map(), &out->words);
-    return;
+void FrameCodes::reset(const CellRect& cells, int d) {
+  region = cells;
+  dims = d;
+  first.assign(1, 0);
+  first.reserve(static_cast<size_t>(cells.area()) + 1);
+  words.clear();
+  counts.clear();
+  residuals.resize(0, d);
+}
+
+float* FrameCodes::addEntry(int16_t word, float count) {
+  const int64_t n = static_cast<int64_t>(words.size());
+  words.push_back(word);
+  counts.push_back(count);
+  if (residuals.rows() <= n) {
+    // Grows geometrically; ReusableMatrix keeps the memory (and the rows already written, as
+    // the columns do not change).
+    residuals.resize(std::max<int64_t>(2 * n, 4096), dims);
   }
-  out->words.assign(static_cast<size_t>(grid.features.rows()), FrameCodes::kNotCoded);
-  const Eigen::RowVectorXf offset = pca.offset();
-  const Vocabulary::Lookup lookup = vocabulary.lookup();
+  return residuals.row(n);
+}
+
+namespace {
+
+constexpr int64_t kAssignChunk = 2048;
+
+// True when the SIFT part of a feature row is not all zero (-0 counts as zero).
+bool hasGradient(const float* f) {
+  uint32_t any = 0;
+  for (int i = 0; i < kSiftDims; ++i) {
+    uint32_t u;
+    std::memcpy(&u, f + i, sizeof u);
+    any |= u & 0x7fffffffu;
+  }
+  return any != 0;
+}
+
+// Index of the largest score (ties: the lower index).
+int16_t argmax(const float* s, int k) {
+  int best = 0;
+  for (int c = 1; c < k; ++c)
+    if (s[c] > s[best]) best = c;
+  return static_cast<int16_t>(best);
+}
+
+}  // namespace
+
+FeatureCoder::FeatureCoder(const Pca& pca, const Vocabulary& vocabulary)
+    : pca_(pca), vocabulary_(vocabulary) {
+  if (pca.outDims() != vocabulary.dims())
+    throw std::invalid_argument("FeatureCoder: PCA and vocabulary dimensions differ");
+  if (pca.inDims() != kFeatureDims)
+    throw std::invalid_argument("FeatureCoder: PCA is not of " + std::to_string(kFeatureDims) +
+                                "-D features");
+  // argmax_k y.c_k - |c_k|^2 / 2 with y = x B - offset  =  argmax_k x (B c_k) - bias_k.
+  const Eigen::MatrixXf ct = vocabulary.centers.transpose();
+  offset_ = pca.offset();
+  word_scores_ = pca.basis * ct;
+  word_bias_ = offset_ * ct + 0.5f * vocabulary.centers.rowwise().squaredNorm().transpose();
+  rgb_scores_ = word_scores_.bottomRows<3>();
+}
+
+void FeatureCoder::assignChunk(const FeatureGrid& grid) {
+  const int64_t n = static_cast<int64_t>(textured_.size());
+  if (n == 0) return;
+  chunk_.resize(n, kFeatureDims);
+  for (int64_t i = 0; i < n; ++i)
+    std::memcpy(chunk_.row(i).data(), grid.features.row(rows_[static_cast<size_t>(textured_[i])]),
+                sizeof(float) * kFeatureDims);
+  chunk_scores_.noalias() = chunk_ * word_scores_;
+  chunk_scores_.rowwise() -= word_bias_;
+  const int K = vocabulary_.size();
+  for (int64_t i = 0; i < n; ++i)
+    row_words_[static_cast<size_t>(textured_[i])] = argmax(chunk_scores_.row(i).data(), K);
+  textured_.clear();
+}
+
+void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes* out,
+                        const std::vector<CellRect>* only) {
+  if (grid.features.cols() != kFeatureDims)
+    throw std::invalid_argument("FeatureCoder: features are not " +
+                                std::to_string(kFeatureDims) + "-D");
   const CellRect& region = grid.region;
-  const int W = region.width(), s = steps_per_cell;
-  std::vector<uint8_t> covered(static_cast<size_t>(std::max(0, W)));
-  std::vector<std::pair<int, int>> runs;  // of covered cells [a, b) on a row of cells
-  for (int v = region.v0; v < region.v1; ++v) {
-    std::fill(covered.begin(), covered.end(), 0);
+  const int K = vocabulary_.size(), D = pca_.outDims(), s = steps_per_cell;
+  const int64_t cells = region.area();
+  // 1. The cells to code, and their descriptors' rows, cell by cell.
+  std::vector<uint8_t> covered(static_cast<size_t>(cells), only ? 0 : 1);
+  if (only)
     for (const CellRect& r : *only) {
       const CellRect c = r.intersected(region);
-      if (v >= c.v0 && v < c.v1)
-        for (int u = c.u0; u < c.u1; ++u) covered[u - region.u0] = 1;
+      for (int v = c.v0; v < c.v1; ++v)
+        for (int u = c.u0; u < c.u1; ++u)
+          covered[static_cast<size_t>(int64_t{v - region.v0} * region.width() + (u - region.u0))] = 1;
     }
-    runs.clear();
-    for (int a = 0; a < W; ++a) {
-      if (!covered[a]) continue;
-      int b = a;
-      while (b < W && covered[b]) ++b;
-      runs.emplace_back(a, b);
-      a = b;
+  rows_.clear();
+  for (int v = region.v0; v < region.v1; ++v)
+    for (int u = region.u0; u < region.u1; ++u) {
+      if (!covered[static_cast<size_t>(int64_t{v - region.v0} * region.width() + (u - region.u0))])
+        continue;
+      const int gx0 = (u - region.u0) * s, gy0 = (v - region.v0) * s;
+      for (int t = 0; t < grid.scales; ++t)
+        for (int gy = gy0; gy < gy0 + s; ++gy)
+          for (int gx = gx0; gx < gx0 + s; ++gx) rows_.push_back(grid.rowOf(gx, gy, t));
     }
-    for (int t = 0; t < grid.scales; ++t)
-      for (int gy = (v - region.v0) * s; gy < (v - region.v0 + 1) * s; ++gy)
-        for (const auto& [a, b] : runs) {
-          const int64_t first = grid.rowOf(a * s, gy, t), n = int64_t{b - a} * s;
-          pca.project(grid.features.map().middleRows(first, n), out->projected.map().middleRows(first, n), offset);
-          vocabulary.assign(out->projected.map().middleRows(first, n), out->words.data() + first, lookup);
-        }
+  // 2. The codeword of each: flat rows from their R, G, B (the last 3 rows of word_scores_),
+  // the others by a matrix product per chunk.
+  row_words_.resize(rows_.size());
+  textured_.clear();
+  std::vector<float> scores(static_cast<size_t>(K));
+  for (size_t i = 0; i < rows_.size(); ++i) {
+    const float* f = grid.features.row(rows_[i]);
+    if (hasGradient(f)) {
+      textured_.push_back(static_cast<int64_t>(i));
+      if (static_cast<int64_t>(textured_.size()) == kAssignChunk) assignChunk(grid);
+      continue;
+    }
+    const float r = f[kSiftDims], g = f[kSiftDims + 1], b = f[kSiftDims + 2];
+    for (int k = 0; k < K; ++k)
+      scores[static_cast<size_t>(k)] =
+          r * rgb_scores_(0, k) + g * rgb_scores_(1, k) + b * rgb_scores_(2, k) - word_bias_[k];
+    row_words_[i] = argmax(scores.data(), K);
+  }
+  assignChunk(grid);
+  // 3. Per cell and codeword: the count and the raw sum of its descriptors.
+  out->reset(region, D);
+  acc_.assign(static_cast<size_t>(K) * kFeatureDims, 0.f);
+  acc_n_.assign(static_cast<size_t>(K), 0.f);
+  const int per_cell = s * s * grid.scales;
+  size_t next = 0;
+  sums_.resize(0, kFeatureDims);
+  for (int64_t c = 0; c < cells; ++c) {
+    if (covered[static_cast<size_t>(c)]) {
+      for (int i = 0; i < per_cell; ++i, ++next) {
+        const int k = row_words_[next];
+        float* __restrict a = acc_.data() + int64_t{k} * kFeatureDims;
+        const float* __restrict f = grid.features.row(rows_[next]);
+        for (int e = 0; e < kFeatureDims; ++e) a[e] += f[e];
+        acc_n_[static_cast<size_t>(k)] += 1.f;
+      }
+      for (int k = 0; k < K; ++k) {
+        if (acc_n_[static_cast<size_t>(k)] == 0.f) continue;
+        const int64_t e = static_cast<int64_t>(out->words.size());
+        out->addEntry(static_cast<int16_t>(k), acc_n_[static_cast<size_t>(k)]);
+        if (sums_.rows() <= e) sums_.resize(std::max<int64_t>(2 * e, 4096), kFeatureDims);
+        float* a = acc_.data() + int64_t{k} * kFeatureDims;
+        std::memcpy(sums_.row(e), a, sizeof(float) * kFeatureDims);
+        std::fill(a, a + kFeatureDims, 0.f);
+        acc_n_[static_cast<size_t>(k)] = 0.f;
+      }
+    }
+    out->endCell();
+  }
+  // 4. Residual sums: (sum x) B - n (offset + c_k), one product for all entries.
+  const int64_t n = static_cast<int64_t>(out->words.size());
+  out->residuals.resize(n, D);
+  if (n == 0) return;
+  auto residuals = out->residuals.map();
+  residuals.noalias() = Eigen::Map<const MatrixRM>(sums_.data(), n, kFeatureDims) * pca_.basis;
+  for (int64_t e = 0; e < n; ++e) {
+    const float cnt = out->counts[static_cast<size_t>(e)];
+    const float* ck = vocabulary_.centers.row(out->words[static_cast<size_t>(e)]).data();
+    float* r = residuals.row(e).data();
+    for (int d = 0; d < D; ++d) r[d] -= cnt * (offset_[d] + ck[d]);
   }
 }
 
@@ -170,37 +290,25 @@ void finishVlad(float* v, const float* counts, int K, int D) {
 
 void DirectEncoder::encode(const PyramidBox& box, float* out) {
   const FrameCodes& c = codes_;
-  const int K = vocabulary_.size(), D = vocabulary_.dims(), KD = K * D, s = c.steps_per_cell;
+  const int K = vocabulary_.size(), D = vocabulary_.dims(), KD = K * D;
   if (!c.region.contains(box.cells()))
     throw std::invalid_argument("DirectEncoder: box outside the coded region");
   std::memset(out, 0, sizeof(float) * kPyramidCells * KD);
   counts_.assign(static_cast<size_t>(kPyramidCells) * K, 0.f);
-  const int16_t* words = c.words.data();
-  const float* y = c.projected.data();
   for (int j = 0; j < 4; ++j)
     for (int i = 0; i < 4; ++i) {
       const int cell = kLevel2 + 4 * j + i;
       float* dst = out + int64_t{cell} * KD;
       float* dst_c = counts_.data() + int64_t{cell} * K;
-      // Grid points of the pooling cells [u[i], u[i+1]) x [v[j], v[j+1]).
-      const int gx0 = (box.u[i] - c.region.u0) * s, gx1 = (box.u[i + 1] - c.region.u0) * s;
-      const int gy0 = (box.v[j] - c.region.v0) * s, gy1 = (box.v[j + 1] - c.region.v0) * s;
-      for (int t = 0; t < c.scales; ++t)
-        for (int gy = gy0; gy < gy1; ++gy) {
-          const int64_t base = c.rowOf(0, gy, t);
-          for (int64_t r = base + gx0; r < base + gx1; ++r) {
-            const int k = words[r];
-            addTo(dst + int64_t{k} * D, y + r * D, D);
-            dst_c[k] += 1.f;
+      // The entries of the pooling cells [u[i], u[i+1]) x [v[j], v[j+1]).
+      for (int v = box.v[j]; v < box.v[j + 1]; ++v)
+        for (int u = box.u[i]; u < box.u[i + 1]; ++u) {
+          const size_t ci = static_cast<size_t>(c.cellIndex(u, v));
+          for (int32_t e = c.first[ci]; e < c.first[ci + 1]; ++e) {
+            const int k = c.words[static_cast<size_t>(e)];
+            addTo(dst + int64_t{k} * D, c.residuals.row(e), D);
+            dst_c[k] += c.counts[static_cast<size_t>(e)];
           }
-        }
-      // Sum of residuals = sum of descriptors - count * codeword.
-      for (int k = 0; k < K; ++k)
-        if (dst_c[k] > 0.f) {
-          const float n = dst_c[k];
-          const float* ck = vocabulary_.centers.row(k).data();
-          float* d = dst + int64_t{k} * D;
-          for (int e = 0; e < D; ++e) d[e] -= n * ck[e];
         }
     }
   sumPyramidLevels(out, counts_.data(), K, D);
@@ -221,7 +329,7 @@ void FlairEncoder::build(const FrameCodes& codes, const Vocabulary& vocabulary,
   region_ = region;
   K_ = vocabulary.size();
   D_ = vocabulary.dims();
-  const int KD = K_ * D_, s = codes.steps_per_cell;
+  const int KD = K_ * D_;
   const int W = region.width(), H = region.height();
   const size_t corners = static_cast<size_t>(W + 1) * static_cast<size_t>(H + 1);
   if (sums_.size() < corners * KD) sums_.resize(corners * KD);
@@ -232,29 +340,19 @@ void FlairEncoder::build(const FrameCodes& codes, const Vocabulary& vocabulary,
   std::memset(counts_.data(), 0, sizeof(float) * (W + 1) * K_);
   row_sums_.resize(KD);
   row_counts_.resize(K_);
-  const int16_t* words = codes.words.data();
-  const float* y = codes.projected.data();
   for (int b = 1; b <= H; ++b) {
     std::fill(row_sums_.begin(), row_sums_.end(), 0.f);
     std::fill(row_counts_.begin(), row_counts_.end(), 0.f);
     std::memset(sums_.data() + int64_t{b} * (W + 1) * KD, 0, sizeof(float) * KD);
     std::memset(counts_.data() + int64_t{b} * (W + 1) * K_, 0, sizeof(float) * K_);
-    const int gy0 = (region.v0 + b - 1 - codes.region.v0) * s;
     for (int a = 1; a <= W; ++a) {
-      // The descriptors of cell (region.u0 + a - 1, region.v0 + b - 1).
-      const int gx0 = (region.u0 + a - 1 - codes.region.u0) * s;
-      for (int t = 0; t < codes.scales; ++t)
-        for (int gy = gy0; gy < gy0 + s; ++gy)
-          for (int gx = gx0; gx < gx0 + s; ++gx) {
-            const int64_t r = codes.rowOf(gx, gy, t);
-            const int k = words[r];
-            if (k < 0) continue;  // no box reads this cell
-            float* __restrict acc = row_sums_.data() + int64_t{k} * D_;
-            const float* __restrict x = y + r * D_;
-            const float* __restrict ck = vocabulary.centers.row(k).data();
-            for (int e = 0; e < D_; ++e) acc[e] += x[e] - ck[e];
-            row_counts_[k] += 1.f;
-          }
+      // The entries of cell (region.u0 + a - 1, region.v0 + b - 1); none where no box reads it.
+      const size_t ci = static_cast<size_t>(codes.cellIndex(region.u0 + a - 1, region.v0 + b - 1));
+      for (int32_t e = codes.first[ci]; e < codes.first[ci + 1]; ++e) {
+        const int k = codes.words[static_cast<size_t>(e)];
+        addTo(row_sums_.data() + int64_t{k} * D_, codes.residuals.row(e), D_);
+        row_counts_[k] += codes.counts[static_cast<size_t>(e)];
+      }
       float* __restrict dst = sums_.data() + (int64_t{b} * (W + 1) + a) * KD;
       const float* __restrict up = sums_.data() + (int64_t{b - 1} * (W + 1) + a) * KD;
       const float* __restrict acc = row_sums_.data();

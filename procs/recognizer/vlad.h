@@ -11,8 +11,9 @@
 // sum of (descriptor - codeword) over the cell's descriptors assigned to that codeword. Then the
 // signed square root of every element, then L2 normalisation of the whole vector (finishVlad).
 //
-// Both encoders produce the same vector up to float rounding. DirectEncoder sums the descriptors
-// inside each 4x4 cell (cost grows with the box's area); FlairEncoder reads the 4x4 cells from
+// Both encoders read the per-cell entries of FrameCodes and produce the same vector up to float
+// rounding. DirectEncoder sums the entries of the pooling cells inside each 4x4 cell (cost grows
+// with the box's area); FlairEncoder reads the 4x4 cells from
 // per-codeword integral tables at the 25 distinct corners (cost independent of the area, plus one
 // table build per frame whose cost grows with the area the boxes span).
 #include <cstddef>
@@ -40,25 +41,70 @@ bool snapBox(double x, double y, double w, double h, int width, int height, int 
 /// A pyramid box from cell boundaries [u0, u1) x [v0, v1) (u1 > u0, v1 > v0).
 PyramidBox pyramidFromCells(const CellRect& cells);
 
-/// The frame's descriptors projected by PCA and assigned to codewords: what both box encoders
-/// read. Rows are those of the FeatureGrid they come from.
+/// What both box encoders read: for each pooling cell of `region`, the codewords its descriptors
+/// were assigned to, each with how many descriptors and the sum of their residuals (projected
+/// descriptor - codeword). A box's VLAD is a sum of these entries over its cells, so the encoders
+/// add one entry per (cell, codeword) instead of one projected descriptor each.
 struct FrameCodes {
   CellRect region;  ///< pooling cells covered
-  int nx = 0, ny = 0, scales = 0;
-  int steps_per_cell = 0;      ///< grid points per pooling cell along x and y
-  ReusableMatrix projected;    ///< N x D (rows of uncoded descriptors: undefined)
-  std::vector<int16_t> words;  ///< N codeword indices; kNotCoded where no box reads the descriptor
-  int64_t rowOf(int i, int j, int t) const { return (int64_t{t} * ny + j) * nx + i; }
-  static constexpr int16_t kNotCoded = -1;
+  int dims = 0;     ///< D
+  /// Entries of cell (u, v) are [first[i], first[i + 1]) with i = cellIndex(u, v), by increasing
+  /// codeword; a cell that no box reads was not coded and has none.
+  std::vector<int32_t> first;
+  std::vector<int16_t> words;  ///< per entry: the codeword
+  std::vector<float> counts;   ///< per entry: its descriptors in the cell
+  ReusableMatrix residuals;    ///< entries x D: sum over them of (projected descriptor - codeword)
+
+  int64_t cellIndex(int u, int v) const {
+    return int64_t{v - region.v0} * region.width() + (u - region.u0);
+  }
+  bool coded(int u, int v) const {
+    const int64_t i = cellIndex(u, v);
+    return first[static_cast<size_t>(i) + 1] > first[static_cast<size_t>(i)];
+  }
+  /// Empties the codes and sizes them for `region` (all cells uncoded).
+  void reset(const CellRect& cells, int d);
+  /// Appends an entry to the cell being filled: cells are filled in index order, each with
+  /// endCell() after its entries.
+  float* addEntry(int16_t word, float count);
+  void endCell() { first.push_back(static_cast<int32_t>(words.size())); }
 };
 
-/// Projects the raw features with `pca` and assigns them to `vocabulary` (reuses out's memory).
-/// With `only` (cell rectangles, e.g. the boxes to encode), only the descriptors of the cells
-/// some rectangle covers are read and coded (one matrix product per run of such cells on a row);
-/// the others get kNotCoded. Both encoders read only the cells of their boxes.
-void codeFeatures(const FeatureGrid& grid, int steps_per_cell, const Pca& pca,
-                  const Vocabulary& vocabulary, FrameCodes* out,
-                  const std::vector<CellRect>* only = nullptr);
+/// Codes the descriptors of a FeatureGrid: each is assigned to its nearest codeword after PCA,
+/// and the entries of FrameCodes are formed per pooling cell. PCA is linear, so a cell's sum of
+/// projected descriptors of one codeword is the projection of their raw sum: the assignment is one
+/// product with (PCA basis x codewords^T) (131 x K) per descriptor, and the projection (131 x D)
+/// runs once per (cell, codeword), not per descriptor. Descriptors whose SIFT part is zero
+/// (below the contrast threshold; a third of a typical frame) are assigned from their R, G, B
+/// alone. The result equals projecting and assigning every descriptor up to float rounding
+/// (ties between two codewords within rounding may go either way).
+class FeatureCoder {
+ public:
+  /// Keeps references: `pca` and `vocabulary` must outlive the coder.
+  FeatureCoder(const Pca& pca, const Vocabulary& vocabulary);
+  /// Codes the cells of grid.region (reusing out's memory). With `only` (cell rectangles, e.g.
+  /// the boxes to encode), just the cells some rectangle covers; the others stay uncoded.
+  void code(const FeatureGrid& grid, int steps_per_cell, FrameCodes* out,
+            const std::vector<CellRect>* only = nullptr);
+
+ private:
+  void assignChunk(const FeatureGrid& grid);
+
+  const Pca& pca_;
+  const Vocabulary& vocabulary_;
+  Eigen::MatrixXf word_scores_;  ///< 131 x K: basis x centres^T
+  Eigen::RowVectorXf word_bias_;   ///< K: offset x centres^T + |c|^2 / 2
+  Eigen::RowVectorXf offset_;      ///< mean x basis
+  Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> rgb_scores_;  ///< R, G, B rows of word_scores_
+  // Scratch, reused across frames.
+  std::vector<int64_t> rows_;      ///< grid rows to code, cell by cell
+  std::vector<int16_t> row_words_;
+  std::vector<int64_t> textured_;  ///< positions in rows_ waiting for the matrix product
+  MatrixRM chunk_, chunk_scores_;
+  ReusableMatrix sums_;            ///< entries x 131: raw sums
+  std::vector<float> acc_;         ///< K x 131 sums of the cell being pooled
+  std::vector<float> acc_n_;
+};
 
 /// Normalises the 21 * K * D raw residual sums in place: blocks whose count is zero are set to
 /// exactly zero (FLAIR's table differences leave rounding noise there), then each element
@@ -70,10 +116,9 @@ void finishVlad(float* v, const float* counts, int K, int D);
 /// per cell) and counts (K per cell).
 void sumPyramidLevels(float* v, float* counts, int K, int D);
 
-/// Encodes boxes by summing the residuals of the descriptors inside each 4x4 pyramid cell, then
-/// the 4x4 cells into the 2x2 cells and the whole box. Shares the frame's projections and
-/// codeword assignments with FLAIR (a strong baseline, not a per-box recomputation); its cost
-/// grows with the box's area.
+/// Encodes boxes by summing the entries of the pooling cells inside each 4x4 pyramid cell, then
+/// the 4x4 cells into the 2x2 cells and the whole box. Shares the frame's codes with FLAIR (a
+/// strong baseline, not a per-box recomputation); its cost grows with the box's area.
 class DirectEncoder {
  public:
   DirectEncoder(const FrameCodes& codes, const Vocabulary& vocabulary)

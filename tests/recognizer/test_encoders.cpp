@@ -4,6 +4,7 @@
 // the boxes' span.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -139,16 +140,10 @@ TEST(Encoders, OnlyTheCellsOfTheBoxesAreCodedAndTheVectorsAreThoseOfAFullCoding)
     enc.encode(fx.frame, {a, b}, kind, &some, &st);
     EXPECT_EQ(st.region, (CellRect{2, 2, 70, 57}));
     const FrameCodes& c = enc.codes();
-    const int s = c.steps_per_cell;
-    const auto word = [&](int u, int v, int t) {
-      return c.words[static_cast<size_t>(c.rowOf((u - c.region.u0) * s, (v - c.region.v0) * s, t))];
-    };
-    for (int t = 0; t < c.scales; ++t) {
-      EXPECT_GE(word(2, 2, t), 0);    // inside a
-      EXPECT_GE(word(69, 56, t), 0);  // inside b
-      EXPECT_EQ(word(40, 30, t), FrameCodes::kNotCoded);  // between them: no box reads it
-      EXPECT_EQ(word(69, 2, t), FrameCodes::kNotCoded);
-    }
+    EXPECT_TRUE(c.coded(2, 2));     // inside a
+    EXPECT_TRUE(c.coded(69, 56));   // inside b
+    EXPECT_FALSE(c.coded(40, 30));  // between them: no box reads it
+    EXPECT_FALSE(c.coded(69, 2));
     enc.encode(fx.frame, {a, b, all}, kind, &full, &st);
     double max_abs = 0;
     for (int r = 0; r < 2; ++r)
@@ -237,4 +232,57 @@ TEST(Encoders, WarmingUpForAFrameSizeChangesNoVector) {
       for (int64_t c = 0; c < a.cols(); ++c)
         ASSERT_EQ(a.row(r)[c], b.row(r)[c]) << encoderName(kind) << " box " << r << " element " << c;
   }
+}
+
+TEST(Encoders, CodesEqualProjectingAndAssigningEveryDescriptor) {
+  Fixture& fx = fixture();
+  // A flat patch (SIFT part zero: the R, G, B shortcut) and a smooth ramp beside the texture.
+  cv::Mat frame = fx.frame.clone();
+  frame(cv::Rect(40, 40, 200, 120)).setTo(cv::Scalar(30, 140, 200));
+  for (int x = 0; x < 200; ++x)
+    frame(cv::Rect(300 + x, 300, 1, 120)).setTo(cv::Scalar(x, 255 - x, 128));
+  DenseFeatureExtractor ex(fx.params.features);
+  ex.setImage(frame);
+  FeatureGrid g;
+  ex.extract(ex.imageCells(), &g);
+  const int s = fx.params.features.stepsPerCell(), K = fx.vocabulary.size(), D = fx.pca.outDims();
+  FrameCodes codes;
+  FeatureCoder(fx.pca, fx.vocabulary).code(g, s, &codes);
+
+  MatrixRM y(g.features.rows(), D);
+  fx.pca.project(g.features.map(), y);
+  std::vector<int16_t> words;
+  fx.vocabulary.assign(y, &words);
+  int64_t flat = 0, moved = 0, entries = 0;
+  double max_err = 0;
+  for (int v = g.region.v0; v < g.region.v1; ++v)
+    for (int u = g.region.u0; u < g.region.u1; ++u) {
+      std::vector<float> n(K, 0.f);
+      MatrixRM sum = MatrixRM::Zero(K, D);
+      for (int t = 0; t < g.scales; ++t)
+        for (int gy = (v - g.region.v0) * s; gy < (v - g.region.v0 + 1) * s; ++gy)
+          for (int gx = (u - g.region.u0) * s; gx < (u - g.region.u0 + 1) * s; ++gx) {
+            const int64_t r = g.rowOf(gx, gy, t);
+            const float* f = g.features.row(r);
+            flat += std::all_of(f, f + kSiftDims, [](float x) { return x == 0.f; });
+            n[words[r]] += 1;
+            sum.row(words[r]) += y.row(r) - fx.vocabulary.centers.row(words[r]);
+          }
+      const size_t ci = static_cast<size_t>(codes.cellIndex(u, v));
+      std::vector<float> got(K, 0.f);
+      for (int32_t e = codes.first[ci]; e < codes.first[ci + 1]; ++e, ++entries) {
+        const int k = codes.words[static_cast<size_t>(e)];
+        got[k] = codes.counts[static_cast<size_t>(e)];
+        if (got[k] != n[k]) continue;
+        for (int d = 0; d < D; ++d)
+          max_err = std::max(max_err, static_cast<double>(std::fabs(codes.residuals.row(e)[d] -
+                                                                    sum(k, d))));
+      }
+      for (int k = 0; k < K; ++k) moved += static_cast<int64_t>(std::fabs(got[k] - n[k]));
+    }
+  EXPECT_GT(flat, g.features.rows() / 20) << "the frame must exercise the flat shortcut";
+  // Only ties within float rounding may land on another codeword.
+  EXPECT_LE(moved, g.features.rows() / 1000) << moved << " of " << g.features.rows();
+  EXPECT_LT(entries, g.features.rows()) << "entries pool descriptors per cell and codeword";
+  EXPECT_LT(max_err, 5e-5) << max_err;
 }

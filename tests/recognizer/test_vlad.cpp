@@ -11,30 +11,29 @@ using namespace slamaware;
 
 namespace {
 
-// 4 x 4 pooling cells with one descriptor each (steps_per_cell 1, one scale), D = 2, K = 2 with
-// codewords c0 = (0, 0) and c1 = (10, 0). All descriptors sit on c0 except four.
+// 4 x 4 pooling cells with one descriptor each, D = 2, K = 2 with codewords c0 = (0, 0) and
+// c1 = (10, 0). All descriptors sit on c0 except four.
 struct Toy {
   Vocabulary vocabulary;
   FrameCodes codes;
+  MatrixRM y = MatrixRM::Zero(16, 2);  // descriptor of cell (i, j) in row 4 j + i
+  std::vector<int16_t> words;
   Toy() {
     vocabulary.centers.resize(2, 2);
     vocabulary.centers << 0, 0, 10, 0;
-    codes.region = CellRect{0, 0, 4, 4};
-    codes.nx = codes.ny = 4;
-    codes.scales = 1;
-    codes.steps_per_cell = 1;
-    codes.projected.resize(16, 2);
-    for (int r = 0; r < 16; ++r) codes.projected.row(r)[0] = codes.projected.row(r)[1] = 0;
     set(0, 0, 1, 2);   // -> c0, residual (1, 2)
     set(1, 0, 11, 0);  // -> c1, residual (1, 0)
     set(2, 1, -1, 1);  // -> c0, residual (-1, 1)
     set(3, 3, 9, 3);   // -> c1, residual (-1, 3)
-    vocabulary.assign(codes.projected.map(), &codes.words);
+    vocabulary.assign(y, &words);
+    codes.reset(CellRect{0, 0, 4, 4}, 2);
+    for (int r = 0; r < 16; ++r) {
+      float* e = codes.addEntry(words[r], 1.f);
+      for (int d = 0; d < 2; ++d) e[d] = y(r, d) - vocabulary.centers(words[r], d);
+      codes.endCell();
+    }
   }
-  void set(int i, int j, float a, float b) {
-    codes.projected.row(codes.rowOf(i, j, 0))[0] = a;
-    codes.projected.row(codes.rowOf(i, j, 0))[1] = b;
-  }
+  void set(int i, int j, float a, float b) { y.row(4 * j + i) << a, b; }
 };
 
 // Raw residual sums by hand: 21 cells x K = 2 x D = 2 (layout of vlad.h).
@@ -69,9 +68,9 @@ std::vector<float> signedSqrtL2(std::vector<float> v) {
 
 TEST(Vlad, ToyDescriptorsGiveTheHandComputedVector) {
   Toy toy;
-  ASSERT_EQ(toy.codes.words[toy.codes.rowOf(1, 0, 0)], 1);
-  ASSERT_EQ(toy.codes.words[toy.codes.rowOf(3, 3, 0)], 1);
-  ASSERT_EQ(toy.codes.words[toy.codes.rowOf(2, 1, 0)], 0);
+  ASSERT_EQ(toy.words[1], 1);
+  ASSERT_EQ(toy.words[4 * 3 + 3], 1);
+  ASSERT_EQ(toy.words[4 * 1 + 2], 0);
   const std::vector<float> expected = signedSqrtL2(handRawVlad());
   // sum |raw| = 26, so e.g. the whole-box c0 y-component is sqrt(3) / sqrt(26).
   EXPECT_NEAR(expected[1], std::sqrt(3.0) / std::sqrt(26.0), 1e-7);
