@@ -1,6 +1,6 @@
 #pragma once
-// Files that must never be seen half-written (maps, models; DESIGN.md §6), and the checksum that
-// tells a damaged file from a good one.
+// Files that must never be seen half-written (maps, models; docs/architecture.md §6), and the
+// checksum that tells a damaged file from a good one.
 #include <cstddef>
 #include <cstdint>
 #include <string>

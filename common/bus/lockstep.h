@@ -1,6 +1,6 @@
 #pragma once
-// What a lockstep source (the camera, the replayer) needs: wait until the pipeline's stages are
-// up, then publish frame n+1 only after the last stage has answered frame n (DESIGN.md §4).
+// What a lockstep source (the camera, the replayer) needs: wait until the pipeline's stages are up,
+// then publish frame n+1 only after the last stage has answered frame n (docs/architecture.md §4).
 #include <functional>
 #include <string>
 #include <vector>

@@ -1,6 +1,6 @@
 #pragma once
-// <NAME>_STATUS heartbeat at 1 Hz (DESIGN.md §1): state, last input handled, queue depth,
-// frames processed and dropped, rejects of the bus, and the process's own counters.
+// <NAME>_STATUS heartbeat at 1 Hz (docs/architecture.md §1): state, last input handled, queue
+// depth, frames processed and dropped, rejects of the bus, and the process's own counters.
 #include <atomic>
 #include <chrono>
 #include <cstdint>

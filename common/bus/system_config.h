@@ -1,6 +1,6 @@
 #pragma once
-// What every process shares, from config/system.yaml: the bus URL, lockstep mode and the
-// channel names (DESIGN.md §1, §4, §5). Code never spells a channel name; it asks Channels.
+// What every process shares, from config/system.yaml: the bus URL, lockstep mode and the channel
+// names (docs/architecture.md §1, §4, §5). Code never spells a channel name; it asks Channels.
 #include <cstddef>
 #include <string>
 #include <vector>

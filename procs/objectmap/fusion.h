@@ -1,6 +1,6 @@
 #pragma once
-// Multi-view class fusion (DESIGN.md §3; Pillai & Leonard 2015, Sec. IV-D). With views x_1..x_N
-// of one object taken as independent and a uniform prior p(c), Bayes gives
+// Multi-view class fusion (docs/architecture.md §3; Pillai & Leonard 2015, Sec. IV-D). With views
+// x_1..x_N of one object taken as independent and a uniform prior p(c), Bayes gives
 //   p(c | x_1..x_N) ∝ p(c) ∏_i p(x_i | c) ∝ ∏_i p(c | x_i) / p(c)^(N-1) ∝ ∏_i p(c | x_i),
 // so the maximum-likelihood label is argmax_c sum_i log p(c | x_i). The object map keeps that sum
 // (the log evidence) per class; the posterior is its softmax.

@@ -1,5 +1,5 @@
 #pragma once
-// The object map on disk (DESIGN.md §6). A save is a numbered generation:
+// The object map on disk (docs/architecture.md §6). A save is a numbered generation:
 //   objectmap-<generation>-seg<id>.ot  one OctoMap ColorOcTree per map segment (octovis opens it;
 //                                      colour = label), written only when its bytes changed
 //   objectmap-<generation>.json        the object table; its first line is a header

@@ -91,7 +91,7 @@ struct GroupingOptions {
   }
 };
 
-/// Where and how often the map is saved (DESIGN.md §6).
+/// Where and how often the map is saved (docs/architecture.md §6).
 struct PersistenceOptions {
   /// Folder of the map files (relative to the working directory); --map-dir overrides it.
   std::string dir = "build/objectmap";

@@ -1,10 +1,10 @@
 #pragma once
-// Object candidates from the semi-dense map (DESIGN.md §3): the map of one SLAM map id is kept
-// per keyframe (incremental updates replace a keyframe's points, a full cloud replaces all),
-// with the views (camera poses) of that map; recluster() removes the map's structure (large
-// planes, and everything not standing on the support the views look at) and over-segments the
-// rest by density-based clustering at several radii, a factor 2 apart. A cluster that survives a
-// map update keeps its id (association by shared voxels).
+// Object candidates from the semi-dense map (docs/architecture.md §3): the map of one SLAM map id
+// is kept per keyframe (incremental updates replace a keyframe's points, a full cloud replaces
+// all), with the views (camera poses) of that map; recluster() removes the map's structure (large
+// planes, and everything not standing on the support the views look at) and over-segments the rest
+// by density-based clustering at several radii, a factor 2 apart. A cluster that survives a map
+// update keeps its id (association by shared voxels).
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>

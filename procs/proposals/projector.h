@@ -1,8 +1,8 @@
 #pragma once
-// Candidates of the map -> boxes in one frame (DESIGN.md §3): each candidate's points projected
-// with the frame's pose, its box and median depth; a depth buffer of the candidates culls those
-// hidden behind nearer ones; small boxes are dropped; the boxes are ranked, and overlapping ones
-// suppressed when `nms_iou` < 1 (by default the recognizer suppresses them after classifying them).
+// Candidates of the map -> boxes in one frame (docs/architecture.md §3): each candidate's points
+// projected with the frame's pose, its box and median depth; a depth buffer of the candidates culls
+// those hidden behind nearer ones; small boxes are dropped; the boxes are ranked, and overlapping
+// ones suppressed when `nms_iou` < 1 (by default the recognizer suppresses them once classified).
 #include <vector>
 
 #include "common/camera_model.h"

@@ -1,5 +1,5 @@
-// slamaware-bench-recognizer: speed of the recognizer on one thread (DESIGN.md §7), as a flat JSON
-// object of medians:
+// slamaware-bench-recognizer: speed of the recognizer on one thread (docs/architecture.md §7), as
+// a flat JSON object of medians:
 //   recognizer_ms_per_frame            a 640x480 frame with 30 boxes: features, PCA, assignment,
 //                                      encoding (the encoder the cost model picks) and scoring
 //   recognizer_ms_per_frame_12_boxes   the same with 12 boxes of 20 to 128 px, about what a frame

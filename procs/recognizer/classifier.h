@@ -6,9 +6,9 @@
 // Calibration. The C one-vs-all scores s_c = w_c . x + b_c of a box are turned into one
 // distribution over the classes: p(c | x) = (1 - mix) softmax_c(s / T) + mix / C. The temperature T
 // and the floor `mix` are fitted on held-out data (instances and scene frames the classifiers did
-// not see) by minimising the negative log-likelihood. Summing log p over views (naive Bayes with a
-// uniform prior, DESIGN.md §3) then behaves: a fitted T undoes the over-confidence of scores on
-// training-like data, and the floor keeps one bad view from vetoing a class (log p >= log(mix/C)).
+// not see) by minimising the negative log-likelihood. Summing log p over views (naive Bayes with
+// a uniform prior, docs/architecture.md §3) then behaves: a fitted T undoes the over-confidence
+// of scores on training-like data, and the floor keeps one bad view from vetoing a class (log p >= log(mix/C)).
 #include <cstdint>
 #include <functional>
 #include <string>

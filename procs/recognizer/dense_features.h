@@ -1,6 +1,6 @@
 #pragma once
 // Dense SIFT (VLFeat vl_dsift, flat window) at several bin sizes on one common grid, plus the mean
-// RGB of each descriptor's support: 131-D raw features (DESIGN.md §3).
+// RGB of each descriptor's support: 131-D raw features (docs/architecture.md §3).
 //
 // Geometry. The image is divided into pooling cells of pool_cell_px; cell (u, v) covers pixels
 // [u*T, (u+1)*T) x [v*T, (v+1)*T). Each cell holds s x s grid points (s = T / step), grid point

@@ -1,6 +1,6 @@
 #pragma once
 // The recognizer's model: encoding parameters, PCA, vocabulary, classifiers and class names in
-// one versioned binary file with a checksum (DESIGN.md §6).
+// one versioned binary file with a checksum (docs/architecture.md §6).
 //
 // File layout (little-endian):
 //   0  char[8]  magic "SLMRECOG"

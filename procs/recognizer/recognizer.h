@@ -105,8 +105,8 @@ struct FrameDetections {
   }
 };
 
-/// Non-maximum suppression of classified boxes (DESIGN.md §3: overlapping boxes, IoU > max_iou,
-/// are suppressed). The boxes are taken in order of their most probable object class's
+/// Non-maximum suppression of classified boxes (docs/architecture.md §3: overlapping boxes,
+/// IoU > max_iou, are suppressed). The boxes are taken in order of their most probable object class's
 /// probability (the background excluded; ties: request order), and a box is removed when it
 /// overlaps one kept before it by IoU > max_iou (with `per_class`, only one whose most probable
 /// object class is the same: a bowl's box beside the box of the bowl and a mug, surer of a mug,

@@ -2,9 +2,9 @@
 // The SLAM stage as a library (no LCM): frames in, poses, keyframes and semi-dense map updates
 // out. Tracking runs on the caller's thread; local mapping and the depth filter on their own.
 //
-// Lockstep (DESIGN.md §4): processFrame() waits for the mapping and depth work the frame caused
-// before it returns, so that the outputs depend only on the input frames. Real time: it returns
-// as soon as the frame is tracked; collectBackground() hands over what the workers produced
+// Lockstep (docs/architecture.md §4): processFrame() waits for the mapping and depth work the frame
+// caused before it returns, so that the outputs depend only on the input frames. Real time: it
+// returns as soon as the frame is tracked; collectBackground() hands over what the workers produced
 // since, and depth-filter frames are skipped (and counted) when the filter falls behind.
 #include <Eigen/Core>
 #include <cstdint>

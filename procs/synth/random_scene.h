@@ -1,7 +1,7 @@
 #pragma once
-// Random scenes: every option of a scene config drawn from wide, documented ranges (DESIGN.md is
-// silent on them; procs/synth/README.md lists them). Used to judge options on tables no one
-// chose: `slamaware-synth scene --random SEED`, `make eval-random`.
+// Random scenes: every option of a scene config drawn from wide, documented ranges
+// (docs/architecture.md is silent on them; procs/synth/README.md lists them). Used to judge options
+// on tables no one chose: `slamaware-synth scene --random SEED`, `make eval-random`.
 #include <cstdint>
 #include <memory>
 

@@ -1,7 +1,8 @@
 // The single_view / multi_view_online / multi_view_final sections of the eval report: VOC all-point
 // AP on hand-computed examples (ties, no ground truth), the matching of boxes to ground truth (one
-// match per ground-truth box, distractors), pooling over sequences, the report keys of DESIGN.md
-// §7, and the multi-view sections scored from what the object map published (and nothing else).
+// match per ground-truth box, distractors), pooling over sequences, the report keys of
+// docs/architecture.md §7, and the multi-view sections scored from what the object map published
+// (and nothing else).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -156,9 +157,9 @@ TEST(RecognitionMatching, ADetectionCannotMatchAnAlreadyMatchedBox) {
   EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["recall"].get<double>(), 100.0);
 }
 
-// A box is matched to the unmatched box of its class that it overlaps most (DESIGN.md §7: "an
-// unmatched ground-truth box"), so the second box of two overlapping caps is found by the second
-// detection even though that detection overlaps the first cap more.
+// A box is matched to the unmatched box of its class that it overlaps most
+// (docs/architecture.md §7: "an unmatched ground-truth box"), so the second box of two overlapping
+// caps is found by the second detection even though that detection overlaps the first cap more.
 TEST(RecognitionMatching, TheUnmatchedBoxOverlappingMostIsTaken) {
   RecognitionScores s = emptyScores({"cap"});
   scoreFrame(kModel, {box(120, 100, 50, 50, {0.9, 0.05, 0.05}), box(115, 100, 50, 50, {0.8, 0.1, 0.1})},

@@ -4,10 +4,10 @@
 // SLAM map was initialised from, not located when it came, gets a second, late set with its boxes),
 // the two runs publish byte-identical payloads on the three channels, and the recognised objects are
 // there (not only empty messages); no two published boxes of a frame that are surest of the same
-// object class overlap by IoU > 0.5 (DESIGN.md §3, suppressed per class), though the proposals did.
-// The object map re-run on the recording's inputs gives the node's messages byte for byte, and on
-// the first half of them the same messages for that half: a fused label never depends on a later
-// frame.
+// object class overlap by IoU > 0.5 (docs/architecture.md §3, suppressed per class), though the
+// proposals did. The object map re-run on the recording's inputs gives the node's messages byte for
+// byte, and on the first half of them the same messages for that half: a fused label never depends
+// on a later frame.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // slamaware-eval: runs the pipeline (the processes that exist: camera -> slam -> ...) lockstep on
 // each sequence folder, records the bus, and computes the report sections of the stages from the
-// recording and the ground truth (DESIGN.md §7): the "slam", "proposals", "single_view",
+// recording and the ground truth (docs/architecture.md §7): the "slam", "proposals", "single_view",
 // "multi_view_online" and "multi_view_final" sections of every sequence, and "overall" over the
 // synthetic suite, plus plots per sequence (trajectory, recall against boxes, precision-recall per
 // class). Only what the processes published is scored. Runs inside a private network namespace

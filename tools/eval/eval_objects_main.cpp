@@ -1,5 +1,5 @@
 // slamaware-eval-objects: recognition without the pipeline, written as a JSON fragment that the
-// evaluation report merges (DESIGN.md §7).
+// evaluation report merges (docs/architecture.md §7).
 //
 // Object sets: category accuracy on instances the recognizer was not trained on, with the
 // confusion matrix: {"objects": {"<set name>": {"accuracy": %, "confusion": [[...]], ...}}}.

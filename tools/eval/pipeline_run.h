@@ -2,7 +2,7 @@
 // Runs the multi-process pipeline on one sequence folder, lockstep (or real time), and records the bus:
 // lcm-logger, then every stage of the pipeline whose binary is built, then the camera, which
 // publishes frame n+1 only after the last stage answered frame n. The stages are a table (the
-// order of DESIGN.md §1) so that later stages join by being built.
+// order of docs/architecture.md §1) so that later stages join by being built.
 #include <map>
 #include <string>
 #include <vector>

@@ -1,13 +1,13 @@
 #pragma once
 // The "single_view", "multi_view_online" and "multi_view_final" sections of the eval report
-// (DESIGN.md §7): detection of the object classes on every 5th frame, each box as the processes
-// published it: DETECTIONS (single view: its frame alone), OBJECT_DETECTIONS (multi view online: its
-// object's evidence up to that frame, ranked by the object map's score) and the last OBJECT_MAP
-// (multi view final, the paper's protocol: its object's evidence over the whole sequence), scored
-// against the ground-truth boxes by VOC average precision, plus precision and recall at the label
-// the system reports (argmax over the classes, background included). The evaluator relabels,
-// re-ranks, fuses and suppresses nothing. Definitions in tools/eval/README.md. Only the evaluator
-// reads ground truth.
+// (docs/architecture.md §7): detection of the object classes on every 5th frame, each box as the
+// processes published it: DETECTIONS (single view: its frame alone), OBJECT_DETECTIONS (multi view
+// online: its object's evidence up to that frame, ranked by the object map's score) and the last
+// OBJECT_MAP (multi view final, the paper's protocol: its object's evidence over the whole
+// sequence), scored against the ground-truth boxes by VOC average precision, plus precision and
+// recall at the label the system reports (argmax over the classes, background included). The
+// evaluator relabels, re-ranks, fuses and suppresses nothing. Definitions in tools/eval/README.md.
+// Only the evaluator reads ground truth.
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>

@@ -1,6 +1,7 @@
 #pragma once
-// What SLAM published for one sequence, and the "slam" section of the eval report computed from
-// it against the sequence's ground truth (DESIGN.md §7). Only the evaluator reads ground truth.
+// What SLAM published for one sequence, and the "slam" section of the eval report computed from it
+// against the sequence's ground truth (docs/architecture.md §7).
+// Only the evaluator reads ground truth.
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>

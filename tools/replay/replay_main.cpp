@@ -1,6 +1,6 @@
 // slamaware-replay: plays an LCM log back onto the bus, in real time (like lcm-logplayer) or
 // lockstep: each CAMERA message waits until the last stage has answered the previous frame, so
-// that the same log gives the same outputs, byte for byte (DESIGN.md §4).
+// that the same log gives the same outputs, byte for byte (docs/architecture.md §4).
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>

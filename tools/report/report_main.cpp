@@ -1,5 +1,5 @@
 // slamaware-report: assembles the machine-read reports of `make eval` and `make bench` from the
-// JSON fragments that each part writes (DESIGN.md §7), and renders report.md.
+// JSON fragments that each part writes (docs/architecture.md §7), and renders report.md.
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <iostream>

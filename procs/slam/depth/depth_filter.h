@@ -1,12 +1,12 @@
 #pragma once
-// Semi-dense depth (DESIGN.md §3): each keyframe's high-gradient pixels become depth-filter seeds
-// (seed.h), updated by epipolar search (epipolar_search.h) in every later located frame of the
-// same map; seeds that converge become coloured points with a depth standard deviation, stored
-// in their keyframe's camera frame so that they move with it when bundle adjustment moves the
-// keyframe. A keyframe's seeds live until max_keyframes newer keyframes exist and they were
-// searched in min_frames frames (at low frame rates, when every frame is a keyframe, max_keyframes
-// alone would give each seed too few measurements to converge); then the keyframe is finished and
-// its points are final.
+// Semi-dense depth (docs/architecture.md §3): each keyframe's high-gradient pixels become
+// depth-filter seeds (seed.h), updated by epipolar search (epipolar_search.h) in every later
+// located frame of the same map; seeds that converge become coloured points with a depth standard
+// deviation, stored in their keyframe's camera frame so that they move with it when bundle
+// adjustment moves the keyframe. A keyframe's seeds live until max_keyframes newer keyframes exist
+// and they were searched in min_frames frames (at low frame rates, when every frame is a keyframe,
+// max_keyframes alone would give each seed too few measurements to converge); then the keyframe is
+// finished and its points are final.
 //
 // The filter works only on the data handed to process() (images, poses snapshotted by the
 // caller), never on the live map, so that it can run on its own thread deterministically.
