@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 double depthBandHalfWidth(const VoteBox& box, const CameraModel& camera,
                           const VotingOptions& options) {
@@ -66,4 +66,4 @@ std::vector<std::vector<VoxelKey>> voxelsInBoxes(const std::vector<OccupiedVoxel
   return out;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

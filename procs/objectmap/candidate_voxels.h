@@ -13,7 +13,7 @@
 #include "procs/objectmap/objectmap_options.h"
 #include "procs/objectmap/occupancy_map.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 struct VoteBox {
   float x = 0, y = 0, w = 0, h = 0;  ///< px, top-left corner and size
@@ -34,4 +34,4 @@ std::vector<std::vector<VoxelKey>> voxelsInBoxes(const std::vector<OccupiedVoxel
                                                  const std::vector<VoteBox>& boxes,
                                                  const VotingOptions& options);
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -7,7 +7,7 @@
 
 #include "common/geometry.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 namespace {
 
@@ -144,4 +144,4 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
   return out;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -28,7 +28,7 @@
 #include "procs/objectmap/fusion.h"
 #include "procs/objectmap/object_table.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 /// The width of the duplicates' Gaussian, in the squared share of a box inside the primary one.
 constexpr double kDuplicateSigma = 0.1;
@@ -70,4 +70,4 @@ double logObjectness(double log_p_background);
 /// the rest of the probability.
 void scaleObjectClasses(std::vector<double>* log_p, const std::vector<double>& log_factors);
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

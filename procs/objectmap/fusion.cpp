@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
                                         size_t num_classes, bool objectness_weights,
@@ -58,4 +58,4 @@ int argmaxClass(const std::vector<double>& values) {
   return best;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

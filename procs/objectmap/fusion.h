@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 /// Log-probabilities are clamped here where the map takes them in: e^-100 is zero for every
 /// purpose, and sums stay finite.
@@ -59,4 +59,4 @@ bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a, const 
 /// The class with the highest value; ties go to the lower index; -1 for an empty vector.
 int argmaxClass(const std::vector<double>& values);
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

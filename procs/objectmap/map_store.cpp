@@ -18,7 +18,7 @@
 
 #include "common/atomic_file.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 namespace fs = std::filesystem;
 
@@ -302,4 +302,4 @@ size_t MapStore::removeOld(int64_t keep_a, int64_t keep_b) {
   return removed;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 /// What is saved: the object table (content["segments"] lists {"id": ...} per segment) and each
 /// segment's .ot bytes by segment id.
@@ -99,4 +99,4 @@ class MapStore {
   int lock_fd_ = -1;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

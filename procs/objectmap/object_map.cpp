@@ -15,7 +15,7 @@
 #include "procs/objectmap/candidate_voxels.h"
 #include "procs/objectmap/frame_labels.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 namespace {
 
@@ -824,4 +824,4 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
   *this = std::move(fresh);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

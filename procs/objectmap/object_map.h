@@ -40,7 +40,7 @@
 #include "slamaware/pose_t.hpp"
 #include "slamaware/proposals_t.hpp"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 /// The name of the class that means "no object" (the recognizer's last class).
 constexpr const char* kBackgroundClass = "background";
@@ -181,4 +181,4 @@ class ObjectMapEngine {
   int64_t regroupings_ = 0;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -8,7 +8,7 @@
 
 #include "procs/objectmap/fusion.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 namespace {
 
@@ -438,4 +438,4 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   objects_ = std::move(objects);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -28,7 +28,7 @@
 #include "procs/objectmap/objectmap_options.h"
 #include "procs/objectmap/voxel_key.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 /// A frame's evidence about one candidate.
 struct View {
@@ -140,4 +140,4 @@ class ObjectTable {
   std::map<int32_t, Object> objects_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -33,6 +33,7 @@
 #include "procs/objectmap/objectmap_options.h"
 
 using namespace slamaware;
+using namespace slamaware::objectmap;
 using Clock = std::chrono::steady_clock;
 
 namespace {

@@ -6,7 +6,7 @@
 
 #include "procs/objectmap/fusion.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 /// The OctoMap occupancy of one map segment.
 struct OccupancyOptions {
@@ -144,4 +144,4 @@ struct ObjectMapOptions {
   }
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 namespace {
 
@@ -302,4 +302,4 @@ bool OccupancyMap::colourOf(VoxelKey key, Rgb* colour) const {
   return true;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

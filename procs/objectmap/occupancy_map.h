@@ -21,7 +21,7 @@
 #include "procs/objectmap/objectmap_options.h"
 #include "procs/objectmap/voxel_key.h"
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 struct Rgb {
   uint8_t r = 0, g = 0, b = 0;
@@ -84,4 +84,4 @@ class OccupancyMap {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

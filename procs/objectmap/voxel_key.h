@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace slamaware {
+namespace slamaware::objectmap {
 
 using VoxelKey = uint64_t;
 
@@ -43,4 +43,4 @@ inline bool voxelKeyOf(const Eigen::Vector3d& p, double resolution, VoxelKey* ke
   return true;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::objectmap

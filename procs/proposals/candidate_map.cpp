@@ -8,7 +8,7 @@
 #include "procs/proposals/density_clustering.h"
 #include "procs/proposals/free_space.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 namespace {
 
@@ -647,4 +647,4 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
   return true;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -15,7 +15,7 @@
 #include "procs/proposals/proposal_options.h"
 #include "procs/proposals/scene_structure.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 struct Candidate {
   int32_t id = -1;
@@ -143,4 +143,4 @@ ProposalOptions scaledLengths(const ProposalOptions& options, double scale);
 /// Exposed for tests and the benchmark.
 std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const ProposalOptions& options);
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

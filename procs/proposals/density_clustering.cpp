@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <numeric>
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 namespace {
 
@@ -188,4 +188,4 @@ std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
   return label;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 struct DensityClusterOptions {
   float radius = 0.01f;    ///< neighbourhood radius
@@ -24,4 +24,4 @@ std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
                                  const std::vector<Eigen::Vector3f>& colours, const DensityClusterOptions& options,
                                  int* count);
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

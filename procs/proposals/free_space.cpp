@@ -5,7 +5,7 @@
 #include <limits>
 #include <unordered_map>
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 namespace {
 
@@ -85,4 +85,4 @@ std::vector<MapPoint> removeSeenThrough(const std::vector<MapPoint>& test,
   return kept;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -11,7 +11,7 @@
 
 #include "procs/proposals/scene_structure.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 /// The points of `test` that no keyframe saw through. Each keyframe's rays are its own points
 /// (`by_keyframe`) from its centre; its orientation only parametrises directions, so the nearest
@@ -22,4 +22,4 @@ std::vector<MapPoint> removeSeenThrough(const std::vector<MapPoint>& test,
                                         const std::vector<View>& views, const FreeSpaceOptions& options,
                                         int64_t* removed = nullptr);
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -6,7 +6,7 @@
 
 #include "common/nearest_depths.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 double boxIou(const ProposalBox& a, const ProposalBox& b) { return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h); }
 
@@ -169,4 +169,4 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
   return kept;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

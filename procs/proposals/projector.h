@@ -9,7 +9,7 @@
 #include "common/geometry.h"
 #include "procs/proposals/candidate_map.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 struct ProposalBox {
   int32_t candidate_id = -1;
@@ -37,4 +37,4 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
                                            const SE3& T_world_camera, const ProposalOptions& options,
                                            ProjectionStats* stats = nullptr);
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -8,7 +8,7 @@
 #include "common/bus/image_msg.h"
 #include "common/thread_priority.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 CandidateMap& ProposalEngine::mapOf(int32_t map_id) {
   auto it = maps_.find(map_id);
@@ -187,4 +187,4 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
   return project(map, pose.utime, pose.seq, pose.map_id, T_wc, &last_);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

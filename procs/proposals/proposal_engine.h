@@ -21,7 +21,7 @@
 #include "slamaware/pose_t.hpp"
 #include "slamaware/proposals_t.hpp"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 class ProposalEngine {
  public:
@@ -99,4 +99,4 @@ class ProposalEngine {
   std::vector<proposals_t> late_out_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -6,7 +6,7 @@
 // the table, 0.1 is about 10 cm.
 #include <string>
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 /// Free-space carving of the map (free_space.h): points that keyframes saw through are dropped.
 struct FreeSpaceOptions {
@@ -186,4 +186,4 @@ struct ProposalOptions {
   }
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

@@ -16,6 +16,7 @@
 #include "procs/proposals/proposal_engine.h"
 
 using namespace slamaware;
+using namespace slamaware::proposals;
 
 int main(int argc, char** argv) {
   CLI::App app{"slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE, SLAM_KEYFRAME -> PROPOSALS)"};

@@ -8,7 +8,7 @@
 #include <set>
 #include <random>
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 namespace {
 
@@ -437,4 +437,4 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
   return kept;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

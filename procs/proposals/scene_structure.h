@@ -9,7 +9,7 @@
 
 #include "procs/proposals/proposal_options.h"
 
-namespace slamaware {
+namespace slamaware::proposals {
 
 struct MapPoint {
   Eigen::Vector3f p;
@@ -75,4 +75,4 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
                                       bool* has_support, StructureStats* stats,
                                       std::vector<MapPoint>* band = nullptr);
 
-}  // namespace slamaware
+}  // namespace slamaware::proposals

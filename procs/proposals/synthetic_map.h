@@ -13,6 +13,8 @@
 
 namespace slamaware::synthmap {
 
+using proposals::MapPoint;
+
 /// Points on the side and top of an upright cylinder standing on z = 0 at (cx, cy), ~step apart.
 std::vector<MapPoint> cylinder(float cx, float cy, float radius, float height, float step, uint8_t grey = 128);
 /// A square table top at z = 0, side `size`, centred at the origin.

@@ -13,6 +13,7 @@
 #include "tools/eval/proposal_metrics.h"
 
 using namespace slamaware;
+using namespace slamaware::proposals;
 using namespace slamaware::synthmap;
 
 namespace {

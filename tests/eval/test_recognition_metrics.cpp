@@ -18,6 +18,7 @@
 #include "tools/eval/recognition_metrics.h"
 
 using namespace slamaware;
+using namespace slamaware::objectmap;
 using test::makeSequence;
 using test::writeEvent;
 namespace fs = std::filesystem;

@@ -18,15 +18,17 @@
 
 namespace {
 
-slamaware::LoadReport loadInto(const std::string& dir, slamaware::ObjectMapEngine* engine) {
-  slamaware::MapStore store(dir);
-  return store.load([&](const slamaware::MapSnapshot& s) { engine->restore(s); });
+slamaware::objectmap::LoadReport loadInto(const std::string& dir,
+                                         slamaware::objectmap::ObjectMapEngine* engine) {
+  slamaware::objectmap::MapStore store(dir);
+  return store.load([&](const slamaware::objectmap::MapSnapshot& s) { engine->restore(s); });
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace slamaware;
+  using namespace slamaware::objectmap;
   if (size < 1) return 0;
   const std::vector<std::string> parts = fuzz::splitParts(data + 1, size - 1);
   const std::string root = fuzz::scratchDir();

@@ -27,6 +27,7 @@
 
 namespace fs = std::filesystem;
 using namespace slamaware;
+using namespace slamaware::objectmap;
 
 namespace {
 

@@ -13,6 +13,7 @@
 #include "tests/objectmap/synthetic_world.h"
 
 using namespace slamaware;
+using namespace slamaware::objectmap;
 
 namespace {
 

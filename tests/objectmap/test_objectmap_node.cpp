@@ -26,6 +26,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::objectmap;
 using namespace std::chrono_literals;
 
 namespace {

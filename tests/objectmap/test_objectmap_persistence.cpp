@@ -23,6 +23,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::objectmap;
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 

@@ -16,6 +16,7 @@
 #include "procs/proposals/synthetic_map.h"
 
 using namespace slamaware;
+using namespace slamaware::proposals;
 using namespace slamaware::synthmap;
 
 namespace {

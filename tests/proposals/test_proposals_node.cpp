@@ -13,6 +13,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::proposals;
 using namespace slamaware::synthmap;
 using namespace slamaware::test;
 using namespace std::chrono_literals;

@@ -18,6 +18,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::proposals;
 using namespace slamaware::synthmap;
 
 namespace {

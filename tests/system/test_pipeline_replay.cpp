@@ -133,7 +133,7 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
 
   // The object map re-run on the recorded inputs publishes what the node did, byte for byte...
   const std::string log0 = dir + "/run0.lcm";
-  const ObjectMapOptions map_options;  // config/objectmap.yaml equals the defaults (tested)
+  const objectmap::ObjectMapOptions map_options;  // config/objectmap.yaml equals the defaults (tested)
   const ObjectMapOutputs again = rerunObjectMap(log0, sys.channels, map_options);
   const ObjectMapOutputs recorded = readObjectMapOutputs(log0, sys.channels);
   ASSERT_EQ(again.frames.size(), recorded.frames.size());

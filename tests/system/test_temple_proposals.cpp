@@ -12,6 +12,7 @@
 #include "tools/eval/proposal_metrics.h"
 
 using namespace slamaware;
+using namespace slamaware::proposals;
 
 TEST(TempleProposals, TheTempleIsProposedInNineOfTenLocalisedViews) {
   const std::string temple = test::sharedData("sequences/middlebury_temple_ring");

@@ -66,7 +66,7 @@ void writeBoxesCsv(const RecognitionRecording& rr, const std::string& path) {
 // (recorded, or re-run with `objectmap_options` when given); no classes in the result when the
 // sequence has none to evaluate.
 RecognitionResult recognitionSections(const std::string& name, const SequenceFolder& seq, const std::string& log,
-                                      const Channels& channels, const ObjectMapOptions* objectmap_options,
+                                      const Channels& channels, const objectmap::ObjectMapOptions* objectmap_options,
                                       const std::string& out_dir, bool dump_boxes, nlohmann::json& out) {
   const ObjectMapOutputs outputs = objectmap_options ? rerunObjectMap(log, channels, *objectmap_options)
                                                      : readObjectMapOutputs(log, channels);
@@ -184,8 +184,10 @@ int main(int argc, char** argv) {
       slam_options = loadConfig<SlamOptions>(slam_config, "slam", false);
     }
 
-    std::optional<ObjectMapOptions> objectmap_options;
-    if (!objectmap_config.empty()) objectmap_options = loadConfig<ObjectMapOptions>(objectmap_config, "objectmap", false);
+    std::optional<objectmap::ObjectMapOptions> objectmap_options;
+    if (!objectmap_config.empty())
+      objectmap_options =
+          loadConfig<objectmap::ObjectMapOptions>(objectmap_config, "objectmap", false);
     RecognitionScores suite_single, suite_online, suite_final;
     bool any_recognition = false;
 
@@ -199,7 +201,8 @@ int main(int argc, char** argv) {
     std::string proposals_path = proposals_config;
     if (proposals_path.empty() && fs::exists(fs::path(pipeline.config_dir) / "proposals.yaml"))
       proposals_path = (fs::path(pipeline.config_dir) / "proposals.yaml").string();
-    const ProposalOptions proposal_options = loadConfig<ProposalOptions>(proposals_path, "proposals", false);
+    const proposals::ProposalOptions proposal_options =
+        loadConfig<proposals::ProposalOptions>(proposals_path, "proposals", false);
     ProposalMisses synthetic_misses;
     int failures = 0;
     for (const auto& dir : sequences) {

@@ -21,6 +21,8 @@
 
 namespace slamaware {
 
+using namespace proposals;
+
 double iou(const Box2& a, const Box2& b) { return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h); }
 
 namespace {

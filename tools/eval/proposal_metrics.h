@@ -66,7 +66,7 @@ struct ProposalMisses {
 /// (to try other options without running SLAM again). With `misses` and `sequence`, also counts
 /// why the ground-truth boxes of every `stride`-th frame are missed.
 ProposalRecording rerunProposals(const std::string& log_path, const Channels& channels,
-                                 const ProposalOptions& options, const SequenceFolder* sequence = nullptr,
+                                 const proposals::ProposalOptions& options, const SequenceFolder* sequence = nullptr,
                                  int stride = 5, ProposalMisses* misses = nullptr);
 nlohmann::json missesSection(const ProposalMisses& misses);
 void mergeMisses(ProposalMisses* into, const ProposalMisses& more);

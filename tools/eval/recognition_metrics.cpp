@@ -19,6 +19,8 @@
 
 namespace slamaware {
 
+using namespace objectmap;
+
 namespace {
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();

@@ -118,7 +118,7 @@ ObjectMapOutputs readObjectMapOutputs(const std::string& log_path, const Channel
 /// recorded messages byte for byte (tested), so options can be tried on recordings without running
 /// the pipeline again (--objectmap-config).
 ObjectMapOutputs rerunObjectMap(const std::string& log_path, const Channels& channels,
-                                const ObjectMapOptions& options);
+                                const objectmap::ObjectMapOptions& options);
 
 /// What the last OBJECT_MAP holds (the "object_map" section of a sequence): segments, objects,
 /// labelled objects, and in the segment whose objects hold the most voxels: its objects, their

@@ -44,6 +44,7 @@
 #include "slamaware/pose_t.hpp"
 
 using namespace slamaware;
+using namespace slamaware::objectmap;
 
 namespace {
 
