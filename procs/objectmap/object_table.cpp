@@ -292,14 +292,77 @@ std::vector<VoxelKey> ObjectTable::groupVoxels(const std::vector<int32_t>& group
   return out;
 }
 
+// The views of a group (one per frame: its most object-like box), their evidence and the group's
+// voxels, each computed once per group (a group: its sorted candidate ids) during one update().
+class ObjectTable::GroupFacts {
+ public:
+  struct Fused {
+    std::map<ViewKey, const View*> views;
+    std::vector<double> evidence;
+    double weight = 0;  ///< the views' total weight
+  };
+  GroupFacts(const ObjectTable& table, size_t num_classes, const FusionOptions& fusion)
+      : table_(table), num_classes_(num_classes), fusion_(fusion) {}
+
+  const Fused& fusion(const std::vector<int32_t>& members) {
+    auto [it, inserted] = fused_.try_emplace(members);
+    if (!inserted) return it->second;
+    Fused& f = it->second;
+    for (int32_t cid : members)
+      for (const auto& [key, v] : table_.candidates_.at(cid).views) {
+        auto [view, added] = f.views.emplace(key, &v);
+        if (!added &&
+            moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
+          view->second = &v;
+      }
+    std::vector<const std::vector<float>*> evidence;
+    for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
+    f.evidence = sumLogProbabilities(evidence, num_classes_, fusion_.objectness_weights, &f.weight);
+    return f;
+  }
+  const std::vector<VoxelKey>& voxels(const std::vector<int32_t>& members) {
+    auto it = voxels_.find(members);
+    if (it == voxels_.end()) it = voxels_.emplace(members, table_.groupVoxels(members)).first;
+    return it->second;
+  }
+
+ private:
+  const ObjectTable& table_;
+  size_t num_classes_;
+  const FusionOptions& fusion_;
+  std::map<std::vector<int32_t>, Fused> fused_;
+  std::map<std::vector<int32_t>, std::vector<VoxelKey>> voxels_;
+};
+
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
                          const FusionOptions& fusion) {
-  // 1. Each candidate's voxels: voted often enough, and occupied now.
-  std::vector<Candidate*> cands;
+  deriveVoxels(occupied, options);
+  std::vector<std::vector<int32_t>> groups = groupOverlapping(grouping);
+  GroupFacts facts(*this, num_classes, fusion);
+  if (grouping.same_label_overlap > 0 && num_classes > 1) {
+    const GroupVoxels voxels_of = [&](const std::vector<int32_t>& m) -> const std::vector<VoxelKey>& {
+      return facts.voxels(m);
+    };
+    const auto label_of = [&](const std::vector<int32_t>& m) {
+      return argmaxClass(facts.fusion(m).evidence);
+    };
+    groups = mergeSameLabel(std::move(groups), grouping, voxels_of, label_of,
+                            static_cast<int>(num_classes) - 1);
+  }
+  const std::vector<int32_t> ids = stableIds(groups, new_id);
+  std::map<int32_t, Object> objects;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    Object o = describeGroup(ids[g], groups[g], facts, fusion);
+    objects.emplace(o.id, std::move(o));
+  }
+  objects_ = std::move(objects);
+}
+
+void ObjectTable::deriveVoxels(const std::function<bool(VoxelKey)>& occupied,
+                               const VotingOptions& options) {
   for (auto& [id, c] : candidates_) {
-    cands.push_back(&c);
     c.voxels.clear();
     const double need =
         std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
@@ -307,8 +370,12 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
       if (n >= need && occupied(key)) c.voxels.push_back(key);
     std::sort(c.voxels.begin(), c.voxels.end());
   }
-  // 2. Groups: pairs of candidates sharing voxels, most overlapping (IoU) first; two groups merge
-  // when their voxel unions pass the test.
+}
+
+std::vector<std::vector<int32_t>> ObjectTable::groupOverlapping(
+    const GroupingOptions& grouping) const {
+  // Pairs of candidates sharing voxels, most overlapping (IoU) first; two groups merge when their
+  // voxel unions pass the test.
   auto passes = [&](size_t inter, const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
     const double small = static_cast<double>(std::min(a.size(), b.size()));
     const double large = static_cast<double>(std::max(a.size(), b.size()));
@@ -316,54 +383,30 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
     const double share = static_cast<double>(inter) / small;
     return share >= grouping.merge_overlap && small >= grouping.merge_size_ratio * large;
   };
+  std::vector<const Candidate*> cands;
   std::vector<const std::vector<VoxelKey>*> sets;
-  for (const Candidate* c : cands) sets.push_back(&c->voxels);
+  for (const auto& [id, c] : candidates_) {
+    cands.push_back(&c);
+    sets.push_back(&c.voxels);
+  }
   UnionFind uf(cands.size());
   joinOverlapping(
       sets, uf, [&](size_t i, size_t j, size_t n) { return passes(n, *sets[i], *sets[j]); },
-      [](size_t n, size_t na, size_t nb) { return -static_cast<double>(n) / static_cast<double>(na + nb - n); },
+      [](size_t n, size_t na, size_t nb) {
+        return -static_cast<double>(n) / static_cast<double>(na + nb - n);
+      },
       passes);
   std::map<size_t, std::vector<int32_t>> by_root;  // root = lowest index = lowest candidate id
   for (size_t i = 0; i < cands.size(); ++i) by_root[uf.find(i)].push_back(cands[i]->id);
   std::vector<std::vector<int32_t>> groups;
   for (auto& [root, members] : by_root) groups.push_back(std::move(members));
+  return groups;
+}
 
-  // The views of a group (one per frame: its most object-like box) and their evidence, computed
-  // once per group (the label of the groups below, and the objects of step 4).
-  struct Fused {
-    std::map<ViewKey, const View*> views;
-    std::vector<double> evidence;
-    double weight = 0;  ///< the views' total weight
-  };
-  std::map<std::vector<int32_t>, Fused> fused;
-  auto fusionOf = [&](const std::vector<int32_t>& members) -> const Fused& {
-    auto [it, inserted] = fused.try_emplace(members);
-    if (!inserted) return it->second;
-    Fused& f = it->second;
-    for (int32_t cid : members)
-      for (const auto& [key, v] : candidates_.at(cid).views) {
-        auto [view, added] = f.views.emplace(key, &v);
-        if (!added && moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
-          view->second = &v;
-      }
-    std::vector<const std::vector<float>*> evidence;
-    for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
-    f.evidence = sumLogProbabilities(evidence, num_classes, fusion.objectness_weights, &f.weight);
-    return f;
-  };
-  // The voxels of a group, likewise once per group (the steps below, and the objects of step 4).
-  std::map<std::vector<int32_t>, std::vector<VoxelKey>> group_voxels;
-  const GroupVoxels voxels_of = [&](const std::vector<int32_t>& members) -> const std::vector<VoxelKey>& {
-    auto it = group_voxels.find(members);
-    if (it == group_voxels.end()) it = group_voxels.emplace(members, groupVoxels(members)).first;
-    return it->second;
-  };
-  const auto label_of = [&](const std::vector<int32_t>& m) { return argmaxClass(fusionOf(m).evidence); };
-  if (grouping.same_label_overlap > 0 && num_classes > 1)
-    groups = mergeSameLabel(std::move(groups), grouping, voxels_of, label_of, static_cast<int>(num_classes) - 1);
-
-  // 3. Stable ids: greedily give each previous object's id to the group sharing most of its
-  // candidates (ties: lower previous id, then earlier group); the other groups get new ids.
+std::vector<int32_t> ObjectTable::stableIds(const std::vector<std::vector<int32_t>>& groups,
+                                            const std::function<int32_t()>& new_id) const {
+  // Greedily give each previous object's id to the group sharing most of its candidates (ties:
+  // lower previous id, then earlier group); the other groups get new ids.
   std::unordered_map<int32_t, int32_t> previous_of;  // candidate -> previous object id
   for (const auto& [id, o] : objects_)
     for (int32_t c : o.candidates) previous_of[c] = id;
@@ -385,57 +428,57 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   }
   for (size_t g = 0; g < groups.size(); ++g)
     if (group_id[g] < 0) group_id[g] = new_id();
+  return group_id;
+}
 
-  // 4. Evidence and geometry of each object.
-  std::map<int32_t, Object> objects;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    Object o;
-    o.id = group_id[g];
-    o.candidates = groups[g];
-    const Fused& f = fusionOf(o.candidates);
-    const std::map<ViewKey, const View*>& views = f.views;
-    const std::vector<VoxelKey>& voxels = voxels_of(o.candidates);
-    Eigen::Vector3d box_sum = Eigen::Vector3d::Zero();
-    int32_t box_n = 0;
-    double box_size = 0;
-    for (int32_t cid : o.candidates) {
-      const Candidate& c = candidates_.at(cid);
-      box_sum += c.box_position_sum;
-      box_n += c.box_positions;
-      box_size = std::max(box_size, c.box_size);
-    }
-    o.log_evidence = f.evidence;
-    o.evidence_weight = f.weight;
-    o.posterior = posteriorFromLogEvidence(o.log_evidence, f.weight, fusion.views_exponent);
-    o.label = argmaxClass(o.log_evidence);
-    o.num_views = static_cast<int32_t>(views.size());
-    if (!views.empty()) {
-      o.first_seen_utime = views.begin()->first.first;
-      o.last_seen_utime = views.rbegin()->first.first;
-    }
-    o.user_label = userLabelOf(o.candidates);
-    o.num_voxels = static_cast<int32_t>(voxels.size());
-    if (!voxels.empty()) {
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo,
-                      sum = Eigen::Vector3d::Zero();
-      for (VoxelKey k : voxels) {
-        const Eigen::Vector3d p = voxelCentre(k, resolution_);
-        sum += p;
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-      }
-      o.centroid = sum / static_cast<double>(voxels.size());
-      o.extent = ((hi - lo).array() + resolution_)
-                     .matrix();  // voxel centres span one voxel less than the voxels
-      o.has_position = true;
-    } else if (box_n > 0) {
-      o.centroid = box_sum / box_n;
-      o.extent = Eigen::Vector3d::Constant(box_size);
-      o.has_position = true;
-    }
-    objects.emplace(o.id, std::move(o));
+Object ObjectTable::describeGroup(int32_t id, const std::vector<int32_t>& members,
+                                  GroupFacts& facts, const FusionOptions& fusion) const {
+  Object o;
+  o.id = id;
+  o.candidates = members;
+  const GroupFacts::Fused& f = facts.fusion(members);
+  const std::vector<VoxelKey>& voxels = facts.voxels(members);
+  o.log_evidence = f.evidence;
+  o.evidence_weight = f.weight;
+  o.posterior = posteriorFromLogEvidence(o.log_evidence, f.weight, fusion.views_exponent);
+  o.label = argmaxClass(o.log_evidence);
+  o.num_views = static_cast<int32_t>(f.views.size());
+  if (!f.views.empty()) {
+    o.first_seen_utime = f.views.begin()->first.first;
+    o.last_seen_utime = f.views.rbegin()->first.first;
   }
-  objects_ = std::move(objects);
+  o.user_label = userLabelOf(members);
+  o.num_voxels = static_cast<int32_t>(voxels.size());
+  if (!voxels.empty()) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo, sum = Eigen::Vector3d::Zero();
+    for (VoxelKey k : voxels) {
+      const Eigen::Vector3d p = voxelCentre(k, resolution_);
+      sum += p;
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    o.centroid = sum / static_cast<double>(voxels.size());
+    // Voxel centres span one voxel less than the voxels.
+    o.extent = ((hi - lo).array() + resolution_).matrix();
+    o.has_position = true;
+    return o;
+  }
+  // No voxels yet: where its boxes put it.
+  Eigen::Vector3d box_sum = Eigen::Vector3d::Zero();
+  int32_t box_n = 0;
+  double box_size = 0;
+  for (int32_t cid : members) {
+    const Candidate& c = candidates_.at(cid);
+    box_sum += c.box_position_sum;
+    box_n += c.box_positions;
+    box_size = std::max(box_size, c.box_size);
+  }
+  if (box_n > 0) {
+    o.centroid = box_sum / box_n;
+    o.extent = Eigen::Vector3d::Constant(box_size);
+    o.has_position = true;
+  }
+  return o;
 }
 
 }  // namespace slamaware::objectmap

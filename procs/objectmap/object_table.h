@@ -135,6 +135,19 @@ class ObjectTable {
   /// The sorted union of a group's candidates' voxels (update() keeps each group's once: GroupVoxels).
   std::vector<VoxelKey> groupVoxels(const std::vector<int32_t>& group) const;
 
+  // The steps of update().
+  class GroupFacts;
+  /// Each candidate's voxels: voted often enough, and occupied now.
+  void deriveVoxels(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options);
+  /// Groups of candidates by shared voxels (GroupingOptions), in order of their lowest candidate.
+  std::vector<std::vector<int32_t>> groupOverlapping(const GroupingOptions& grouping) const;
+  /// The id of each group: a previous object's, or new_id().
+  std::vector<int32_t> stableIds(const std::vector<std::vector<int32_t>>& groups,
+                                 const std::function<int32_t()>& new_id) const;
+  /// The object a group makes: its evidence and geometry.
+  Object describeGroup(int32_t id, const std::vector<int32_t>& members, GroupFacts& facts,
+                       const FusionOptions& fusion) const;
+
   double resolution_;
   std::map<int32_t, Candidate> candidates_;
   std::map<int32_t, Object> objects_;
