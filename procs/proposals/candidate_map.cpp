@@ -541,13 +541,15 @@ Clustering clusterMap(const ClusterInputRef& in) {
     std::vector<MapPoint> rest = std::move(small);
     const auto t1 = std::chrono::steady_clock::now();
     out.stats.filter_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
-    StructureStats ss;
-    std::vector<MapPoint> band;
-    rest = removeStructure(rest, in.views, priors, o, &out.support, &has_support, &ss, &band);
+    StructureResult structure = removeStructure(rest, in.views, priors, o);
+    rest = std::move(structure.kept);
+    out.support = structure.support;
+    has_support = structure.has_support;
+    const std::vector<MapPoint>& band = structure.band;
     const auto t2 = std::chrono::steady_clock::now();
     out.stats.structure_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
-    out.stats.planes = ss.planes;
-    out.stats.plane_points = ss.structure_points;
+    out.stats.planes = structure.stats.planes;
+    out.stats.plane_points = structure.stats.structure_points;
     out.stats.support = has_support;
     if (has_support) {
       // What stands on the support: over its points' region and not higher than an object.

@@ -251,11 +251,11 @@ ViewPriors viewPriors(const std::vector<View>& views) {
   return v;
 }
 
-std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
-                                      const ViewPriors& priors, const ProposalOptions& o, Support* support,
-                                      bool* has_support, StructureStats* stats, std::vector<MapPoint>* band) {
-  *has_support = false;
-  *stats = StructureStats{};
+namespace {
+
+// Up to o.max_planes planes, each searched among the points not on the planes before it.
+std::vector<FoundPlane> findPlanes(const std::vector<MapPoint>& points, const ViewPriors& priors,
+                                   const ProposalOptions& o) {
   const size_t total = points.size();
   const float cell = static_cast<float>(o.structure_cell);
   std::vector<int> rest(total);
@@ -294,7 +294,6 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
       coef = Eigen::Vector4f(n.x(), n.y(), n.z(), -n.dot(mean.cast<float>()));
     }
     if (static_cast<double>(in.size()) < o.plane_min_fraction * static_cast<double>(total)) break;
-    ++stats->planes;
     FoundPlane f;
     const Eigen::Vector3f towards = priors.valid ? priors.mean_centre : Eigen::Vector3f::Zero();
     if (coef.head<3>().dot(towards) + coef[3] < 0) coef = -coef;  // normal towards the cameras
@@ -304,137 +303,174 @@ std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const
     planeAxes(f.plane.n, &f.u, &f.v);
     f.patches = structurePatches(&f, points, in, cell, o.structure_min_points, static_cast<float>(o.structure_extent));
     // The next plane is searched among the points that are not on this one; the points of this
-    // plane that are not structure are kept (they go back to the output below). A plane without
-    // structure is kept too: it may be the support (a small table top, below), never removed.
+    // plane that are not structure are kept (they go back to the output). A plane without
+    // structure is kept too: it may be the support (a small table top), never removed.
     rest.swap(out);
     found.push_back(std::move(f));
   }
+  return found;
+}
 
-  // The support: a level plane and its region: its dense cells within support_radius of where
-  // the views look. With a look-at point, of the planes with points there from support_below
-  // over it to max_height under it, the nearest to it: what the views aim at stands on it. Not
-  // the one with most points there: the floor around a small table seen from afar holds more
-  // than the table top. Else the structure plane the optical axes hit first, where it has
-  // points, most often, around the mean of those hits.
-  // Without views (the algorithm alone, in tests), the largest patch of the largest plane.
-  const float cos_tilt = static_cast<float>(std::cos(o.support_max_tilt_deg * M_PI / 180.0));
-  const float radius = static_cast<float>(o.support_radius);
+// A support candidate: a plane of `found` (-1: none) and its dense cells that make the region.
+struct SupportChoice {
+  int plane = -1;
+  std::vector<CellKey> region;
+};
+
+// Without views (the algorithm alone, in tests): the largest patch of the largest plane.
+SupportChoice largestPatch(const std::vector<FoundPlane>& found) {
+  SupportChoice c;
+  size_t most = 0;
+  for (size_t k = 0; k < found.size(); ++k)
+    for (const auto& patch : found[k].patches)
+      if (patch.points.size() > most) {
+        most = patch.points.size();
+        c.plane = static_cast<int>(k);
+        c.region.assign(patch.cells.begin(), patch.cells.end());
+      }
+  return c;
+}
+
+// Of the level planes with points near the look-at point, from support_below over it to
+// max_height under it: the level nearest to it, then of the planes at that level (within
+// support_below of it: a plane fitted through the same table top at a tilt) the one with most
+// points there. What the views aim at stands on it; the plane with most points there is not it
+// (the floor around a small table seen from afar holds more than the table top).
+template <class Level>
+SupportChoice underLookAt(const std::vector<FoundPlane>& found, const ViewPriors& priors,
+                          const ProposalOptions& o, const Level& level) {
+  const float cell = static_cast<float>(o.structure_cell);
+  struct Candidate {
+    float h;                     // |height| of the look-at point over the plane
+    size_t plane;
+    std::vector<CellKey> cells;  // its dense cells near the look-at point
+  };
+  std::vector<Candidate> levels;
+  float nearest = std::numeric_limits<float>::infinity();
+  for (size_t k = 0; k < found.size(); ++k) {
+    const float h = found[k].plane.distance(priors.look_at);
+    if (!level(found[k]) || h < -o.support_below || h > o.max_height) continue;
+    std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, static_cast<float>(o.support_radius), cell);
+    if (cells.empty()) continue;
+    nearest = std::min(nearest, std::abs(h));
+    levels.push_back({std::abs(h), k, std::move(cells)});
+  }
+  SupportChoice c;
+  size_t most = 0;
+  for (auto& [h, k, cells] : levels) {
+    if (h > nearest + o.support_below) continue;
+    const size_t n = found[k].pointsIn(cells);
+    if (n > most) {
+      most = n;
+      c.plane = static_cast<int>(k);
+      c.region = std::move(cells);
+    }
+  }
+  return c;
+}
+
+// The level plane the optical axes hit first, where it has points, most often; its region around
+// the mean of those hits.
+template <class Level>
+SupportChoice whereViewsAim(const std::vector<FoundPlane>& found, const std::vector<View>& views,
+                            const ProposalOptions& o, const Level& level) {
+  const float cell = static_cast<float>(o.structure_cell);
+  std::vector<int> votes(found.size(), 0);
+  std::vector<Eigen::Vector3f> aim(found.size(), Eigen::Vector3f::Zero());
+  for (const View& w : views) {
+    int hit = -1;
+    float nearest = std::numeric_limits<float>::infinity();
+    for (size_t k = 0; k < found.size(); ++k) {
+      const Plane& pl = found[k].plane;
+      const float along = pl.n.dot(w.forward);
+      if (!level(found[k]) || along >= 0) continue;  // looking away from its upper side
+      const float t = -pl.distance(w.centre) / along;
+      if (!(t > 0) || t >= nearest) continue;
+      const Eigen::Vector3f at = w.centre + t * w.forward;
+      const int p = found[k].patchAt(at, 0.0f);
+      if (p < 0 || !found[k].solidAt(p, at, cell, static_cast<float>(o.support_fill))) continue;
+      nearest = t;
+      hit = static_cast<int>(k);
+    }
+    if (hit < 0) continue;
+    ++votes[static_cast<size_t>(hit)];
+    aim[static_cast<size_t>(hit)] += w.centre + nearest * w.forward;
+  }
+  SupportChoice c;
+  for (size_t k = 0; k < found.size(); ++k)
+    if (votes[k] > 0 && (c.plane < 0 || votes[k] > votes[static_cast<size_t>(c.plane)])) c.plane = static_cast<int>(k);
+  if (c.plane >= 0) {
+    const size_t b = static_cast<size_t>(c.plane);
+    c.region = found[b].cellsNear(aim[b] / static_cast<float>(votes[b]), static_cast<float>(o.support_radius), cell);
+  }
+  return c;
+}
+
+// The support: a level plane and its region (its dense cells within support_radius of where the
+// views look): under the look-at point when there is one, else where the optical axes hit.
+SupportChoice chooseSupport(const std::vector<FoundPlane>& found, const std::vector<View>& views,
+                            const ViewPriors& priors, const ProposalOptions& o) {
+  if (!priors.valid) return largestPatch(found);
   // Level: within support_max_tilt_deg of up. Without up that cannot be told, and only a plane
   // with structure (larger than any object) can be a support: a smaller one may be a face of the
   // object itself (the Middlebury temple, whose views never turn about up). With up, a plane
   // without structure is a small table top (a round table seen from a metre away).
+  const float cos_tilt = static_cast<float>(std::cos(o.support_max_tilt_deg * M_PI / 180.0));
   auto level = [&](const FoundPlane& f) {
     return priors.up_known ? f.plane.n.dot(priors.up) >= cos_tilt : !f.patches.empty();
   };
-  int best = -1;
-  std::vector<CellKey> region;
-  if (!priors.valid) {
-    size_t most = 0;
-    for (size_t k = 0; k < found.size(); ++k)
-      for (const auto& patch : found[k].patches)
-        if (patch.points.size() > most) {
-          most = patch.points.size();
-          best = static_cast<int>(k);
-          region.assign(patch.cells.begin(), patch.cells.end());
-        }
-  } else {
-    if (priors.has_look_at) {
-      // The level nearest to the look-at point, then of the planes at that level (within
-      // support_below of it: a plane fitted through the same table top at a tilt) the one with
-      // most points there.
-      struct Level {
-        float h;                      // |height| of the look-at point over the plane
-        size_t plane;
-        std::vector<CellKey> cells;   // its dense cells near the look-at point
-      };
-      std::vector<Level> levels;
-      float nearest = std::numeric_limits<float>::infinity();
-      for (size_t k = 0; k < found.size(); ++k) {
-        const float h = found[k].plane.distance(priors.look_at);
-        if (!level(found[k]) || h < -o.support_below || h > o.max_height) continue;
-        std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, radius, cell);
-        if (cells.empty()) continue;
-        nearest = std::min(nearest, std::abs(h));
-        levels.push_back({std::abs(h), k, std::move(cells)});
-      }
-      size_t most = 0;
-      for (auto& [h, k, cells] : levels) {
-        if (h > nearest + o.support_below) continue;
-        const size_t n = found[k].pointsIn(cells);
-        if (n > most) {
-          most = n;
-          best = static_cast<int>(k);
-          region = std::move(cells);
-        }
-      }
-    }
-    if (best < 0) {
-      std::vector<int> votes(found.size(), 0);
-      std::vector<Eigen::Vector3f> aim(found.size(), Eigen::Vector3f::Zero());
-      for (const View& w : views) {
-        int hit = -1;
-        float nearest = std::numeric_limits<float>::infinity();
-        for (size_t k = 0; k < found.size(); ++k) {
-          const Plane& pl = found[k].plane;
-          const float along = pl.n.dot(w.forward);
-          if (!level(found[k]) || along >= 0) continue;  // looking away from its upper side
-          const float t = -pl.distance(w.centre) / along;
-          if (!(t > 0) || t >= nearest) continue;
-          const Eigen::Vector3f at = w.centre + t * w.forward;
-          const int p = found[k].patchAt(at, 0.0f);
-          if (p < 0 || !found[k].solidAt(p, at, cell, static_cast<float>(o.support_fill))) continue;
-          nearest = t;
-          hit = static_cast<int>(k);
-        }
-        if (hit < 0) continue;
-        ++votes[static_cast<size_t>(hit)];
-        aim[static_cast<size_t>(hit)] += w.centre + nearest * w.forward;
-      }
-      for (size_t k = 0; k < found.size(); ++k)
-        if (votes[k] > 0 && (best < 0 || votes[k] > votes[static_cast<size_t>(best)])) best = static_cast<int>(k);
-      if (best >= 0) {
-        const size_t b = static_cast<size_t>(best);
-        region = found[b].cellsNear(aim[b] / static_cast<float>(votes[b]), radius, cell);
-      }
-    }
+  if (priors.has_look_at) {
+    SupportChoice c = underLookAt(found, priors, o, level);
+    if (c.plane >= 0) return c;
   }
-  if (best >= 0 && !region.empty()) {
-    *support = found[static_cast<size_t>(best)].support(region, cell);
-    *has_support = support->hull.size() >= 3;
+  return whereViewsAim(found, views, o, level);
+}
+
+}  // namespace
+
+StructureResult removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
+                                const ViewPriors& priors, const ProposalOptions& o) {
+  StructureResult r;
+  const std::vector<FoundPlane> found = findPlanes(points, priors, o);
+  r.stats.planes = static_cast<int>(found.size());
+  SupportChoice choice = chooseSupport(found, views, priors, o);
+  const float cell = static_cast<float>(o.structure_cell);
+  if (choice.plane >= 0 && !choice.region.empty()) {
+    r.support = found[static_cast<size_t>(choice.plane)].support(choice.region, cell);
+    r.has_support = r.support.hull.size() >= 3;
   }
-  if (!*has_support) best = -1;
-  stats->support = *has_support;
+  const int best = r.has_support ? choice.plane : -1;
+  r.stats.support = r.has_support;
   // What is removed: the support plane's dense cells in the region (points within
-  // support_distance of it), and the structure of the planes that are not parallel to it (walls; planes parallel to it are other
-  // tables, the floor, or slices through the objects standing on it, which the objects must
-  // keep). Without a support, every structure patch.
+  // support_distance of it), and the structure of the planes that are not parallel to it (walls;
+  // planes parallel to it are other tables, the floor, or slices through the objects standing on
+  // it, which the objects must keep). Without a support, every structure patch.
+  const size_t total = points.size();
   std::vector<bool> structure(total, false);
-  auto mark = [&](const std::vector<int>& pts) {
-    for (int i : pts) {
-      if (!structure[static_cast<size_t>(i)]) ++stats->structure_points;
-      structure[static_cast<size_t>(i)] = true;
-    }
+  auto mark = [&](int i) {
+    if (!structure[static_cast<size_t>(i)]) ++r.stats.structure_points;
+    structure[static_cast<size_t>(i)] = true;
   };
   // The support's band is thinner than RANSAC's inlier distance: flat objects (a towel, a tube
   // lying down) are not much thicker than the depth noise of the table.
   if (best >= 0)
-    for (const auto& key : region)
+    for (const auto& key : choice.region)
       for (int i : found[static_cast<size_t>(best)].dense.at(key))
-        if (std::abs(support->plane.distance(points[static_cast<size_t>(i)].p)) <= o.support_distance) {
-          mark({i});
-          if (band) band->push_back(points[static_cast<size_t>(i)]);
+        if (std::abs(r.support.plane.distance(points[static_cast<size_t>(i)].p)) <= o.support_distance) {
+          mark(i);
+          r.band.push_back(points[static_cast<size_t>(i)]);
         }
   for (size_t k = 0; k < found.size(); ++k) {
-    const bool remove = best < 0 || std::abs(found[k].plane.n.dot(support->plane.n)) < 0.5f;
+    const bool remove = best < 0 || std::abs(found[k].plane.n.dot(r.support.plane.n)) < 0.5f;
     if (!remove || found[k].patches.empty()) continue;
-    ++stats->structure_planes;
-    for (const auto& patch : found[k].patches) mark(patch.points);
+    ++r.stats.structure_planes;
+    for (const auto& patch : found[k].patches)
+      for (int i : patch.points) mark(i);
   }
-  std::vector<MapPoint> kept;
-  kept.reserve(total);
+  r.kept.reserve(total);
   for (size_t i = 0; i < total; ++i)
-    if (!structure[i]) kept.push_back(points[i]);
-  return kept;
+    if (!structure[i]) r.kept.push_back(points[i]);
+  return r;
 }
 
 }  // namespace slamaware::proposals

@@ -67,12 +67,15 @@ struct StructureStats {
 /// the near-horizontal plane (normal within o.support_max_tilt_deg of the views' up; a plane
 /// without structure only when up is known: a small table top) nearest under the point the
 /// views' optical axes meet (else the structure plane they hit first most
-/// often); `support` is set when there is one. Returns the points that are not structure.
-/// `band`, when given, receives the support's own points (its band of o.support_distance),
-/// which are removed.
-std::vector<MapPoint> removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
-                                      const ViewPriors& priors, const ProposalOptions& o, Support* support,
-                                      bool* has_support, StructureStats* stats,
-                                      std::vector<MapPoint>* band = nullptr);
+/// often).
+struct StructureResult {
+  std::vector<MapPoint> kept;  ///< the points that are not structure
+  bool has_support = false;
+  Support support;             ///< when has_support
+  std::vector<MapPoint> band;  ///< the support's own points (its band of o.support_distance), removed
+  StructureStats stats;
+};
+StructureResult removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,
+                                const ViewPriors& priors, const ProposalOptions& o);
 
 }  // namespace slamaware::proposals

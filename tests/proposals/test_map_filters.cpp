@@ -193,11 +193,10 @@ TEST(SceneStructure, TheSupportIsThePlaneTheViewsLookAt) {
   const auto points = join(join(floor, wall), join(table, object));
   std::vector<View> views;
   for (const SE3& T : circle(1.0, 1.3, 300, 10, Eigen::Vector3d(0, 0, 0.74))) views.push_back(viewOf(T));
-  Support support;
-  bool has_support = false;
-  StructureStats stats;
-  const auto rest = removeStructure(points, views, viewPriors(views), o, &support, &has_support, &stats);
-  ASSERT_TRUE(has_support);
+  const StructureResult r = removeStructure(points, views, viewPriors(views), o);
+  const Support& support = r.support;
+  const std::vector<MapPoint>& rest = r.kept;
+  ASSERT_TRUE(r.has_support);
   EXPECT_GT(support.plane.n.dot(Eigen::Vector3f::UnitZ()), 0.999f);
   EXPECT_NEAR(-support.plane.d, 0.74f, 0.005f) << "the support is not the table top";
   EXPECT_TRUE(support.over(Eigen::Vector3f(0.1f, 0.05f, 0.8f), 0.0f));
@@ -234,9 +233,10 @@ TEST(SceneStructure, ASparseTableOfAYoungMapIsTheSupport) {
   ASSERT_FALSE(priors.has_look_at);
 
   auto run = [&](const ProposalOptions& options, bool* has_support) {
-    Support support;
-    StructureStats stats;
-    const auto rest = removeStructure(all, views, priors, options, &support, has_support, &stats);
+    const StructureResult r = removeStructure(all, views, priors, options);
+    const Support& support = r.support;
+    const std::vector<MapPoint>& rest = r.kept;
+    *has_support = r.has_support;
     if (*has_support) {
       EXPECT_NEAR(-support.plane.d / support.plane.n.z(), 0.74f, 0.005f) << "the support is not the table top";
     }
