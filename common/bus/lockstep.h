@@ -14,7 +14,6 @@ class LockstepGate {
  public:
   LockstepGate(Bus& bus, const std::string& channel);
   const std::string& channel() const { return channel_; }
-  int32_t acked() const { return acked_; }
   /// Handles the bus until a message with seq >= `seq` arrived on the channel. Calls idle()
   /// between waits. Returns false on timeout or shutdown.
   bool waitFor(int32_t seq, double timeout_s, const std::function<void()>& idle);

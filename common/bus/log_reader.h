@@ -55,7 +55,6 @@ class LogReader {
   std::optional<LogRecord> next();
 
   const std::string& path() const { return path_; }
-  int64_t fileSize() const { return file_size_; }
   /// Reads a whole log; throws LogError like next().
   static std::vector<LogRecord> readAll(const std::string& path);
 

@@ -190,7 +190,6 @@ bool OccupancyMap::isOccupied(VoxelKey key) const {
 }
 
 size_t OccupancyMap::numLeaves() const { return impl_->tree.getNumLeafNodes(); }
-size_t OccupancyMap::memoryBytes() const { return impl_->tree.memoryUsage(); }
 
 std::string OccupancyMap::serialize(const std::function<Rgb(VoxelKey)>& colour) {
   octomap::ColorOcTree& tree = impl_->tree;

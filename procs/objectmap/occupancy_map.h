@@ -65,7 +65,6 @@ class OccupancyMap {
   const std::vector<OccupiedVoxel>& occupied() const;
   bool isOccupied(VoxelKey key) const;
   size_t numLeaves() const;
-  size_t memoryBytes() const;
 
   /// The map as an OctoMap .ot file (what octovis opens), every occupied voxel coloured by
   /// colour(key). Sets the colours in the tree (they are not part of the occupancy).

@@ -173,7 +173,6 @@ void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, cons
     const size_t k = h.size() * 4 / 5;
     std::nth_element(h.begin(), h.begin() + static_cast<long>(k), h.end());
     if (h.empty() || h[k] < o.min_height) continue;
-    c.height = h[k];
     c.on_support = true;
     if (o.add_footprint) {
       const size_t count = c.points.size();

@@ -26,7 +26,6 @@ struct Candidate {
   std::vector<Eigen::Vector3f> points; ///< world frame, map units
   Eigen::Vector3f min, max;            ///< axis-aligned bounds
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  float height = 0;                    ///< map units, over the support (0 without one)
   bool on_support = false;             ///< stands on the map's support (its box is trimmed by box_trim_pct)
   int64_t lost_since = -1;             ///< frame time of the clustering that lost it (-1: found by the last one)
 };

@@ -18,8 +18,6 @@ class RestartPolicy {
   /// The process ended at `now` (failed: non-zero exit, killed by a signal, or hung). Returns the
   /// delay before the restart, or a negative value for "do not restart".
   double ended(double now, bool failed);
-  /// The delay the next quick failure would get.
-  double currentBackoff() const { return backoff_s_; }
   /// Consecutive quick failures (runs shorter than stable_s).
   int quickFailures() const { return quick_failures_; }
 
