@@ -313,22 +313,27 @@ void fillResult(const Hypothesis& h, TwoViewResult* r) {
   r->parallax_deg = h.parallax_deg;
 }
 
-}  // namespace
-
-TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
-                                 const Eigen::Matrix3d& K, const InitOptions& opt, uint64_t seed) {
-  TwoViewResult r;
-  const int n = static_cast<int>(std::min(px_ref.size(), px_cur.size()));
-  if (n < 8) {
-    r.reason = "fewer than 8 matches";
-    return r;
-  }
+// The matches of both views, Hartley-normalised for the DLTs, and the random generator every
+// sample of the initialisation draws from (in a fixed order).
+struct Matches {
+  const Points& px_ref;
+  const Points& px_cur;
+  const Eigen::Matrix3d& K;
+  int n = 0;
   Points n1, n2;
-  const Eigen::Matrix3d T1 = normalize(px_ref, &n1), T2 = normalize(px_cur, &n2);  // for the DLTs
-  const Eigen::Matrix3d T2inv = T2.inverse();
-  const Eigen::Matrix3d Kinv = K.inverse();
-  std::mt19937_64 rng(seed);
-  auto sampleIndices = [&](const std::vector<int>& from, int k) {
+  Eigen::Matrix3d T1, T2, T2inv, Kinv;
+  std::mt19937_64 rng;
+
+  Matches(const Points& ref, const Points& cur, const Eigen::Matrix3d& k, uint64_t seed)
+      : px_ref(ref), px_cur(cur), K(k), n(static_cast<int>(std::min(ref.size(), cur.size()))),
+        rng(seed) {
+    T1 = normalize(px_ref, &n1);
+    T2 = normalize(px_cur, &n2);
+    T2inv = T2.inverse();
+    Kinv = K.inverse();
+  }
+  // k distinct indices of `from` (a partial Fisher-Yates shuffle).
+  std::vector<int> sample(const std::vector<int>& from, int k) {
     std::vector<int> pool = from, out(k);
     for (int j = 0; j < k; ++j) {
       const int pick = j + static_cast<int>(rng() % static_cast<uint64_t>(pool.size() - j));
@@ -336,137 +341,117 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
       out[j] = pool[j];
     }
     return out;
-  };
-  std::vector<int> all(n);
-  for (int i = 0; i < n; ++i) all[i] = i;
+  }
+  std::vector<int> all() const {
+    std::vector<int> a(n);
+    for (int i = 0; i < n; ++i) a[i] = i;
+    return a;
+  }
+};
 
-  // Homography: RANSAC over 4-point samples, then re-fitted to its inliers while that helps.
-  double best_h = -1;
-  Eigen::Matrix3d H21 = Eigen::Matrix3d::Identity();
-  std::vector<bool> in_h, tmp;
+struct ModelFit {
+  double score = -1;  // <= 0: none
+  Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
+  std::vector<bool> inliers;
+};
+
+// Homography: RANSAC over 4-point samples, then re-fitted to its inliers while that helps.
+ModelFit fitHomography(Matches& m, const InitOptions& opt) {
+  ModelFit best;
+  std::vector<bool> tmp;
+  const std::vector<int> all = m.all();
   for (int it = 0; it < opt.ransac_iterations; ++it) {
-    const Eigen::Matrix3d h = T2inv * computeH21(n1, n2, sampleIndices(all, 4)) * T1;
+    const Eigen::Matrix3d h = m.T2inv * computeH21(m.n1, m.n2, m.sample(all, 4)) * m.T1;
     if (!h.allFinite() || std::abs(h.determinant()) < 1e-12) continue;
-    const double s = scoreHomography(h, px_ref, px_cur, opt.sigma_px, &tmp);
-    if (s > best_h) {
-      best_h = s;
-      H21 = h;
-      in_h = tmp;
-    }
+    const double s = scoreHomography(h, m.px_ref, m.px_cur, opt.sigma_px, &tmp);
+    if (s > best.score) best = {s, h, tmp};
   }
-  for (int round = 0; round < 3 && best_h > 0; ++round) {
+  for (int round = 0; round < 3 && best.score > 0; ++round) {
     std::vector<int> inl;
-    for (int i = 0; i < n; ++i)
-      if (in_h[i]) inl.push_back(i);
+    for (int i = 0; i < m.n; ++i)
+      if (best.inliers[i]) inl.push_back(i);
     if (inl.size() < 8) break;
-    const Eigen::Matrix3d h = T2inv * computeH21(n1, n2, inl) * T1;
-    const double s = h.allFinite() ? scoreHomography(h, px_ref, px_cur, opt.sigma_px, &tmp) : -1;
-    if (s <= best_h) break;
-    best_h = s;
-    H21 = h;
-    in_h = tmp;
+    const Eigen::Matrix3d h = m.T2inv * computeH21(m.n1, m.n2, inl) * m.T1;
+    const double s = h.allFinite() ? scoreHomography(h, m.px_ref, m.px_cur, opt.sigma_px, &tmp) : -1;
+    if (s <= best.score) break;
+    best = {s, h, tmp};
   }
+  if (best.inliers.empty()) best.inliers.assign(static_cast<size_t>(m.n), false);
+  return best;
+}
 
-  // Epipolar geometry: the calibrated five-point essential matrix (Nister 2004, OpenCV's RANSAC)
-  // gives the score and the inliers. Its pose is not trusted alone: with a narrow field of view,
-  // rotation and sideways translation are nearly interchangeable (the bas-relief ambiguity) and
-  // the minimal solvers often land on the wrong member of the family, which puts part of the
-  // points behind a camera. Eight-point samples of the inliers add candidate poses; they are
-  // ranked by how many inliers they put in front of both cameras.
-  double best_f = -1;
-  std::vector<bool> in_f(n, false);
-  std::vector<SE3> epipolar_candidates;
-  {
-    std::vector<cv::Point2d> a(n), b(n);
-    for (int i = 0; i < n; ++i) {
-      a[i] = cv::Point2d(px_ref[i].x(), px_ref[i].y());
-      b[i] = cv::Point2d(px_cur[i].x(), px_cur[i].y());
-    }
-    cv::Mat Kcv, mask, Ecv;
-    cv::eigen2cv(K, Kcv);
-    try {
-      Ecv =
-          cv::findEssentialMat(a, b, Kcv, cv::RANSAC, 0.999, std::sqrt(3.841) * opt.sigma_px, mask);
-    } catch (const cv::Exception&) {
-      Ecv.release();
-    }
-    if (Ecv.rows >= 3 && Ecv.cols == 3) {
-      Eigen::Matrix3d E;
-      cv::cv2eigen(Ecv.rowRange(0, 3), E);
-      const Eigen::Matrix3d F = Kinv.transpose() * E * Kinv;
-      if (F.allFinite()) {
-        best_f = scoreFundamental(F, px_ref, px_cur, opt.sigma_px, &in_f);
-        for (const SE3& T : decomposeEssential(E)) epipolar_candidates.push_back(T);
-      }
+// Epipolar geometry: the calibrated five-point essential matrix (Nister 2004, OpenCV's RANSAC)
+// gives the score and the inliers, and its decompositions are candidate poses. Its pose is not
+// trusted alone: with a narrow field of view, rotation and sideways translation are nearly
+// interchangeable (the bas-relief ambiguity) and the minimal solvers often land on the wrong
+// member of the family, which puts part of the points behind a camera.
+ModelFit fitEssential(const Matches& m, const InitOptions& opt, std::vector<SE3>* poses) {
+  ModelFit fit;
+  fit.inliers.assign(static_cast<size_t>(m.n), false);
+  std::vector<cv::Point2d> a(m.n), b(m.n);
+  for (int i = 0; i < m.n; ++i) {
+    a[i] = cv::Point2d(m.px_ref[i].x(), m.px_ref[i].y());
+    b[i] = cv::Point2d(m.px_cur[i].x(), m.px_cur[i].y());
+  }
+  cv::Mat Kcv, mask, Ecv;
+  cv::eigen2cv(m.K, Kcv);
+  try {
+    Ecv = cv::findEssentialMat(a, b, Kcv, cv::RANSAC, 0.999, std::sqrt(3.841) * opt.sigma_px, mask);
+  } catch (const cv::Exception&) {
+    Ecv.release();
+  }
+  if (Ecv.rows >= 3 && Ecv.cols == 3) {
+    Eigen::Matrix3d E;
+    cv::cv2eigen(Ecv.rowRange(0, 3), E);
+    const Eigen::Matrix3d F = m.Kinv.transpose() * E * m.Kinv;
+    if (F.allFinite()) {
+      fit.score = scoreFundamental(F, m.px_ref, m.px_cur, opt.sigma_px, &fit.inliers);
+      fit.M = F;
+      for (const SE3& T : decomposeEssential(E)) poses->push_back(T);
     }
   }
-  std::vector<int> f_inliers;
-  for (int i = 0; i < n; ++i)
-    if (in_f[i]) f_inliers.push_back(i);
-  if (best_h <= 0 && best_f <= 0) {
-    r.reason = "no model";
-    return r;
-  }
-  r.score_ratio = std::max(0.0, best_h) / (std::max(0.0, best_h) + std::max(0.0, best_f));
-  const bool use_h = r.score_ratio > opt.homography_ratio;
-  r.model = use_h ? 'H' : 'F';
-  const std::vector<bool>& inliers = use_h ? in_h : in_f;
-  r.num_inliers = static_cast<int>(std::count(inliers.begin(), inliers.end(), true));
-  const int min_good = std::max(static_cast<int>(0.9 * r.num_inliers), opt.min_triangulated);
+  return fit;
+}
 
-  // Candidate poses from both models: the homography's decompositions and the epipolar
-  // candidates. With narrow views both can land on the depth-reversed twin of the true motion
-  // (the Necker reversal: rotation mirrored, translation flipped, all points still in front);
-  // bundle adjustment over the chosen model's inliers then tells them apart.
-  std::vector<SE3> candidates;
-  if (best_h > 0) {
-    // Decomposition of the calibrated homography into up to four (R, t/d, n) solutions.
-    cv::Mat Hcv, Kcv;
-    cv::eigen2cv(H21, Hcv);
-    cv::eigen2cv(K, Kcv);
-    std::vector<cv::Mat> Rs, ts, normals;
-    try {
-      cv::decomposeHomographyMat(Hcv, Kcv, Rs, ts, normals);
-    } catch (const cv::Exception&) {
-      Rs.clear();
-    }
-    for (size_t k = 0; k < Rs.size(); ++k) {
-      SE3 T = SE3::Identity();
-      Eigen::Matrix3d R;
-      Eigen::Vector3d t;
-      cv::cv2eigen(Rs[k], R);
-      cv::cv2eigen(ts[k], t);
-      if (t.norm() < 1e-9) continue;
-      T.linear() = R;
-      T.translation() = t.normalized();
-      candidates.push_back(T);
-    }
+// The calibrated homography's decompositions into up to four (R, t/d, n) solutions.
+std::vector<SE3> homographyPoses(const Eigen::Matrix3d& H21, const Eigen::Matrix3d& K) {
+  std::vector<SE3> poses;
+  cv::Mat Hcv, Kcv;
+  cv::eigen2cv(H21, Hcv);
+  cv::eigen2cv(K, Kcv);
+  std::vector<cv::Mat> Rs, ts, normals;
+  try {
+    cv::decomposeHomographyMat(Hcv, Kcv, Rs, ts, normals);
+  } catch (const cv::Exception&) {
+    Rs.clear();
   }
-  if (f_inliers.size() >= 8) {
-    for (int it = 0; it < opt.ransac_iterations; ++it) {
-      const Eigen::Matrix3d F =
-          T2.transpose() * computeF21(n1, n2, sampleIndices(f_inliers, 8)) * T1;
-      if (!F.allFinite()) continue;
-      for (const SE3& T : decomposeEssential(K.transpose() * F * K))
-        epipolar_candidates.push_back(T);
-    }
+  for (size_t k = 0; k < Rs.size(); ++k) {
+    SE3 T = SE3::Identity();
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    cv::cv2eigen(Rs[k], R);
+    cv::cv2eigen(ts[k], t);
+    if (t.norm() < 1e-9) continue;
+    T.linear() = R;
+    T.translation() = t.normalized();
+    poses.push_back(T);
   }
-  candidates.insert(candidates.end(), epipolar_candidates.begin(), epipolar_candidates.end());
-  if (candidates.empty()) {
-    r.reason = "no pose hypothesis";
-    return r;
-  }
-  // Rank by points in front of both cameras; refine the best few distinct ones.
-  std::vector<Eigen::Vector3d> rays1(n), rays2(n);
-  for (int i = 0; i < n; ++i) {
-    rays1[i] = Kinv * px_ref[i].homogeneous();
-    rays2[i] = Kinv * px_cur[i].homogeneous();
+  return poses;
+}
+
+// Up to five distinct candidates, best first: those that put nearly as many of the chosen
+// model's inliers in front of both cameras as the best does, ordered by how well their epipolar
+// geometry fits (the same score as model selection).
+std::vector<SE3> rankCandidates(const std::vector<SE3>& candidates, const Matches& m,
+                                const std::vector<bool>& inliers, const InitOptions& opt) {
+  std::vector<Eigen::Vector3d> rays1(m.n), rays2(m.n);
+  for (int i = 0; i < m.n; ++i) {
+    rays1[i] = m.Kinv * m.px_ref[i].homogeneous();
+    rays2[i] = m.Kinv * m.px_cur[i].homogeneous();
   }
   std::vector<int> inlier_idx;
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < m.n; ++i)
     if (inliers[i]) inlier_idx.push_back(i);
-  // Candidates that put nearly as many inliers in front as the best are ordered by how well
-  // their epipolar geometry fits (the same score as model selection).
   std::vector<int> in_front(candidates.size());
   int most = 0;
   for (size_t k = 0; k < candidates.size(); ++k) {
@@ -474,11 +459,12 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
     most = std::max(most, in_front[k]);
   }
   std::vector<std::pair<double, size_t>> ranked;
+  std::vector<bool> tmp;
   for (size_t k = 0; k < candidates.size(); ++k) {
     if (in_front[k] < 0.97 * most) continue;
     const Eigen::Matrix3d F =
-        Kinv.transpose() * skew(candidates[k].translation()) * candidates[k].linear() * Kinv;
-    ranked.push_back({scoreFundamental(F, px_ref, px_cur, opt.sigma_px, &tmp), k});
+        m.Kinv.transpose() * skew(candidates[k].translation()) * candidates[k].linear() * m.Kinv;
+    ranked.push_back({scoreFundamental(F, m.px_ref, m.px_cur, opt.sigma_px, &tmp), k});
   }
   std::stable_sort(ranked.begin(), ranked.end(),
                    [](const auto& x, const auto& y) { return x.first > y.first; });
@@ -489,34 +475,46 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
     for (const SE3& d : distinct) seen = seen || samePose(d, candidates[k]);
     if (!seen) distinct.push_back(candidates[k]);
   }
-  struct Refined {
-    SE3 T;
-    double rms;
-    Hypothesis h;
-  };
-  // Each refinement is independent of the others (two bundle adjustments, most of the
-  // initialisation's time): they are shared out to opt.threads threads, each result kept at its
-  // candidate's index, so the outcome does not depend on the threads.
-  auto refineAll = [&](const std::vector<SE3>& starts) {
-    std::vector<Refined> out(starts.size());
-    runShared(static_cast<int>(starts.size()), opt.threads, [&](int k) {
+  return distinct;
+}
+
+struct Refined {
+  SE3 T;
+  double rms;
+  Hypothesis h;
+};
+
+// Each start refined by bundle adjustment over the inliers, then the depth-reversed twin of each
+// refined pose (every point on its reference ray with its depth mirrored about the median depth,
+// the current camera re-sectioned against them: the Necker reversal that narrow views allow)
+// refined too. Each refinement is independent of the others (two bundle adjustments, most of the
+// initialisation's time): they are shared out to opt.threads threads, each result kept at its
+// candidate's index, so the outcome does not depend on the threads.
+std::vector<Refined> refineWithTwins(const std::vector<SE3>& starts, const Matches& m,
+                                     const std::vector<bool>& inliers, const InitOptions& opt,
+                                     uint64_t seed) {
+  auto refineAll = [&](const std::vector<SE3>& from) {
+    std::vector<Refined> out(from.size());
+    runShared(static_cast<int>(from.size()), opt.threads, [&](int k) {
       double rms = 1e9;
-      const SE3 T = refinePose(starts[k], px_ref, px_cur, inliers, K, &rms);
-      out[k] = {T, rms, checkPose(T, px_ref, px_cur, inliers, K, 2 * opt.sigma_px)};
+      const SE3 T = refinePose(from[k], m.px_ref, m.px_cur, inliers, m.K, &rms);
+      out[k] = {T, rms, checkPose(T, m.px_ref, m.px_cur, inliers, m.K, 2 * opt.sigma_px)};
     });
     return out;
   };
-  std::vector<Refined> refined = refineAll(distinct);
-  // The depth-reversed twin of each refined pose: every point stays on its reference ray with
-  // its depth mirrored about the median depth, and the current camera is re-sectioned (PnP)
-  // against the mirrored points.
+  std::vector<Refined> refined = refineAll(starts);
   std::vector<SE3> twins;
   for (const Refined& k : refined) {
     SE3 twin;
-    if (neckerTwin(k.h, px_ref, px_cur, K, seed, &twin)) twins.push_back(twin);
+    if (neckerTwin(k.h, m.px_ref, m.px_cur, m.K, seed, &twin)) twins.push_back(twin);
   }
   for (Refined& k : refineAll(twins)) refined.push_back(std::move(k));
-  // The refined pose that explains the most inliers, the lowest error among near ties.
+  return refined;
+}
+
+// The refined pose that explains the most inliers, the lowest error among near ties; -1 when
+// another pose explains the points about as well (the two views cannot tell them apart).
+int pickRefined(const std::vector<Refined>& refined) {
   size_t best = 0;
   for (size_t k = 1; k < refined.size(); ++k) {
     const bool more = refined[k].h.good > 1.05 * refined[best].h.good;
@@ -525,15 +523,68 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
   }
   for (size_t k = 0; k < refined.size(); ++k) {
     if (k == best || samePose(refined[k].T, refined[best].T)) continue;
-    // Another pose explaining the points about as well: the two views cannot tell them apart.
     if (refined[k].h.good >= 0.95 * refined[best].h.good &&
-        refined[k].rms < 1.03 * refined[best].rms) {
-      r.reason = std::string("ambiguous ") + (use_h ? "homography" : "essential-matrix") +
-                 " decomposition";
-      return r;
-    }
+        refined[k].rms < 1.03 * refined[best].rms)
+      return -1;
   }
-  const Hypothesis& h = refined[best].h;
+  return static_cast<int>(best);
+}
+
+}  // namespace
+
+TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
+                                 const Eigen::Matrix3d& K, const InitOptions& opt, uint64_t seed) {
+  TwoViewResult r;
+  if (std::min(px_ref.size(), px_cur.size()) < 8) {
+    r.reason = "fewer than 8 matches";
+    return r;
+  }
+  Matches m(px_ref, px_cur, K, seed);
+  const ModelFit homography = fitHomography(m, opt);
+  std::vector<SE3> epipolar_candidates;
+  const ModelFit essential = fitEssential(m, opt, &epipolar_candidates);
+  if (homography.score <= 0 && essential.score <= 0) {
+    r.reason = "no model";
+    return r;
+  }
+  const double best_h = std::max(0.0, homography.score), best_f = std::max(0.0, essential.score);
+  r.score_ratio = best_h / (best_h + best_f);
+  const bool use_h = r.score_ratio > opt.homography_ratio;
+  r.model = use_h ? 'H' : 'F';
+  const std::vector<bool>& inliers = use_h ? homography.inliers : essential.inliers;
+  r.num_inliers = static_cast<int>(std::count(inliers.begin(), inliers.end(), true));
+  const int min_good = std::max(static_cast<int>(0.9 * r.num_inliers), opt.min_triangulated);
+
+  // Candidate poses from both models: the homography's decompositions, the essential matrix's,
+  // and those of eight-point samples of the epipolar inliers. With narrow views both can land on
+  // the depth-reversed twin of the true motion (the Necker reversal: rotation mirrored,
+  // translation flipped, all points still in front); bundle adjustment over the chosen model's
+  // inliers then tells them apart.
+  std::vector<SE3> candidates;
+  if (homography.score > 0) candidates = homographyPoses(homography.M, K);
+  std::vector<int> f_inliers;
+  for (int i = 0; i < m.n; ++i)
+    if (essential.inliers[i]) f_inliers.push_back(i);
+  if (f_inliers.size() >= 8)
+    for (int it = 0; it < opt.ransac_iterations; ++it) {
+      const Eigen::Matrix3d F = m.T2.transpose() * computeF21(m.n1, m.n2, m.sample(f_inliers, 8)) * m.T1;
+      if (!F.allFinite()) continue;
+      for (const SE3& T : decomposeEssential(K.transpose() * F * K)) epipolar_candidates.push_back(T);
+    }
+  candidates.insert(candidates.end(), epipolar_candidates.begin(), epipolar_candidates.end());
+  if (candidates.empty()) {
+    r.reason = "no pose hypothesis";
+    return r;
+  }
+  const std::vector<Refined> refined =
+      refineWithTwins(rankCandidates(candidates, m, inliers, opt), m, inliers, opt, seed);
+  const int best = pickRefined(refined);
+  if (best < 0) {
+    r.reason = std::string("ambiguous ") + (use_h ? "homography" : "essential-matrix") +
+               " decomposition";
+    return r;
+  }
+  const Hypothesis& h = refined[static_cast<size_t>(best)].h;
   fillResult(h, &r);
   if (h.good < min_good) {
     r.reason = "only " + std::to_string(h.good) + " of " + std::to_string(r.num_inliers) +
