@@ -286,27 +286,19 @@ Mesh disc(float cx, float cy, float radius, float z, int segments) {
   return m;
 }
 
-Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableOptions& to,
-                             Rng& rng, float clear_radius) {
-  Environment env;
-  static const std::vector<std::string> kFloors{"wood",   "parquet",  "tiles",
-                                                "carpet", "concrete", "linoleum"};
-  static const std::vector<std::string> kWalls{"wallpaper", "brick",   "plaster",
-                                               "panels",    "stripes", "tiles"};
-  static const std::vector<std::string> kTops{"wood",   "laminate", "cloth",
-                                              "marble", "checker",  "stone"};
+namespace {
 
-  // ---- Room ------------------------------------------------------------------------------------
+const std::vector<std::string> kFloors{"wood",   "parquet",  "tiles",
+                                       "carpet", "concrete", "linoleum"};
+const std::vector<std::string> kWalls{"wallpaper", "brick",   "plaster",
+                                      "panels",    "stripes", "tiles"};
+const std::vector<std::string> kTops{"wood", "laminate", "cloth", "marble", "checker", "stone"};
+
+// The floor (a shadow and ambient-occlusion receiver) and the ceiling of the room env spans.
+void addFloorAndCeiling(RenderScene* s, Environment* e, const RoomOptions& ro, Rng& rng) {
+  Environment& env = *e;
   const float X = static_cast<float>(ro.size[0]), Y = static_cast<float>(ro.size[1]),
               H = static_cast<float>(ro.height);
-  const float sx = std::max(0.f, X / 2 - clear_radius), sy = std::max(0.f, Y / 2 - clear_radius);
-  const float ox = rng.uniformf(-sx, sx) * 0.8f, oy = rng.uniformf(-sy, sy) * 0.8f;
-  env.room_x0 = ox - X / 2;
-  env.room_x1 = ox + X / 2;
-  env.room_y0 = oy - Y / 2;
-  env.room_y1 = oy + Y / 2;
-  env.room_h = H;
-
   const std::string floor_style = ro.floor == "random" ? rng.pick(kFloors) : ro.floor;
   {
     Rng fr = rng.fork(1);
@@ -340,7 +332,14 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
     Mesh m = orientedQuad(V3(env.room_x0, env.room_y0, H), V3(X, 0, 0), V3(0, Y, 0), -V3::UnitZ());
     addItem(s, std::move(m), tex(ceilingTexture(cr, X, Y, 0.01f)), 0.02f, 3);
   }
-  // Walls: seen from inside, u runs left to right and v downwards.
+}
+
+// The four walls with their skirting boards; seen from inside, u runs left to right and v
+// downwards. Returns their spans, for what stands or hangs on them.
+std::vector<WallSpan> addWalls(RenderScene* s, const Environment& env, const RoomOptions& ro,
+                               Rng& rng) {
+  const float X = static_cast<float>(ro.size[0]), Y = static_cast<float>(ro.size[1]),
+              H = static_cast<float>(ro.height);
   std::vector<WallSpan> walls(4);
   walls[0] = {V3(env.room_x1, env.room_y0, 0), V3(-1, 0, 0), V3(0, 1, 0), X, {}};   // south
   walls[1] = {V3(env.room_x1, env.room_y1, 0), V3(0, -1, 0), V3(-1, 0, 0), Y, {}};  // east
@@ -361,7 +360,12 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
                  Eigen::Translation3f(0, -0.0075f, 0.04f));
     addItem(s, std::move(sk), tex(plasticTexture(wr, 512, 16, skirting, 0.05f), true), 0.1f, 4);
   }
-  // A door on one wall.
+  return walls;
+}
+
+// A door on one of the walls, where it fits.
+void addDoor(RenderScene* s, std::vector<WallSpan>* spans, Rng& rng) {
+  std::vector<WallSpan>& walls = *spans;
   {
     const int k = rng.range(0, 3);
     WallSpan& w = walls[static_cast<size_t>(k)];
@@ -386,7 +390,13 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
               6);
     }
   }
-  // Furniture along the walls.
+}
+
+// Furniture along the walls: bookshelves, cabinets, boxes, plants.
+void addFurniture(RenderScene* s, Environment* e, std::vector<WallSpan>* spans,
+                  const RoomOptions& ro, Rng& rng) {
+  Environment& env = *e;
+  std::vector<WallSpan>& walls = *spans;
   for (int i = 0; i < ro.furniture; ++i) {
     Rng fr = rng.fork(100 + static_cast<uint64_t>(i));
     const int kind = fr.range(0, 3);
@@ -414,7 +424,12 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
       break;
     }
   }
-  // Pictures.
+}
+
+// Pictures on the walls.
+void addPictures(RenderScene* s, std::vector<WallSpan>* spans, const RoomOptions& ro, float H,
+                 Rng& rng) {
+  std::vector<WallSpan>& walls = *spans;
   for (int i = 0; i < ro.pictures; ++i) {
     Rng pr = rng.fork(200 + static_cast<uint64_t>(i));
     const float w = pr.uniformf(0.3f, 1.0f), h = w * pr.uniformf(0.6f, 1.4f);
@@ -432,7 +447,12 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
     }
   }
 
-  // ---- Table ----------------------------------------------------------------------------------
+}
+
+// The table: its top (a receiver), its edge, and legs and aprons (rectangular) or a pedestal
+// (round).
+void addTable(RenderScene* s, Environment* e, const TableOptions& to, Rng& rng) {
+  Environment& env = *e;
   Rng tr = rng.fork(300);
   TableGeometry& T = env.table;
   T.round = to.shape == "round";
@@ -518,6 +538,30 @@ Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableO
                        48, 2.f),
                  edge, 0.1f);
   }
+}
+
+}  // namespace
+
+Environment buildEnvironment(RenderScene* s, const RoomOptions& ro, const TableOptions& to,
+                             Rng& rng, float clear_radius) {
+  Environment env;
+  // The room, placed so that the table (at the origin) stands at least clear_radius from its walls.
+  const float X = static_cast<float>(ro.size[0]), Y = static_cast<float>(ro.size[1]),
+              H = static_cast<float>(ro.height);
+  const float sx = std::max(0.f, X / 2 - clear_radius), sy = std::max(0.f, Y / 2 - clear_radius);
+  const float ox = rng.uniformf(-sx, sx) * 0.8f, oy = rng.uniformf(-sy, sy) * 0.8f;
+  env.room_x0 = ox - X / 2;
+  env.room_x1 = ox + X / 2;
+  env.room_y0 = oy - Y / 2;
+  env.room_y1 = oy + Y / 2;
+  env.room_h = H;
+
+  addFloorAndCeiling(s, &env, ro, rng);
+  std::vector<WallSpan> walls = addWalls(s, env, ro, rng);
+  addDoor(s, &walls, rng);
+  addFurniture(s, &env, &walls, ro, rng);
+  addPictures(s, &walls, ro, env.room_h, rng);
+  addTable(s, &env, to, rng);
   return env;
 }
 
