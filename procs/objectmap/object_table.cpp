@@ -342,7 +342,8 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   std::vector<std::vector<int32_t>> groups = groupOverlapping(grouping);
   GroupFacts facts(*this, num_classes, fusion);
   if (grouping.same_label_overlap > 0 && num_classes > 1) {
-    const GroupVoxels voxels_of = [&](const std::vector<int32_t>& m) -> const std::vector<VoxelKey>& {
+    const GroupVoxels voxels_of =
+        [&](const std::vector<int32_t>& m) -> const std::vector<VoxelKey>& {
       return facts.voxels(m);
     };
     const auto label_of = [&](const std::vector<int32_t>& m) {

@@ -350,7 +350,8 @@ SupportChoice underLookAt(const std::vector<FoundPlane>& found, const ViewPriors
   for (size_t k = 0; k < found.size(); ++k) {
     const float h = found[k].plane.distance(priors.look_at);
     if (!level(found[k]) || h < -o.support_below || h > o.max_height) continue;
-    std::vector<CellKey> cells = found[k].cellsNear(priors.look_at, static_cast<float>(o.support_radius), cell);
+    std::vector<CellKey> cells =
+        found[k].cellsNear(priors.look_at, static_cast<float>(o.support_radius), cell);
     if (cells.empty()) continue;
     nearest = std::min(nearest, std::abs(h));
     levels.push_back({std::abs(h), k, std::move(cells)});
@@ -398,10 +399,12 @@ SupportChoice whereViewsAim(const std::vector<FoundPlane>& found, const std::vec
   }
   SupportChoice c;
   for (size_t k = 0; k < found.size(); ++k)
-    if (votes[k] > 0 && (c.plane < 0 || votes[k] > votes[static_cast<size_t>(c.plane)])) c.plane = static_cast<int>(k);
+    if (votes[k] > 0 && (c.plane < 0 || votes[k] > votes[static_cast<size_t>(c.plane)]))
+      c.plane = static_cast<int>(k);
   if (c.plane >= 0) {
     const size_t b = static_cast<size_t>(c.plane);
-    c.region = found[b].cellsNear(aim[b] / static_cast<float>(votes[b]), static_cast<float>(o.support_radius), cell);
+    c.region = found[b].cellsNear(aim[b] / static_cast<float>(votes[b]),
+                                  static_cast<float>(o.support_radius), cell);
   }
   return c;
 }
@@ -456,7 +459,8 @@ StructureResult removeStructure(const std::vector<MapPoint>& points, const std::
   if (best >= 0)
     for (const auto& key : choice.region)
       for (int i : found[static_cast<size_t>(best)].dense.at(key))
-        if (std::abs(r.support.plane.distance(points[static_cast<size_t>(i)].p)) <= o.support_distance) {
+        if (std::abs(r.support.plane.distance(points[static_cast<size_t>(i)].p)) <=
+            o.support_distance) {
           mark(i);
           r.band.push_back(points[static_cast<size_t>(i)]);
         }

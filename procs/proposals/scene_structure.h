@@ -72,7 +72,7 @@ struct StructureResult {
   std::vector<MapPoint> kept;  ///< the points that are not structure
   bool has_support = false;
   Support support;             ///< when has_support
-  std::vector<MapPoint> band;  ///< the support's own points (its band of o.support_distance), removed
+  std::vector<MapPoint> band;  ///< the support's own points (band of o.support_distance), removed
   StructureStats stats;
 };
 StructureResult removeStructure(const std::vector<MapPoint>& points, const std::vector<View>& views,

@@ -372,7 +372,8 @@ ModelFit fitHomography(Matches& m, const InitOptions& opt) {
       if (best.inliers[i]) inl.push_back(i);
     if (inl.size() < 8) break;
     const Eigen::Matrix3d h = m.T2inv * computeH21(m.n1, m.n2, inl) * m.T1;
-    const double s = h.allFinite() ? scoreHomography(h, m.px_ref, m.px_cur, opt.sigma_px, &tmp) : -1;
+    const double s =
+        h.allFinite() ? scoreHomography(h, m.px_ref, m.px_cur, opt.sigma_px, &tmp) : -1;
     if (s <= best.score) break;
     best = {s, h, tmp};
   }
@@ -567,9 +568,11 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
     if (essential.inliers[i]) f_inliers.push_back(i);
   if (f_inliers.size() >= 8)
     for (int it = 0; it < opt.ransac_iterations; ++it) {
-      const Eigen::Matrix3d F = m.T2.transpose() * computeF21(m.n1, m.n2, m.sample(f_inliers, 8)) * m.T1;
+      const Eigen::Matrix3d F =
+          m.T2.transpose() * computeF21(m.n1, m.n2, m.sample(f_inliers, 8)) * m.T1;
       if (!F.allFinite()) continue;
-      for (const SE3& T : decomposeEssential(K.transpose() * F * K)) epipolar_candidates.push_back(T);
+      for (const SE3& T : decomposeEssential(K.transpose() * F * K))
+        epipolar_candidates.push_back(T);
     }
   candidates.insert(candidates.end(), epipolar_candidates.begin(), epipolar_candidates.end());
   if (candidates.empty()) {
