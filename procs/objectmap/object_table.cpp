@@ -225,15 +225,57 @@ void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_si
     }
 }
 
+// The views of a group (one per frame: its most object-like box), their evidence and the group's
+// voxels, each computed once per group (a group: its sorted candidate ids) during one update().
+class ObjectTable::GroupFacts {
+ public:
+  struct Fused {
+    std::map<ViewKey, const View*> views;
+    std::vector<double> evidence;
+    double weight = 0;  ///< the views' total weight
+  };
+  GroupFacts(const ObjectTable& table, size_t num_classes, const FusionOptions& fusion)
+      : table_(table), num_classes_(num_classes), fusion_(fusion) {}
+
+  const Fused& fusion(const std::vector<int32_t>& members) {
+    auto [it, inserted] = fused_.try_emplace(members);
+    if (!inserted) return it->second;
+    Fused& f = it->second;
+    for (int32_t cid : members)
+      for (const auto& [key, v] : table_.candidates_.at(cid).views) {
+        auto [view, added] = f.views.emplace(key, &v);
+        if (!added &&
+            moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
+          view->second = &v;
+      }
+    std::vector<const std::vector<float>*> evidence;
+    for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
+    f.evidence = sumLogProbabilities(evidence, num_classes_, fusion_.objectness_weights, &f.weight);
+    return f;
+  }
+  const std::vector<VoxelKey>& voxels(const std::vector<int32_t>& members) {
+    auto it = voxels_.find(members);
+    if (it == voxels_.end()) it = voxels_.emplace(members, table_.groupVoxels(members)).first;
+    return it->second;
+  }
+
+ private:
+  const ObjectTable& table_;
+  size_t num_classes_;
+  const FusionOptions& fusion_;
+  std::map<std::vector<int32_t>, Fused> fused_;
+  std::map<std::vector<int32_t>, std::vector<VoxelKey>> voxels_;
+};
+
 std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
-    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, const GroupVoxels& voxels_of,
-    const std::function<int(const std::vector<int32_t>&)>& label_of, int background) const {
+    std::vector<std::vector<int32_t>> groups, const GroupingOptions& grouping, GroupFacts& facts,
+    int background) const {
   static const std::vector<VoxelKey> kNone;
   std::vector<int> label(groups.size());
   std::vector<const std::vector<VoxelKey>*> sets(groups.size(), &kNone);  // none for background groups
   for (size_t g = 0; g < groups.size(); ++g) {
-    label[g] = label_of(groups[g]);
-    if (label[g] >= 0 && label[g] != background) sets[g] = &voxels_of(groups[g]);
+    label[g] = argmaxClass(facts.fusion(groups[g]).evidence);
+    if (label[g] >= 0 && label[g] != background) sets[g] = &facts.voxels(groups[g]);
   }
   UnionFind uf(groups.size());
   // Most overlapping (share of the smaller) first; joined groups keep their label (a sum of
@@ -292,48 +334,6 @@ std::vector<VoxelKey> ObjectTable::groupVoxels(const std::vector<int32_t>& group
   return out;
 }
 
-// The views of a group (one per frame: its most object-like box), their evidence and the group's
-// voxels, each computed once per group (a group: its sorted candidate ids) during one update().
-class ObjectTable::GroupFacts {
- public:
-  struct Fused {
-    std::map<ViewKey, const View*> views;
-    std::vector<double> evidence;
-    double weight = 0;  ///< the views' total weight
-  };
-  GroupFacts(const ObjectTable& table, size_t num_classes, const FusionOptions& fusion)
-      : table_(table), num_classes_(num_classes), fusion_(fusion) {}
-
-  const Fused& fusion(const std::vector<int32_t>& members) {
-    auto [it, inserted] = fused_.try_emplace(members);
-    if (!inserted) return it->second;
-    Fused& f = it->second;
-    for (int32_t cid : members)
-      for (const auto& [key, v] : table_.candidates_.at(cid).views) {
-        auto [view, added] = f.views.emplace(key, &v);
-        if (!added &&
-            moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
-          view->second = &v;
-      }
-    std::vector<const std::vector<float>*> evidence;
-    for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
-    f.evidence = sumLogProbabilities(evidence, num_classes_, fusion_.objectness_weights, &f.weight);
-    return f;
-  }
-  const std::vector<VoxelKey>& voxels(const std::vector<int32_t>& members) {
-    auto it = voxels_.find(members);
-    if (it == voxels_.end()) it = voxels_.emplace(members, table_.groupVoxels(members)).first;
-    return it->second;
-  }
-
- private:
-  const ObjectTable& table_;
-  size_t num_classes_;
-  const FusionOptions& fusion_;
-  std::map<std::vector<int32_t>, Fused> fused_;
-  std::map<std::vector<int32_t>, std::vector<VoxelKey>> voxels_;
-};
-
 void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
@@ -341,17 +341,8 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
   deriveVoxels(occupied, options);
   std::vector<std::vector<int32_t>> groups = groupOverlapping(grouping);
   GroupFacts facts(*this, num_classes, fusion);
-  if (grouping.same_label_overlap > 0 && num_classes > 1) {
-    const GroupVoxels voxels_of =
-        [&](const std::vector<int32_t>& m) -> const std::vector<VoxelKey>& {
-      return facts.voxels(m);
-    };
-    const auto label_of = [&](const std::vector<int32_t>& m) {
-      return argmaxClass(facts.fusion(m).evidence);
-    };
-    groups = mergeSameLabel(std::move(groups), grouping, voxels_of, label_of,
-                            static_cast<int>(num_classes) - 1);
-  }
+  if (grouping.same_label_overlap > 0 && num_classes > 1)
+    groups = mergeSameLabel(std::move(groups), grouping, facts, static_cast<int>(num_classes) - 1);
   const std::vector<int32_t> ids = stableIds(groups, new_id);
   std::map<int32_t, Object> objects;
   for (size_t g = 0; g < groups.size(); ++g) {

@@ -77,9 +77,6 @@ struct Object {
 
 class ObjectTable {
  public:
-  /// The sorted union of a group's candidates' voxels (a group: its sorted candidate ids).
-  using GroupVoxels = std::function<const std::vector<VoxelKey>&(const std::vector<int32_t>&)>;
-
   explicit ObjectTable(double resolution) : resolution_(resolution) {}
 
   double resolution() const { return resolution_; }
@@ -125,18 +122,19 @@ class ObjectTable {
  private:
   /// The user_label most of `members` (candidate ids) hold (ties: the first in order), "" if none.
   std::string userLabelOf(const std::vector<int32_t>& members) const;
-  /// Merges groups that `label_of` gives the same object class (not `background`) and that share
-  /// same_label_overlap of the smaller's voxels (parts and wholes of one object); order kept.
+  /// A group's fused views and evidence and its voxels, each computed once per update() (a
+  /// group: its sorted candidate ids).
+  class GroupFacts;
+  /// Merges groups whose fused evidence gives the same object class (not `background`) and that
+  /// share same_label_overlap of the smaller's voxels (parts and wholes of one object); order kept.
   std::vector<std::vector<int32_t>> mergeSameLabel(std::vector<std::vector<int32_t>> groups,
-                                                   const GroupingOptions& grouping, const GroupVoxels& voxels_of,
-                                                   const std::function<int(const std::vector<int32_t>&)>& label_of,
-                                                   int background) const;
+                                                   const GroupingOptions& grouping,
+                                                   GroupFacts& facts, int background) const;
 
-  /// The sorted union of a group's candidates' voxels (update() keeps each group's once: GroupVoxels).
+  /// The sorted union of a group's candidates' voxels (GroupFacts keeps each group's once).
   std::vector<VoxelKey> groupVoxels(const std::vector<int32_t>& group) const;
 
   // The steps of update().
-  class GroupFacts;
   /// Each candidate's voxels: voted often enough, and occupied now.
   void deriveVoxels(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options);
   /// Groups of candidates by shared voxels (GroupingOptions), in order of their lowest candidate.

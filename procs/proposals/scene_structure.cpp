@@ -436,7 +436,7 @@ StructureResult removeStructure(const std::vector<MapPoint>& points, const std::
   StructureResult r;
   const std::vector<FoundPlane> found = findPlanes(points, priors, o);
   r.stats.planes = static_cast<int>(found.size());
-  SupportChoice choice = chooseSupport(found, views, priors, o);
+  const SupportChoice choice = chooseSupport(found, views, priors, o);
   const float cell = static_cast<float>(o.structure_cell);
   if (choice.plane >= 0 && !choice.region.empty()) {
     r.support = found[static_cast<size_t>(choice.plane)].support(choice.region, cell);

@@ -16,9 +16,9 @@ EncoderKind parseEncoderKind(const std::string& name);
 const char* encoderName(EncoderKind kind);
 
 /// Time model of the two encoders (defaults: the medians of slamaware-bench-recognizer on
-/// 640x480 frames, 2-core reference machine, 2026-12-03; see README). Direct: per box a fixed part plus a part per descriptor inside
-/// the box. FLAIR: a table build per corner of the region the boxes span, plus a fixed time per
-/// box whatever its size.
+/// 640x480 frames, 2-core reference machine, 2026-12-03; see README). Direct: per box a fixed
+/// part plus a part per descriptor inside the box. FLAIR: a table build per corner of the region
+/// the boxes span, plus a fixed time per box whatever its size.
 struct EncoderCostModel {
   double direct_us_per_box = 130.0;
   double direct_ns_per_descriptor = 2.7;

@@ -49,16 +49,11 @@ Pca Pca::fit(const MatrixRM& samples, int out_dims) {
 }
 
 void Pca::project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y) const {
-  project(x, y, offset());
-}
-
-void Pca::project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y,
-                  const Eigen::RowVectorXf& offset) const {
-  if (x.cols() != inDims() || y.rows() != x.rows() || y.cols() != outDims() || offset.size() != outDims())
+  if (x.cols() != inDims() || y.rows() != x.rows() || y.cols() != outDims())
     throw std::invalid_argument("Pca::project: wrong dimensions");
   if (x.rows() == 0) return;
   y.noalias() = x * basis;
-  y.rowwise() -= offset;
+  y.rowwise() -= offset();
 }
 
 Vocabulary Vocabulary::train(const MatrixRM& samples, int k, uint32_t seed, int max_iterations) {
@@ -85,22 +80,14 @@ Vocabulary Vocabulary::train(const MatrixRM& samples, int k, uint32_t seed, int 
   return voc;
 }
 
-void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* words) const {
-  words->resize(static_cast<size_t>(y.rows()));
-  assign(y, words->data(), lookup());
-}
-
-Vocabulary::Lookup Vocabulary::lookup() const {
-  return Lookup{centers.transpose(), 0.5f * centers.rowwise().squaredNorm().transpose()};
-}
-
-void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, int16_t* words, const Lookup& lookup) const {
-  if (y.cols() != dims() || lookup.ct.cols() != size())
-    throw std::invalid_argument("Vocabulary::assign: wrong dimension");
+void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* out) const {
+  if (y.cols() != dims()) throw std::invalid_argument("Vocabulary::assign: wrong dimension");
   const int64_t n = y.rows();
   const int k = size();
-  const Eigen::RowVectorXf& half_norm = lookup.half_norm;
-  const Eigen::MatrixXf& ct = lookup.ct;
+  out->resize(static_cast<size_t>(n));
+  int16_t* words = out->data();
+  const Eigen::RowVectorXf half_norm = 0.5f * centers.rowwise().squaredNorm().transpose();
+  const Eigen::MatrixXf ct = centers.transpose();
   const int64_t block = 2048;
   thread_local std::vector<float> buffer;  // scores of a block of rows (grows, never shrinks)
   buffer.resize(std::max(buffer.size(), static_cast<size_t>(std::min(block, n) * k)));

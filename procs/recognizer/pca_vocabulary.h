@@ -22,9 +22,6 @@ struct Pca {
   void project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y) const;
   /// mean * basis, what project() subtracts from X basis.
   Eigen::RowVectorXf offset() const { return mean * basis; }
-  /// The same with offset() computed once by the caller (many small blocks of rows).
-  void project(const Eigen::Ref<const MatrixRM>& x, Eigen::Ref<MatrixRM> y,
-               const Eigen::RowVectorXf& offset) const;
 };
 
 /// K codewords in the projected space.
@@ -39,14 +36,6 @@ struct Vocabulary {
   /// Nearest codeword of every row of y (ties: the lower index), via one matrix product
   /// (argmax of y.c - |c|^2 / 2).
   void assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* words) const;
-  /// What assignment derives from the centres, computed once for many small blocks of rows.
-  struct Lookup {
-    Eigen::MatrixXf ct;            ///< D x K: the centres transposed
-    Eigen::RowVectorXf half_norm;  ///< |c|^2 / 2
-  };
-  Lookup lookup() const;
-  /// The same into words[0 .. y.rows()).
-  void assign(const Eigen::Ref<const MatrixRM>& y, int16_t* words, const Lookup& lookup) const;
 };
 
 }  // namespace slamaware

@@ -69,7 +69,6 @@ PyramidBox pyramidFromCells(const CellRect& c) {
 
 void FrameCodes::reset(const CellRect& cells, int d) {
   region = cells;
-  dims = d;
   first.assign(1, 0);
   first.reserve(static_cast<size_t>(cells.area()) + 1);
   words.clear();
@@ -81,11 +80,7 @@ float* FrameCodes::addEntry(int16_t word, float count) {
   const int64_t n = static_cast<int64_t>(words.size());
   words.push_back(word);
   counts.push_back(count);
-  if (residuals.rows() <= n) {
-    // Grows geometrically; ReusableMatrix keeps the memory (and the rows already written, as
-    // the columns do not change).
-    residuals.resize(std::max<int64_t>(2 * n, 4096), dims);
-  }
+  residuals.resize(n + 1, residuals.cols());  // keeps the rows written (same columns)
   return residuals.row(n);
 }
 
@@ -210,7 +205,7 @@ void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes*
         if (acc_n_[static_cast<size_t>(k)] == 0.f) continue;
         const int64_t e = static_cast<int64_t>(out->words.size());
         out->addEntry(static_cast<int16_t>(k), acc_n_[static_cast<size_t>(k)]);
-        if (sums_.rows() <= e) sums_.resize(std::max<int64_t>(2 * e, 4096), kFeatureDims);
+        sums_.resize(e + 1, kFeatureDims);
         float* a = acc_.data() + int64_t{k} * kFeatureDims;
         std::memcpy(sums_.row(e), a, sizeof(float) * kFeatureDims);
         std::fill(a, a + kFeatureDims, 0.f);
@@ -221,7 +216,6 @@ void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes*
   }
   // 4. Residual sums: (sum x) B - n (offset + c_k), one product for all entries.
   const int64_t n = static_cast<int64_t>(out->words.size());
-  out->residuals.resize(n, D);
   if (n == 0) return;
   auto residuals = out->residuals.map();
   residuals.noalias() = Eigen::Map<const MatrixRM>(sums_.data(), n, kFeatureDims) * pca_.basis;

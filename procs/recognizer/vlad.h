@@ -47,7 +47,6 @@ PyramidBox pyramidFromCells(const CellRect& cells);
 /// add one entry per (cell, codeword) instead of one projected descriptor each.
 struct FrameCodes {
   CellRect region;  ///< pooling cells covered
-  int dims = 0;     ///< D
   /// Entries of cell (u, v) are [first[i], first[i + 1]) with i = cellIndex(u, v), by increasing
   /// codeword; a cell that no box reads was not coded and has none.
   std::vector<int32_t> first;
