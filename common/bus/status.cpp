@@ -11,8 +11,14 @@ StatusReporter::StatusReporter(Bus& bus, std::string name, std::string channel)
     : bus_(bus), name_(std::move(name)), channel_(std::move(channel)) {}
 
 void StatusReporter::setState(State s) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  state_ = s;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (s == state_) return;
+    state_ = s;
+    state_changed_ = true;
+    if (std::chrono::steady_clock::now() - last_publish_ < kStateChangeGap) return;
+  }
+  publish();
 }
 void StatusReporter::noteInput(int64_t utime, int32_t seq) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -61,7 +67,8 @@ void StatusReporter::tick() {
   const auto now = std::chrono::steady_clock::now();
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (now - last_publish_ < std::chrono::seconds(1)) return;
+    const auto since = now - last_publish_;
+    if (since < std::chrono::seconds(1) && !(state_changed_ && since >= kStateChangeGap)) return;
   }
   publish();
 }
@@ -71,6 +78,7 @@ void StatusReporter::publish() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     last_publish_ = std::chrono::steady_clock::now();
+    state_changed_ = false;
     msg.utime = wallUtime();
     msg.name = name_;
     msg.pid = static_cast<int32_t>(getpid());

@@ -1,6 +1,8 @@
 #pragma once
 // <NAME>_STATUS heartbeat at 1 Hz (docs/architecture.md §1): state, last input handled, queue
-// depth, frames processed and dropped, rejects of the bus, and the process's own counters.
+// depth, frames processed and dropped, rejects of the bus, and the process's own counters. A
+// change of state goes out at once (at most 10 per second): the supervisor learns that a process
+// it restarted is running when it is, not up to a second later.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -16,9 +18,11 @@ class StatusReporter {
  public:
   enum class State : int8_t { kStarting = 0, kRunning = 1, kDegraded = 2, kStopping = 3 };
 
-  /// Publishes on `channel` for process `name`; the first status goes out at the first tick().
+  /// Publishes on `channel` for process `name`; the first status goes out at the first tick() or
+  /// change of state.
   StatusReporter(Bus& bus, std::string name, std::string channel);
 
+  /// A new state is published at once, or at the first tick() 0.1 s after the last status.
   void setState(State s);
   /// The last input message handled (its frame utime and seq).
   void noteInput(int64_t utime, int32_t seq);
@@ -32,7 +36,8 @@ class StatusReporter {
   /// The last warning or error worth showing to an operator (sent until replaced).
   void setMessage(const std::string& message);
 
-  /// Publishes if a second has passed since the last status. Call often (main loop).
+  /// Publishes if a second has passed since the last status, or 0.1 s when the state changed
+  /// since. Call often (main loop).
   void tick();
   /// Publishes now.
   void publish();
@@ -51,7 +56,9 @@ class StatusReporter {
   int64_t processed_ = 0, dropped_ = 0;
   std::map<std::string, int64_t> counters_;
   std::string message_;
+  bool state_changed_ = false;  ///< the state changed since the last status
   std::chrono::steady_clock::time_point last_publish_{};
+  static constexpr std::chrono::milliseconds kStateChangeGap{100};
 };
 
 }  // namespace slamaware
