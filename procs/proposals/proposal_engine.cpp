@@ -102,13 +102,15 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
   return taken;
 }
 
-proposals_t ProposalEngine::project(const CandidateMap& map, int64_t utime, int32_t seq, int32_t map_id,
-                                    const SE3& T_wc, ProjectionStats* stats) const {
+proposals_t ProposalEngine::project(const CandidateMap& map, int64_t utime, int32_t seq,
+                                    int32_t map_id, const SE3& T_world_camera,
+                                    ProjectionStats* stats) const {
   proposals_t m{};
   m.utime = utime;
   m.seq = seq;
   m.map_id = map_id;
-  for (const auto& b : projectCandidates(map.candidates(), camera_, T_wc, options_, stats)) {
+  for (const auto& b :
+       projectCandidates(map.candidates(), camera_, T_world_camera, options_, stats)) {
     m.boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
     m.candidate_ids.push_back(b.candidate_id);
     m.median_depth.push_back(b.median_depth);
@@ -125,9 +127,9 @@ void ProposalEngine::onKeyframe(const keyframe_t& k) {
   }
   const auto it = unproposed_.find(k.seq);
   if (options_.late_keyframe_delay_s < 0 || it == unproposed_.end() || it->second != k.utime) return;
-  const SE3 T_wc = se3FromArrays(k.position, k.orientation);
-  if (!T_wc.matrix().allFinite()) return;
-  late_[k.seq] = LateKeyframe{k.utime, k.map_id, T_wc};
+  const SE3 T_world_camera = se3FromArrays(k.position, k.orientation);
+  if (!T_world_camera.matrix().allFinite()) return;
+  late_[k.seq] = LateKeyframe{k.utime, k.map_id, T_world_camera};
 }
 
 std::vector<proposals_t> ProposalEngine::takeLateProposals() {
@@ -141,7 +143,8 @@ void ProposalEngine::projectLateKeyframes(const CandidateMap& map, int32_t map_i
   for (auto it = late_.begin(); it != late_.end();) {
     const double age_us = static_cast<double>(utime - it->second.utime);
     if (it->second.map_id == map_id && age_us >= delay_us) {
-      late_out_.push_back(project(map, it->second.utime, it->first, map_id, it->second.T_wc, nullptr));
+      late_out_.push_back(
+          project(map, it->second.utime, it->first, map_id, it->second.T_world_camera, nullptr));
       unproposed_.erase(it->first);  // it has its proposals now: later messages of the keyframe are moves
       it = late_.erase(it);
     } else if (age_us > delay_us + 1e6 * kLateGiveUpS) {
@@ -173,18 +176,18 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
     return m;
   };
   const bool located = pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
-  const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
-  if (!T_wc.matrix().allFinite()) {
+  const SE3 T_world_camera = se3FromArrays(pose.position, pose.orientation);
+  if (!T_world_camera.matrix().allFinite()) {
     *why = "SLAM_POSE seq " + std::to_string(pose.seq) + ": pose is not finite";
     return unproposed();
   }
   if (!located || !have_camera_) return unproposed();
   if (!maps_.count(pose.map_id)) return unproposed();  // no point of that map yet
   CandidateMap& map = mapOf(pose.map_id);
-  map.addView(pose.map_id, T_wc);
+  map.addView(pose.map_id, T_world_camera);
   if (recluster(map, pose) && reclustered) *reclustered = true;
   projectLateKeyframes(map, pose.map_id, pose.utime);
-  return project(map, pose.utime, pose.seq, pose.map_id, T_wc, &last_);
+  return project(map, pose.utime, pose.seq, pose.map_id, T_world_camera, &last_);
 }
 
 }  // namespace slamaware::proposals

@@ -63,9 +63,9 @@ class ProposalEngine {
   /// Clusters `map` when due: at once, or (background) takes a finished clustering and starts the
   /// next one. True when new candidates were taken.
   bool recluster(CandidateMap& map, const pose_t& pose);
-  /// The message of the candidates of `map` projected with T_wc into frame (utime, seq).
-  proposals_t project(const CandidateMap& map, int64_t utime, int32_t seq, int32_t map_id, const SE3& T_wc,
-                      ProjectionStats* stats) const;
+  /// The message of the candidates of `map` projected with T_world_camera into frame (utime, seq).
+  proposals_t project(const CandidateMap& map, int64_t utime, int32_t seq, int32_t map_id,
+                      const SE3& T_world_camera, ProjectionStats* stats) const;
   /// Projects the keyframes waiting for late proposals in map_id that are due at `utime`; forgets
   /// those too old to be due.
   void projectLateKeyframes(const CandidateMap& map, int32_t map_id, int64_t utime);
@@ -93,7 +93,7 @@ class ProposalEngine {
   struct LateKeyframe {
     int64_t utime = 0;
     int32_t map_id = -1;
-    SE3 T_wc;
+    SE3 T_world_camera;
   };
   std::map<int32_t, LateKeyframe> late_;  ///< seq -> keyframe waiting for its proposals
   std::vector<proposals_t> late_out_;

@@ -87,13 +87,13 @@ point_cloud_t cloudMessage(int map_id, const std::vector<MapPoint>& points, bool
   return c;
 }
 
-pose_t poseMessage(int seq, int8_t state, const SE3& T_wc, int map_id) {
+pose_t poseMessage(int seq, int8_t state, const SE3& T_world_camera, int map_id) {
   pose_t p{};
   p.seq = seq;
   p.utime = 1000 * seq;
   p.state = state;
   p.map_id = map_id;
-  se3ToArrays(T_wc, p.position, p.orientation);
+  se3ToArrays(T_world_camera, p.position, p.orientation);
   return p;
 }
 

@@ -134,13 +134,14 @@ void countMisses(const ProposalEngine& engine, const ProposalOptions& options, c
   const bool any_uncovered =
       std::any_of(truth.begin(), truth.end(), [&](const Box2& t) { return bestIou(published, t) < 0.5; });
   if (any_uncovered && localized && camera && engine.map().mapId() == pose.map_id) {
-    const SE3 T_wc = se3FromArrays(pose.position, pose.orientation);
+    const SE3 T_world_camera = se3FromArrays(pose.position, pose.orientation);
     ProposalOptions o = options;
     o.nms_iou = 2;  // nothing is suppressed
     o.max_boxes = std::numeric_limits<int>::max();
-    for (const auto& b : projectCandidates(engine.map().candidates(), *camera, T_wc, o)) without_nms.push_back(toBox2(b));
+    for (const auto& b : projectCandidates(engine.map().candidates(), *camera, T_world_camera, o))
+      without_nms.push_back(toBox2(b));
     o.occluded_fraction = 2;  // nothing is culled either
-    for (const auto& b : projectCandidates(engine.map().candidates(), *camera, T_wc, o))
+    for (const auto& b : projectCandidates(engine.map().candidates(), *camera, T_world_camera, o))
       without_culling.push_back(toBox2(b));
   }
   for (const auto& t : truth) {

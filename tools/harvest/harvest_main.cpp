@@ -87,7 +87,7 @@ struct DepthBuffer {
   }
 };
 
-/// The mask of `t` in a frame seen from `T_wc`, or why not (the counter to raise).
+/// The mask of `t` in a frame seen from `T_world_camera`, or why not (the counter to raise).
 enum class ViewResult { kWritten, kOutOfView, kTruncated, kHidden, kSmall };
 
 struct View {
