@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "common/parallel.h"
 
 namespace slamaware {
 
@@ -58,8 +59,8 @@ int LinearClassifier::classIndex(const std::string& name) const {
 }
 
 LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std::string>& classes,
-                               const SgdOptions& options,
-                               const std::function<void(int)>& progress) {
+                               const SgdOptions& options, const std::function<void(int)>& progress,
+                               int threads) {
   const int C = static_cast<int>(classes.size());
   const int64_t n = examples.size(), dims = examples.dims();
   if (C < 1 || n < 1) throw std::invalid_argument("trainOneVsAll: no classes or no examples");
@@ -89,47 +90,55 @@ LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std
   std::vector<int64_t> order(static_cast<size_t>(n));
   for (int64_t i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
   std::mt19937 rng(static_cast<uint32_t>(options.seed));
-  std::vector<int32_t> index;
-  std::vector<float> values;
   const int64_t bd = examples.blockDims();
   const double lambda = options.lambda;
-  int64_t t = 0;
+  // The classes learn independently from the same example order, so they are split among the
+  // workers: the result is the same for any number of threads.
+  const int workers = std::min(workerThreads(threads), C);
+  int64_t t0 = 0;  // steps before this epoch
   for (int epoch = 0; epoch < options.epochs; ++epoch) {
     // Fisher-Yates with mt19937's raw output (std::shuffle's use of it is implementation-defined).
     for (int64_t i = n - 1; i > 0; --i)
       std::swap(order[static_cast<size_t>(i)],
                 order[static_cast<size_t>(rng() % static_cast<uint32_t>(i + 1))]);
-    for (int64_t idx : order) {
-      const int nb = examples.blocks(idx, &index, &values);
-      const int label = examples.label(idx);
-      const double example_weight = examples.weight(idx);
-      const double eta = options.eta0 / (1.0 + lambda * options.eta0 * static_cast<double>(t));
-      for (int c = 0; c < C; ++c) {
-        const size_t cc = static_cast<size_t>(c);
-        float* vc = v.row(c).data();
-        float dot = 0;
-        for (int k = 0; k < nb; ++k)
-          dot += Eigen::Map<const Eigen::VectorXf>(vc + index[static_cast<size_t>(k)] * bd, bd)
-                     .dot(Eigen::Map<const Eigen::VectorXf>(values.data() + k * bd, bd));
-        const double s = scale[cc] * static_cast<double>(dot) + bias[cc];
-        const double z = label == c ? 1.0 : -1.0;
-        const double weight = example_weight * (z > 0 ? w_pos[cc] : w_neg[cc]);
-        const double g = -z * weight * sigmoid(-z * s);  // d loss / d s
-        scale[cc] *= 1.0 - eta * lambda;
-        if (g != 0) {
-          const float step = static_cast<float>(-eta * g / scale[cc]);
+    runWorkers(workers, [&](int w) {
+      std::vector<int32_t> index;
+      std::vector<float> values;
+      const int c_begin = C * w / workers, c_end = C * (w + 1) / workers;
+      int64_t t = t0;
+      for (int64_t idx : order) {
+        const int nb = examples.blocks(idx, &index, &values);
+        const int label = examples.label(idx);
+        const double example_weight = examples.weight(idx);
+        const double eta = options.eta0 / (1.0 + lambda * options.eta0 * static_cast<double>(t));
+        for (int c = c_begin; c < c_end; ++c) {
+          const size_t cc = static_cast<size_t>(c);
+          float* vc = v.row(c).data();
+          float dot = 0;
           for (int k = 0; k < nb; ++k)
-            Eigen::Map<Eigen::VectorXf>(vc + index[static_cast<size_t>(k)] * bd, bd) +=
-                step * Eigen::Map<const Eigen::VectorXf>(values.data() + k * bd, bd);
+            dot += Eigen::Map<const Eigen::VectorXf>(vc + index[static_cast<size_t>(k)] * bd, bd)
+                       .dot(Eigen::Map<const Eigen::VectorXf>(values.data() + k * bd, bd));
+          const double s = scale[cc] * static_cast<double>(dot) + bias[cc];
+          const double z = label == c ? 1.0 : -1.0;
+          const double weight = example_weight * (z > 0 ? w_pos[cc] : w_neg[cc]);
+          const double g = -z * weight * sigmoid(-z * s);  // d loss / d s
+          scale[cc] *= 1.0 - eta * lambda;
+          if (g != 0) {
+            const float step = static_cast<float>(-eta * g / scale[cc]);
+            for (int k = 0; k < nb; ++k)
+              Eigen::Map<Eigen::VectorXf>(vc + index[static_cast<size_t>(k)] * bd, bd) +=
+                  step * Eigen::Map<const Eigen::VectorXf>(values.data() + k * bd, bd);
+          }
+          bias[cc] -= eta * options.bias_rate * g;
+          if (scale[cc] < 1e-6) {
+            v.row(c) *= static_cast<float>(scale[cc]);
+            scale[cc] = 1.0;
+          }
         }
-        bias[cc] -= eta * options.bias_rate * g;
-        if (scale[cc] < 1e-6) {
-          v.row(c) *= static_cast<float>(scale[cc]);
-          scale[cc] = 1.0;
-        }
+        ++t;
       }
-      ++t;
-    }
+    });
+    t0 += n;
     if (progress) progress(epoch + 1);
   }
   LinearClassifier model;

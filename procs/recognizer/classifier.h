@@ -60,11 +60,12 @@ void calibratedLogProbabilities(const float* scores, int C, float temperature, f
                                 float* out);
 
 /// Trains one logistic regression per class (label == c against all other examples) by SGD with
-/// L2 regularisation. Deterministic for given examples and options. `progress(epoch)` is called
+/// L2 regularisation. Deterministic for given examples and options, and the same for any number of
+/// `threads` (0: one per core; the classes are split among them). `progress(epoch)` is called
 /// after each epoch when set.
 LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std::string>& classes,
                                const SgdOptions& options,
-                               const std::function<void(int)>& progress = {});
+                               const std::function<void(int)>& progress = {}, int threads = 1);
 
 /// Fits temperature and floor on held-out scores (B x C) with labels; returns the mean negative
 /// log-likelihood reached.

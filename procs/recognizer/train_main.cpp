@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> objects, scenes, background_objects;
   std::string out, config, report_path, proposals_dir, log_level = "info";
   int64_t seed = -1;
+  int threads = 0;
   std::string show, base;
   bool replace = false;
   app.add_option("--report", show,
@@ -47,6 +48,9 @@ int main(int argc, char** argv) {
   app.add_option("--config", config, "YAML file with a 'train' section (default: built-in options)")
       ->check(CLI::ExistingFile);
   app.add_option("--seed", seed, "overrides train.seed");
+  app.add_option("--threads", threads,
+                 "threads of the long loops (0: one per core); the model does not depend on it")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--write-report", report_path, "also write the training report (JSON) here");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
@@ -66,7 +70,8 @@ int main(int argc, char** argv) {
   }
   if (!base.empty()) {
     try {
-      const TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
+      TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
+      options.threads = threads;
       AddClassesReport report;
       const RecognizerModel model = addClasses(loadModel(base), objects, options, replace, &report);
       saveModel(model, out);
@@ -82,6 +87,7 @@ int main(int argc, char** argv) {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
     example_kb = ExampleSet(options.encoding.vladDims(), options.encoding.pca_dims).maxRowBytes() / 1000;
     if (seed >= 0) options.seed = static_cast<int>(seed);
+    options.threads = threads;
     TrainReport report;
     const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
     saveModel(model, out);

@@ -8,7 +8,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <set>
 #include <sstream>
@@ -16,9 +19,8 @@
 #include "common/config.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
+#include "common/parallel.h"
 #include "common/progress.h"
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 namespace slamaware {
 
@@ -129,20 +131,24 @@ Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFr
   return s;
 }
 
-
 // Encodes `boxes` of one scene frame as background examples (group = -1 - frame index).
-void addBackground(FrameEncoder& encoder, const cv::Mat& image,
-                   const std::vector<cv::Rect2d>& boxes, int label, int group, int domain,
-                   ReusableMatrix* buffer, ExampleSet* out) {
+// The pixel boxes that snap to the image's pooling grid, encoded into the rows of the result (none
+// when no box snaps).
+ReusableMatrix encodeRects(FrameEncoder& encoder, const cv::Mat& image,
+                           const std::vector<cv::Rect2d>& boxes) {
   std::vector<PyramidBox> snapped;
   for (const auto& r : boxes) {
     PyramidBox b;
     if (encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) snapped.push_back(b);
   }
-  if (snapped.empty()) return;
-  encoder.encode(image, snapped, EncoderKind::kAuto, buffer);
-  for (int64_t i = 0; i < buffer->rows(); ++i) out->add(buffer->row(i), label, group, domain);
+  ReusableMatrix rows;
+  if (!snapped.empty()) encoder.encode(image, snapped, EncoderKind::kAuto, &rows);
+  return rows;
 }
+
+// Scene frames held by the workers of a parallel loop at a time (their encoded boxes as floats:
+// some MB per frame).
+constexpr size_t kFrameWindow = 16;
 
 // A crop and its object mask (8-bit, object > 0) cut to the mask's bounding box; a mask without
 // object pixels, or of another size, leaves the crop whole and *mask empty.
@@ -539,8 +545,6 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
                  const std::function<void(int64_t, int64_t)>& progress) {
   const EncodingParams& p = options.encoding;
   p.validate();
-  DenseFeatureExtractor extractor(p.features);
-  FeatureGrid grid;
   const int64_t target = std::max<int64_t>(options.vocabulary_descriptors, p.vocabulary_size * 4);
   // Half of the sample from photographs when there are any, half from renderings (codewords fitted
   // to rendered images alone describe photographs poorly); within each, half from scene frames
@@ -557,32 +561,49 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
   }
   const int64_t per_crop_rendered = quota[0][0], per_crop_real = quota[1][0];
   const int64_t per_frame_rendered = quota[0][1], per_frame_real = quota[1][1];
-  std::vector<float> rows;
-  const int64_t total = static_cast<int64_t>(crops.size() + frames.size());
-  int64_t done = 0;
-  auto sample = [&](const std::string& path, int64_t quota, uint32_t seed) {
-    extractor.setImage(readImage(path));
-    extractor.extract(extractor.imageCells(), &grid);
-    const int64_t n = grid.features.rows();
-    std::vector<int64_t> idx(static_cast<size_t>(n));
-    for (int64_t i = 0; i < n; ++i) idx[static_cast<size_t>(i)] = i;
-    std::mt19937 rng(seed);
-    const int64_t take = std::min(quota, n);
-    for (int64_t i = 0; i < take; ++i) {
-      std::swap(
-          idx[static_cast<size_t>(i)],
-          idx[static_cast<size_t>(i + static_cast<int64_t>(rng() % static_cast<uint32_t>(n - i)))]);
-      const float* r = grid.features.row(idx[static_cast<size_t>(i)]);
-      rows.insert(rows.end(), r, r + kFeatureDims);
-    }
-    if (progress) progress(++done, total);
+  // Each image's share of the sample, drawn by the workers and gathered in image order (crops,
+  // then frames).
+  struct Worker {
+    explicit Worker(const FeatureParams& params) : extractor(params) {}
+    DenseFeatureExtractor extractor;
+    FeatureGrid grid;
   };
-  for (size_t i = 0; i < crops.size(); ++i)
-    sample(crops[i].path, crops[i].real ? per_crop_real : per_crop_rendered,
-           subSeed(static_cast<uint32_t>(options.seed), 2, static_cast<uint32_t>(i)));
-  for (size_t i = 0; i < frames.size(); ++i)
-    sample(frames[i].path, frames[i].real ? per_frame_real : per_frame_rendered,
-           subSeed(static_cast<uint32_t>(options.seed), 3, static_cast<uint32_t>(i)));
+  std::vector<std::unique_ptr<Worker>> workers;
+  for (int w = 0; w < workerThreads(options.threads); ++w)
+    workers.push_back(std::make_unique<Worker>(p.features));
+  auto sample = [&](size_t i, std::unique_ptr<Worker>& worker) {
+    const bool crop = i < crops.size();
+    const size_t k = crop ? i : i - crops.size();
+    const bool real = crop ? crops[k].real : frames[k].real;
+    const int64_t quota = crop ? (real ? per_crop_real : per_crop_rendered)
+                               : (real ? per_frame_real : per_frame_rendered);
+    worker->extractor.setImage(readImage(crop ? crops[k].path : frames[k].path));
+    worker->extractor.extract(worker->extractor.imageCells(), &worker->grid);
+    const ReusableMatrix& features = worker->grid.features;
+    const int64_t n = features.rows();
+    std::vector<int64_t> idx(static_cast<size_t>(n));
+    for (int64_t j = 0; j < n; ++j) idx[static_cast<size_t>(j)] = j;
+    std::mt19937 rng(
+        subSeed(static_cast<uint32_t>(options.seed), crop ? 2 : 3, static_cast<uint32_t>(k)));
+    const int64_t take = std::min(quota, n);
+    std::vector<float> out;
+    out.reserve(static_cast<size_t>(std::max<int64_t>(0, take) * kFeatureDims));
+    for (int64_t j = 0; j < take; ++j) {
+      std::swap(
+          idx[static_cast<size_t>(j)],
+          idx[static_cast<size_t>(j + static_cast<int64_t>(rng() % static_cast<uint32_t>(n - j)))]);
+      const float* r = features.row(idx[static_cast<size_t>(j)]);
+      out.insert(out.end(), r, r + kFeatureDims);
+    }
+    return out;
+  };
+  std::vector<float> rows;
+  const size_t total = crops.size() + frames.size();
+  orderedParallelFor<std::vector<float>>(
+      total, workers, 64, sample, [&](size_t i, const std::vector<float>& sampled) {
+        rows.insert(rows.end(), sampled.begin(), sampled.end());
+        if (progress) progress(static_cast<int64_t>(i + 1), static_cast<int64_t>(total));
+      });
   int64_t n = static_cast<int64_t>(rows.size()) / kFeatureDims;
   if (n < p.vocabulary_size)
     throw std::runtime_error("fitEncoding: only " + std::to_string(n) + " features for " +
@@ -705,13 +726,23 @@ std::string TrainReport::toText() const {
   return o.str();
 }
 
-RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
-                           const std::vector<std::string>& scene_dirs,
-                           const TrainOptions& options, TrainReport* report,
-                           const std::string& proposals_dir,
-                           const std::vector<std::string>& background_object_dirs) {
-  const auto started = Clock::now();
-  options.encoding.validate();
+namespace {
+
+// What a model is trained on: the crops and scene frames, the model's categories (background last
+// when there is any) and the held-out split (trainer.h, step 1).
+struct TrainingData {
+  std::vector<LabeledCrop> crops;
+  std::vector<SceneFrame> frames;
+  std::vector<std::string> classes, instances;
+  bool has_background = false;
+  int bg = -1;  ///< index of "background" in classes, -1 without
+  Split split;
+};
+
+TrainingData gatherTrainingData(const std::vector<std::string>& object_dirs,
+                                const std::vector<std::string>& scene_dirs,
+                                const TrainOptions& options, const std::string& proposals_dir,
+                                const std::vector<std::string>& background_object_dirs) {
   std::vector<LabeledCrop> crops;
   for (const auto& dir : object_dirs) {
     // A rendered set's instances are named after the set: its "coffee_mug_1" is not the UW RGB-D
@@ -721,7 +752,7 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     for (auto& c : rendered ? collectNamedCrops(dir, options.max_views_per_instance) : collectCrops({dir}, 0))
       crops.push_back(std::move(c));
   }
-  const std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs, proposals_dir);
+  std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs, proposals_dir);
   if (crops.empty()) throw DatasetError("no training crops");
   std::set<std::string> category_set, instance_set;
   for (const auto& c : crops) category_set.insert(c.category);
@@ -755,8 +786,8 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
   const bool has_background = !frames.empty() || background_crops > 0;
   if (has_background) classes.push_back("background");
   const int bg = has_background ? static_cast<int>(classes.size()) - 1 : -1;
-  const std::vector<std::string> instances(instance_set.begin(), instance_set.end());
-  const Split split = makeSplit(crops, frames, options);
+  std::vector<std::string> instances(instance_set.begin(), instance_set.end());
+  Split split = makeSplit(crops, frames, options);
   spdlog::info(
       "{} crops of {} instances in {} categories ({} of them of {} other categories: background; {} "
       "photographed), {} scene frames ({} photographed); held out: {} instances, {} frames{}",
@@ -765,36 +796,42 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       std::count_if(frames.begin(), frames.end(), [](const SceneFrame& f) { return f.real; }),
       split.held_out_instances.size(), std::count(split.frame_val.begin(), split.frame_val.end(), true),
       split.held_out_sequences.empty() ? "" : fmt::format(" (scenes {})", fmt::join(split.held_out_sequences, ", ")));
+  return {std::move(crops),     std::move(frames), std::move(classes),
+          std::move(instances), has_background,    bg,
+          std::move(split)};
+}
 
-  RecognizerModel model;
-  model.params = options.encoding;
-  {
-    std::vector<LabeledCrop> train_crops;
-    std::vector<SceneFrame> train_frames;
-    for (size_t i = 0; i < crops.size(); ++i)
-      if (!split.crop_val[i]) train_crops.push_back(crops[i]);
-    for (size_t i = 0; i < frames.size(); ++i)
-      if (!split.frame_val[i]) train_frames.push_back(frames[i]);
-    ProgressBar bar("vocabulary features",
-                    static_cast<int64_t>(train_crops.size() + train_frames.size()));
-    fitEncoding(train_crops, train_frames, options, &model.pca, &model.vocabulary,
-                [&](int64_t done, int64_t) { bar.update(done); });
-    bar.finish();
-  }
-  FrameEncoder encoder(model.params, model.pca, model.vocabulary);
+// Encoded examples, and which of them are held out (is_val: one per example of `all`).
+struct Examples {
+  Examples(int64_t dims, int64_t block_dims)
+      : all(dims, block_dims), held_out_mirrors(dims, block_dims) {}
+  ExampleSet all;
+  std::vector<bool> is_val;
+  ExampleSet held_out_mirrors;  ///< mirror images of the held-out crops: trained on at the end only
+};
 
-  ExampleSet all(model.params.vladDims(), model.params.pca_dims);
+/// One encoder per worker of the frame loops (the examples do not depend on their number).
+using Workers = std::vector<std::unique_ptr<FrameEncoder>>;
+
+// Every crop as one box covering it (and mirrored).
+void encodeCropExamples(const TrainingData& d, const TrainOptions& options, FrameEncoder& encoder,
+                        Examples* ex) {
+  const std::vector<LabeledCrop>& crops = d.crops;
+  const Split& split = d.split;
+  ExampleSet& all = ex->all;
+  std::vector<bool>& is_val = ex->is_val;
+  ExampleSet& held_out_mirrors = ex->held_out_mirrors;
   {
     ProgressBar bar("encode crops", static_cast<int64_t>(crops.size()));
-    all = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
-                      [&](int64_t done, int64_t) { bar.update(done); }, bg);
+    all = encodeCrops(
+        crops, d.classes, d.instances, encoder, options.mirror_crops,
+        [&](int64_t done, int64_t) { bar.update(done); }, d.bg);
     bar.finish();
   }
   // Held-out crops stay held out; their mirror images are augmentation, not validation data, and
   // join the training set only for the final retraining on everything.
   const size_t per_crop = options.mirror_crops ? 2 : 1;
-  std::vector<bool> is_val(static_cast<size_t>(all.size()));
-  ExampleSet held_out_mirrors(all.dims(), all.blockDims());
+  is_val.assign(static_cast<size_t>(all.size()), false);
   for (size_t i = 0; i < crops.size(); ++i)
     for (size_t k = 0; k < per_crop; ++k) is_val[i * per_crop + k] = split.crop_val[i];
   if (per_crop > 1) {
@@ -807,6 +844,19 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       if (keep[i]) v.push_back(is_val[i]);
     is_val = v;
   }
+}
+
+// Each crop pasted into scene frames (step 3).
+void encodeCropsInContext(const TrainingData& d, const TrainOptions& options, FrameEncoder& encoder,
+                          Examples* ex) {
+  const std::vector<LabeledCrop>& crops = d.crops;
+  const std::vector<SceneFrame>& frames = d.frames;
+  const Split& split = d.split;
+  const std::vector<std::string>& classes = d.classes;
+  const std::vector<std::string>& instances = d.instances;
+  const int bg = d.bg;
+  ExampleSet& all = ex->all;
+  std::vector<bool>& is_val = ex->is_val;
   ReusableMatrix buffer;
   if (!frames.empty() && (options.context_copies > 0 || options.real_copies > 0)) {
     // Crops in context: pasted into scene frames of the same split (any frame if that split has
@@ -866,109 +916,178 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     }
     bar.finish();
   }
-  if (has_background) {
+}
+
+// `negatives_per_frame` random background boxes per scene frame (step 3).
+void encodeBackgroundBoxes(const TrainingData& d, const TrainOptions& options, Workers& workers,
+                           Examples* ex) {
+  const std::vector<SceneFrame>& frames = d.frames;
+  const Split& split = d.split;
+  ExampleSet& all = ex->all;
+  std::vector<bool>& is_val = ex->is_val;
+  const int bg = d.bg;
+  if (d.has_background) {
     ProgressBar bar("encode background boxes", static_cast<int64_t>(frames.size()));
-    for (size_t f = 0; f < frames.size(); ++f) {
-      const cv::Mat image = readImage(frames[f].path);
-      const auto boxes = randomBackgroundBoxes(
-          image.cols, image.rows, frames[f].objects, options.negatives_per_frame, options,
-          subSeed(static_cast<uint32_t>(options.seed), 6, static_cast<uint32_t>(f)));
-      addBackground(encoder, image, boxes, bg, -1 - static_cast<int>(f), frames[f].real ? 1 : 0, &buffer, &all);
-      is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
-      bar.update(static_cast<int64_t>(f + 1));
-    }
+    orderedParallelFor<ReusableMatrix>(
+        frames.size(), workers, kFrameWindow,
+        [&](size_t f, std::unique_ptr<FrameEncoder>& worker) {
+          const cv::Mat image = readImage(frames[f].path);
+          return encodeRects(
+              *worker, image,
+              randomBackgroundBoxes(
+                  image.cols, image.rows, frames[f].objects, options.negatives_per_frame, options,
+                  subSeed(static_cast<uint32_t>(options.seed), 6, static_cast<uint32_t>(f))));
+        },
+        [&](size_t f, const ReusableMatrix& rows) {
+          for (int64_t i = 0; i < rows.rows(); ++i)
+            all.add(rows.row(i), bg, -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
+          is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
+          bar.update(static_cast<int64_t>(f + 1));
+        });
     bar.finish();
   }
-  if (has_background && (options.scene_positive_every > 0 || options.proposal_every > 0)) {
+}
+
+// The scenes' objects and proposal boxes (step 3).
+void encodeSceneObjects(const TrainingData& d, const TrainOptions& options, Workers& workers,
+                        Examples* ex) {
+  const std::vector<SceneFrame>& frames = d.frames;
+  const std::vector<std::string>& classes = d.classes;
+  const Split& split = d.split;
+  const int bg = d.bg;
+  ExampleSet& all = ex->all;
+  std::vector<bool>& is_val = ex->is_val;
+  if (d.has_background && (options.scene_positive_every > 0 || options.proposal_every > 0)) {
     // The scenes' objects, boxed as a proposal would box them: a category of the model is a
     // positive, any other object is background (a calculator is not a cap).
     auto every = [](int index, int n) { return n > 0 && index % n == 0; };
     ProgressBar bar("encode scene objects", static_cast<int64_t>(frames.size()));
     int64_t positives = 0, others = 0, partials = 0, proposal_positives = 0, proposal_others = 0;
-    for (size_t f = 0; f < frames.size(); ++f) {
-      bar.update(static_cast<int64_t>(f + 1));
-      const bool objects = every(frames[f].index, options.scene_positive_every) && !frames[f].objects.empty();
-      const bool proposals = every(frames[f].index, options.proposal_every) && !frames[f].proposals.empty();
-      if (!objects && !proposals) continue;
-      const cv::Mat image = readImage(frames[f].path);
-      std::vector<PyramidBox> snapped;
+    struct Encoded {  // one frame's boxes
+      ReusableMatrix rows;
       std::vector<int> labels;
-      for (size_t o = 0; objects && o < frames[f].objects.size(); ++o) {
-        const int c = indexOf(classes, frames[f].object_classes[o]);
-        const int label = c >= 0 ? c : bg;
-        std::vector<cv::Rect2d> boxes{frames[f].objects[o]};
-        const auto jittered = jitteredBoxes(frames[f].objects[o], image.cols, image.rows, options.positive_jitter,
-                                            options.positive_min_iou,
-                                            subSeed(static_cast<uint32_t>(options.seed), 8,
-                                                    static_cast<uint32_t>(f * 64 + o)));
-        boxes.insert(boxes.end(), jittered.begin(), jittered.end());
-        const size_t whole = boxes.size();
-        const auto partial = partialBoxes(frames[f].objects, o, image.cols, image.rows, options.partial_negatives,
-                                          options.partial_min_iou, options.partial_max_iou,
-                                          subSeed(static_cast<uint32_t>(options.seed), 9,
-                                                  static_cast<uint32_t>(f * 64 + o)));
-        boxes.insert(boxes.end(), partial.begin(), partial.end());
-        for (size_t n = 0; n < boxes.size(); ++n) {
-          const auto& r = boxes[n];
-          PyramidBox b;
-          if (!encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) continue;
-          snapped.push_back(b);
-          labels.push_back(n < whole ? label : bg);
-          partials += n >= whole;
-        }
-      }
-      // The boxes the proposals stage drew here: views of objects as the pipeline frames them, and
-      // its boxes on parts, on several objects, on the table (background).
-      const std::vector<int> proposal_labels =
-          proposals ? labelProposals(frames[f], classes, bg, options) : std::vector<int>();
-      for (size_t n = 0; n < proposal_labels.size(); ++n) {
-        const auto& r = frames[f].proposals[n];
-        PyramidBox b;
-        if (proposal_labels[n] < 0 || !encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) continue;
-        snapped.push_back(b);
-        labels.push_back(proposal_labels[n]);
-        (proposal_labels[n] == bg ? proposal_others : proposal_positives) += 1;
-      }
-      if (snapped.empty()) continue;
-      encoder.encode(image, snapped, EncoderKind::kAuto, &buffer);
-      for (int64_t i = 0; i < buffer.rows(); ++i) {
-        all.add(buffer.row(i), labels[static_cast<size_t>(i)], -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
-        (labels[static_cast<size_t>(i)] == bg ? others : positives) += 1;
-      }
-      is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
-    }
+      int64_t partials = 0, proposal_positives = 0, proposal_others = 0;
+    };
+    orderedParallelFor<Encoded>(
+        frames.size(), workers, kFrameWindow,
+        [&](size_t f, std::unique_ptr<FrameEncoder>& worker) {
+          Encoded e;
+          FrameEncoder& encoder = *worker;
+          const bool objects =
+              every(frames[f].index, options.scene_positive_every) && !frames[f].objects.empty();
+          const bool proposals =
+              every(frames[f].index, options.proposal_every) && !frames[f].proposals.empty();
+          if (!objects && !proposals) return e;
+          const cv::Mat image = readImage(frames[f].path);
+          std::vector<PyramidBox> snapped;
+          for (size_t o = 0; objects && o < frames[f].objects.size(); ++o) {
+            const int c = indexOf(classes, frames[f].object_classes[o]);
+            const int label = c >= 0 ? c : bg;
+            std::vector<cv::Rect2d> boxes{frames[f].objects[o]};
+            const auto jittered = jitteredBoxes(
+                frames[f].objects[o], image.cols, image.rows, options.positive_jitter,
+                options.positive_min_iou,
+                subSeed(static_cast<uint32_t>(options.seed), 8, static_cast<uint32_t>(f * 64 + o)));
+            boxes.insert(boxes.end(), jittered.begin(), jittered.end());
+            const size_t whole = boxes.size();
+            const auto partial = partialBoxes(
+                frames[f].objects, o, image.cols, image.rows, options.partial_negatives,
+                options.partial_min_iou, options.partial_max_iou,
+                subSeed(static_cast<uint32_t>(options.seed), 9, static_cast<uint32_t>(f * 64 + o)));
+            boxes.insert(boxes.end(), partial.begin(), partial.end());
+            for (size_t n = 0; n < boxes.size(); ++n) {
+              const auto& r = boxes[n];
+              PyramidBox b;
+              if (!encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b)) continue;
+              snapped.push_back(b);
+              e.labels.push_back(n < whole ? label : bg);
+              e.partials += n >= whole;
+            }
+          }
+          // The boxes the proposals stage drew here: views of objects as the pipeline frames them,
+          // and its boxes on parts, on several objects, on the table (background).
+          const std::vector<int> proposal_labels =
+              proposals ? labelProposals(frames[f], classes, bg, options) : std::vector<int>();
+          for (size_t n = 0; n < proposal_labels.size(); ++n) {
+            const auto& r = frames[f].proposals[n];
+            PyramidBox b;
+            if (proposal_labels[n] < 0 ||
+                !encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b))
+              continue;
+            snapped.push_back(b);
+            e.labels.push_back(proposal_labels[n]);
+            (proposal_labels[n] == bg ? e.proposal_others : e.proposal_positives) += 1;
+          }
+          if (!snapped.empty()) encoder.encode(image, snapped, EncoderKind::kAuto, &e.rows);
+          return e;
+        },
+        [&](size_t f, const Encoded& e) {
+          bar.update(static_cast<int64_t>(f + 1));
+          if (e.labels.empty()) return;
+          partials += e.partials;
+          proposal_positives += e.proposal_positives;
+          proposal_others += e.proposal_others;
+          for (int64_t i = 0; i < e.rows.rows(); ++i) {
+            const int label = e.labels[static_cast<size_t>(i)];
+            all.add(e.rows.row(i), label, -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
+            (label == bg ? others : positives) += 1;
+          }
+          is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
+        });
     bar.finish();
     spdlog::info("scene objects: {} boxes of the model's categories, {} of other objects or parts (background: {} "
                  "parts); of them from the proposal boxes: {} of the model's categories, {} background",
                  positives, others, partials, proposal_positives, proposal_others);
   }
-  spdlog::info("{} examples encoded, {:.1f} GB in memory", all.size(), static_cast<double>(all.allocatedBytes()) / 1e9);
-  // Training and held-out parts.
-  ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });
-  ExampleSet train = std::move(all);
-  train.filter([&](int64_t i) { return !is_val[static_cast<size_t>(i)]; });
+}
 
-  auto trainStage = [&](ExampleSet& set, const std::string& label) {
-    balanceDomains(&set, static_cast<int>(classes.size()), options.real_share);
-    ProgressBar bar(label, options.sgd.epochs);
-    LinearClassifier clf = trainOneVsAll(set, classes, options.sgd, [&](int e) { bar.update(e); });
-    bar.finish();
-    return clf;
-  };
-  LinearClassifier clf = trainStage(train, "train classifiers");
+// Keeps the `max` hardest examples of *hard (by *hardness, one per example; ties: the earlier).
+void keepHardest(ExampleSet* hard, std::vector<double>* hardness, int64_t max) {
+  if (hard->size() <= max) return;
+  std::vector<double> sorted = *hardness;
+  std::nth_element(sorted.begin(), sorted.begin() + max - 1, sorted.end(), std::greater<double>());
+  const double cut = sorted[static_cast<size_t>(max - 1)];
+  int64_t kept = 0;
+  std::vector<double> kept_h;
+  hard->filter([&](int64_t i) {
+    const bool k = (*hardness)[static_cast<size_t>(i)] >= cut && kept < max;
+    if (k) {
+      ++kept;
+      kept_h.push_back((*hardness)[static_cast<size_t>(i)]);
+    }
+    return k;
+  });
+  *hardness = std::move(kept_h);
+}
 
+// `mining_rounds` rounds of hard-negative mining (step 4): the background boxes *clf takes for
+// objects join *train and the classifiers are trained again. Returns the boxes added per round.
+std::vector<int64_t> mineHardNegatives(
+    const TrainingData& d, const TrainOptions& options, Workers& workers,
+    const std::function<LinearClassifier(ExampleSet&, const std::string&)>& trainStage,
+    ExampleSet* train_set, LinearClassifier* classifier) {
+  const std::vector<SceneFrame>& frames = d.frames;
+  const std::vector<std::string>& classes = d.classes;
+  const Split& split = d.split;
+  const int bg = d.bg;
+  ExampleSet& train = *train_set;
+  LinearClassifier& clf = *classifier;
   std::vector<int64_t> mined;
   if (!frames.empty()) {  // mining searches scene frames
     const int C = static_cast<int>(classes.size());
     for (int round = 1; round <= options.mining_rounds; ++round) {
-      ExampleSet hard(model.params.vladDims(), model.params.pca_dims);
+      ExampleSet hard(train.dims(), train.blockDims());
       std::vector<double> hardness;
-      MatrixRM s;
       ProgressBar bar("hard negatives, round " + std::to_string(round),
                       static_cast<int64_t>(frames.size()));
-      for (size_t f = 0; f < frames.size(); ++f) {
-        bar.update(static_cast<int64_t>(f + 1));
-        if (split.frame_val[f]) continue;
+      // Each frame's candidates scored by the workers; those taken for objects kept in frame order.
+      struct Scored {  // the candidates taken for objects (p(background) < 0.5), in box order
+        ReusableMatrix rows;
+        std::vector<double> p_background;
+      };
+      auto score = [&](size_t f, std::unique_ptr<FrameEncoder>& worker) {
+        Scored out;
+        if (split.frame_val[f]) return out;
         const cv::Mat image = readImage(frames[f].path);
         auto boxes = randomBackgroundBoxes(
             image.cols, image.rows, frames[f].objects, options.mining_candidates_per_frame, options,
@@ -982,55 +1101,35 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                                                     static_cast<uint32_t>(f * 64 + o)));
           boxes.insert(boxes.end(), partial.begin(), partial.end());
         }
-        std::vector<PyramidBox> snapped;
-        for (const auto& r : boxes) {
-          PyramidBox b;
-          if (encoder.snap(r.x, r.y, r.width, r.height, image.cols, image.rows, &b))
-            snapped.push_back(b);
-        }
-        if (snapped.empty()) continue;
-        encoder.encode(image, snapped, EncoderKind::kAuto, &buffer);
-        clf.scores(buffer.map(), &s);
+        const ReusableMatrix rows = encodeRects(*worker, image, boxes);
+        if (rows.rows() == 0) return out;
+        MatrixRM s;
+        clf.scores(rows.map(), &s);
+        std::vector<int64_t> taken;
         for (int64_t i = 0; i < s.rows(); ++i) {
           const double p_bg = backgroundProbability(s.row(i).data(), C);
           if (p_bg >= 0.5) continue;
-          hard.add(buffer.row(i), bg, -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
-          hardness.push_back(-p_bg);
+          taken.push_back(i);
+          out.p_background.push_back(p_bg);
         }
-        // Keep the memory bounded: only the hardest mining_max_per_round survive.
-        if (hard.size() > 2 * static_cast<int64_t>(options.mining_max_per_round)) {
-          std::vector<double> sorted = hardness;
-          std::nth_element(sorted.begin(), sorted.begin() + options.mining_max_per_round - 1,
-                           sorted.end(), std::greater<double>());
-          const double cut = sorted[static_cast<size_t>(options.mining_max_per_round - 1)];
-          int64_t kept = 0;
-          std::vector<double> kept_h;
-          hard.filter([&](int64_t i) {
-            const bool k =
-                hardness[static_cast<size_t>(i)] >= cut && kept < options.mining_max_per_round;
-            if (k) {
-              ++kept;
-              kept_h.push_back(hardness[static_cast<size_t>(i)]);
+        out.rows.resize(static_cast<int64_t>(taken.size()), rows.cols());
+        for (size_t k = 0; k < taken.size(); ++k)
+          std::copy_n(rows.row(taken[k]), rows.cols(), out.rows.row(static_cast<int64_t>(k)));
+        return out;
+      };
+      orderedParallelFor<Scored>(
+          frames.size(), workers, kFrameWindow, score, [&](size_t f, const Scored& scored) {
+            bar.update(static_cast<int64_t>(f + 1));
+            for (int64_t i = 0; i < scored.rows.rows(); ++i) {
+              hard.add(scored.rows.row(i), bg, -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
+              hardness.push_back(-scored.p_background[static_cast<size_t>(i)]);
             }
-            return k;
+            // Keep the memory bounded: only the hardest mining_max_per_round survive.
+            if (hard.size() > 2 * static_cast<int64_t>(options.mining_max_per_round))
+              keepHardest(&hard, &hardness, options.mining_max_per_round);
           });
-          hardness = kept_h;
-        }
-      }
       bar.finish();
-      if (hard.size() > options.mining_max_per_round) {
-        std::vector<double> sorted = hardness;
-        std::nth_element(sorted.begin(), sorted.begin() + options.mining_max_per_round - 1,
-                         sorted.end(), std::greater<double>());
-        const double cut = sorted[static_cast<size_t>(options.mining_max_per_round - 1)];
-        int64_t kept = 0;
-        hard.filter([&](int64_t i) {
-          const bool k =
-              hardness[static_cast<size_t>(i)] >= cut && kept < options.mining_max_per_round;
-          kept += k;
-          return k;
-        });
-      }
+      keepHardest(&hard, &hardness, options.mining_max_per_round);
       mined.push_back(hard.size());
       spdlog::info("hard-negative round {}: {} background boxes taken for objects added", round,
                    hard.size());
@@ -1039,6 +1138,71 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       clf = trainStage(train, "retrain, round " + std::to_string(round));
     }
   }
+
+  return mined;
+}
+
+}  // namespace
+
+RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
+                           const std::vector<std::string>& scene_dirs, const TrainOptions& options,
+                           TrainReport* report, const std::string& proposals_dir,
+                           const std::vector<std::string>& background_object_dirs) {
+  const auto started = Clock::now();
+  options.encoding.validate();
+  const TrainingData d =
+      gatherTrainingData(object_dirs, scene_dirs, options, proposals_dir, background_object_dirs);
+  const std::vector<LabeledCrop>& crops = d.crops;
+  const std::vector<SceneFrame>& frames = d.frames;
+  const std::vector<std::string>& classes = d.classes;
+  const Split& split = d.split;
+  const int bg = d.bg;
+
+  RecognizerModel model;
+  model.params = options.encoding;
+  {
+    std::vector<LabeledCrop> train_crops;
+    std::vector<SceneFrame> train_frames;
+    for (size_t i = 0; i < crops.size(); ++i)
+      if (!split.crop_val[i]) train_crops.push_back(crops[i]);
+    for (size_t i = 0; i < frames.size(); ++i)
+      if (!split.frame_val[i]) train_frames.push_back(frames[i]);
+    ProgressBar bar("vocabulary features",
+                    static_cast<int64_t>(train_crops.size() + train_frames.size()));
+    fitEncoding(train_crops, train_frames, options, &model.pca, &model.vocabulary,
+                [&](int64_t done, int64_t) { bar.update(done); });
+    bar.finish();
+  }
+  FrameEncoder encoder(model.params, model.pca, model.vocabulary);
+  Workers workers;
+  for (int w = 0; w < workerThreads(options.threads); ++w)
+    workers.push_back(std::make_unique<FrameEncoder>(model.params, model.pca, model.vocabulary));
+  Examples ex(model.params.vladDims(), model.params.pca_dims);
+  encodeCropExamples(d, options, encoder, &ex);
+  encodeCropsInContext(d, options, encoder, &ex);
+  encodeBackgroundBoxes(d, options, workers, &ex);
+  encodeSceneObjects(d, options, workers, &ex);
+  ExampleSet& all = ex.all;
+  const std::vector<bool>& is_val = ex.is_val;
+  spdlog::info("{} examples encoded, {:.1f} GB in memory", all.size(),
+               static_cast<double>(all.allocatedBytes()) / 1e9);
+  // Training and held-out parts.
+  ExampleSet val = all.select([&](int64_t i) { return is_val[static_cast<size_t>(i)]; });
+  ExampleSet train = std::move(all);
+  train.filter([&](int64_t i) { return !is_val[static_cast<size_t>(i)]; });
+
+  auto trainStage = [&](ExampleSet& set, const std::string& label) {
+    balanceDomains(&set, static_cast<int>(classes.size()), options.real_share);
+    ProgressBar bar(label, options.sgd.epochs);
+    LinearClassifier clf = trainOneVsAll(
+        set, classes, options.sgd, [&](int e) { bar.update(e); }, options.threads);
+    bar.finish();
+    return clf;
+  };
+  LinearClassifier clf = trainStage(train, "train classifiers");
+
+  const std::vector<int64_t> mined =
+      mineHardNegatives(d, options, workers, trainStage, &train, &clf);
 
   ValidationSummary summary;
   if (val.size() > 0) {
@@ -1051,11 +1215,11 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
       labels.push_back(val.label(i));
     }
     calibrate(s, labels, &clf);
-    summary = summarize(clf, val, has_background, split.held_out_instances);
+    summary = summarize(clf, val, d.has_background, split.held_out_instances);
     // Final classifiers on all the data, with the held-out calibration.
     const float temperature = clf.temperature, mix = clf.uniform_mix;
     train.append(val);
-    train.append(held_out_mirrors);
+    train.append(ex.held_out_mirrors);
     clf = trainStage(train, "final training on all data");
     clf.temperature = temperature;
     clf.uniform_mix = mix;
@@ -1113,9 +1277,12 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
                                            if (progress) progress(stage + " encode", d, t);
                                          });
     const ExampleSet test = encodeCrops(test_crops, result.classes, instances, encoder);
-    const LinearClassifier clf = trainOneVsAll(train, result.classes, sgd, [&](int e) {
-      if (progress) progress(stage + " train", e, sgd.epochs);
-    });
+    const LinearClassifier clf = trainOneVsAll(
+        train, result.classes, sgd,
+        [&](int e) {
+          if (progress) progress(stage + " train", e, sgd.epochs);
+        },
+        options.threads);
     MatrixRM x(1, test.dims()), s;
     std::map<std::string, std::pair<int64_t, int64_t>> per_instance;  // right, total
     for (int64_t i = 0; i < test.size(); ++i) {
@@ -1283,8 +1450,8 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   std::vector<std::string> trained_and_rest = trained;
   trained_and_rest.push_back("(every other)");
   ProgressBar bar("train classifiers", options.sgd.epochs);
-  const LinearClassifier fresh_rows =
-      trainOneVsAll(relabelled, trained_and_rest, options.sgd, [&](int e) { bar.update(e); });
+  const LinearClassifier fresh_rows = trainOneVsAll(
+      relabelled, trained_and_rest, options.sgd, [&](int e) { bar.update(e); }, options.threads);
   bar.finish();
   LinearClassifier clf;
   clf.classes = classes;

@@ -89,6 +89,10 @@ struct TrainOptions {
   /// recognizer suppresses after classifying them); the shipped model was trained on them
   /// suppressed at 0.5 in the stage's order, and twice the boxes would need about twice the memory.
   double proposal_nms_iou = 0.5;
+  /// Threads of the long loops (0: one per core). Not an option of the model: the model is the same
+  /// for any number, so it is neither read from config files nor written into the provenance
+  /// (slamaware-train --threads).
+  int threads = 0;
 
   template <class V>
   void visit(V& v) {

@@ -100,6 +100,24 @@ TEST(Training, SeparatesTwoSyntheticCategoriesOnHeldOutInstances) {
   EXPECT_GT(t.report.train_negatives, 0);
 }
 
+TEST(Training, TheModelIsTheSameForAnyNumberOfThreads) {
+  const Trained& t = synthetic();  // one thread per core
+  TrainOptions o = testOptions();
+  o.threads = 1;
+  const RecognizerModel one = trainModel({t.objects}, {t.scenes}, o, nullptr);
+  o.threads = 3;
+  const RecognizerModel three = trainModel({t.objects}, {t.scenes}, o, nullptr);
+  for (const RecognizerModel* m : {&t.model, &three}) {
+    EXPECT_TRUE(m->pca.mean == one.pca.mean && m->pca.basis == one.pca.basis) << "PCA";
+    EXPECT_TRUE(m->vocabulary.centers == one.vocabulary.centers) << "codewords";
+    EXPECT_TRUE(m->classifier.weights == one.classifier.weights) << "classifier weights";
+    EXPECT_TRUE(m->classifier.bias == one.classifier.bias) << "classifier biases";
+    EXPECT_EQ(m->classifier.temperature, one.classifier.temperature);
+    EXPECT_EQ(m->classifier.uniform_mix, one.classifier.uniform_mix);
+    EXPECT_EQ(m->exemplars.size(), one.exemplars.size());
+  }
+}
+
 TEST(Training, JitteredPositivesOverlapTheirObjectAndStayInTheImage) {
   auto overlap = [](const cv::Rect2d& a, const cv::Rect2d& b) {
     const double inter = (a & b).area();
