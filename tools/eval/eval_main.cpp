@@ -122,194 +122,239 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
   return res;
 }
 
+// Everything the scoring of one sequence needs, from the command line and the config files.
+struct EvalContext {
+  SystemConfig system;
+  PipelineRunOptions pipeline;
+  std::string out_dir;
+  bool from_logs = false, offline = false, verbose = false;
+  SlamOptions slam_options;                     // offline
+  proposals::ProposalOptions proposal_options;  // of the recorded run, or the ones to try
+  bool rerun_proposals = false;  // score proposal_options' boxes, not the recorded ones
+  ProposalEvalOptions peo;
+  int draw_frames = 0;
+  bool dump_proposals = false, dump_boxes = false;
+  std::optional<objectmap::ObjectMapOptions> objectmap_options;  // re-run the object map with these
+};
+
+// The figures of the synthetic sequences, pooled.
+struct SuiteTotals {
+  std::vector<nlohmann::json> slam;
+  std::vector<SceneFolder> scenes;
+  ProposalScores proposals;
+  ProposalMisses misses;
+  bool any_proposals = false;
+  RecognitionScores single, online, final;
+  bool any_recognition = false;
+};
+
+// The proposals section of one sequence (its recording's boxes, or those of a re-run).
+void proposalsOfSequence(const std::string& name, const SequenceFolder& seq, const std::string& log,
+                         const EvalContext& c, nlohmann::json* report, SuiteTotals* totals) {
+  const fs::path out(c.out_dir);
+  ProposalMisses misses;
+  const ProposalRecording rerun_pr =
+      rerunProposals(log, c.system.channels, c.proposal_options, &seq, c.peo.stride, &misses);
+  const ProposalRecording pr =
+      c.rerun_proposals ? rerun_pr : readProposalRecording(log, c.system.channels);
+  const ProposalScores sc = scoreProposals(pr, seq, c.peo);
+  if (c.draw_frames > 0) {
+    const fs::path d = out / "proposals" / name;
+    fs::create_directories(d);
+    drawProposalFrames(pr, seq, d.string(), c.peo.stride, c.draw_frames, 20);
+  }
+  if (c.dump_proposals) writeProposalBoxes(pr, (out / "proposal_boxes" / (name + ".csv")).string());
+  nlohmann::json p = proposalSection(sc, (out / "plots" / (name + "_proposals.png")).string());
+  p["misses"] = missesSection(misses);
+  (*report)["sequences"][name]["proposals"] = p;
+  if (isSyntheticSequence(seq)) {
+    mergeScores(&totals->proposals, sc);
+    mergeMisses(&totals->misses, misses);
+    totals->any_proposals = true;
+  }
+  spdlog::info("{}: proposals recall {:.1f}% at IoU 0.5 ({:.1f}% at 0.7), {} boxes per frame", name,
+               p.value("recall_iou50", 0.0), p.value("recall_iou70", 0.0),
+               p.value("boxes_per_frame", 0.0));
+}
+
+// Runs the pipeline on one sequence folder (or reads its recording) and scores every stage into
+// report["sequences"][name]; a synthetic sequence's figures also go to *totals. False when the run
+// or the scoring failed (the section says why).
+bool evaluateSequence(const std::string& dir, const EvalContext& c, nlohmann::json* report,
+                      SuiteTotals* totals) {
+  const std::string name = fs::path(dir).filename().string();
+  const fs::path out(c.out_dir);
+  nlohmann::json section;
+  bool ok = true;
+  try {
+    const SequenceFolder seq = SequenceFolder::open(dir);
+    SlamRecording run;
+    const std::string log = (out / "logs" / (name + ".lcm")).string();
+    bool have_proposals = c.rerun_proposals;
+    if (c.from_logs) {
+      run = readSlamRecording(log, c.system.channels);
+      have_proposals = true;
+    } else if (c.offline) {
+      run = runSlamOffline(seq, c.slam_options, c.verbose);
+    } else {
+      spdlog::info("{}: running the pipeline, recording {}", name, log);
+      PipelineRunOptions po = c.pipeline;
+      po.objectmap_dir = (out / "objectmap" / name).string();
+      fs::remove_all(po.objectmap_dir);
+      const PipelineRun pr = runPipeline(dir, log, c.system, po);
+      section["pipeline_stages"] = pr.stages;
+      for (const auto& st : pr.stages) have_proposals = have_proposals || st == "proposals";
+      if (!pr.ok) {
+        section["pipeline_error"] = pr.error;
+        spdlog::error("{}: {}", name, pr.error);
+        ok = false;
+      }
+      run = readSlamRecording(log, c.system.channels);
+    }
+    SlamEvalOptions eo;
+    eo.plot_path = (out / "plots" / (name + "_trajectory.png")).string();
+    nlohmann::json slam = evaluateSlam(run, seq, eo);
+    for (auto it = slam.begin(); it != slam.end(); ++it) section[it.key()] = it.value();
+    if (isSyntheticSequence(seq)) {
+      totals->slam.push_back(slam);
+      totals->scenes.push_back({name, dir});
+    }
+    spdlog::info("{}: tracked {}%, ATE {} m ({}% of path), {} maps", name,
+                 slam.value("tracked_pct", 0.0), slam.value("ate_rmse", 0.0),
+                 slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
+    if (have_proposals && !c.offline && seq.hasBoxes())
+      proposalsOfSequence(name, seq, log, c, report, totals);
+    if (!c.offline) {
+      const RecognitionResult res = recognitionSections(
+          name, seq, log, c.system.channels, c.objectmap_options ? &*c.objectmap_options : nullptr,
+          c.out_dir, c.dump_boxes, (*report)["sequences"][name]);
+      if (!res.classes.empty() && isSyntheticSequence(seq)) {
+        mergeRecognition(&totals->single, res.single);
+        mergeRecognition(&totals->online, res.online);
+        mergeRecognition(&totals->final, res.final);
+        totals->any_recognition = true;
+      }
+    }
+  } catch (const std::exception& e) {
+    section["error"] = e.what();
+    spdlog::error("{}: {}", name, e.what());
+    ok = false;
+  }
+  (*report)["sequences"][name]["slam"] = section;
+  return ok;
+}
+
+// report["overall"]: the synthetic sequences pooled, and the spread over scenes.
+void addOverall(const SuiteTotals& t, const std::string& out_dir, nlohmann::json* report) {
+  const fs::path plots = fs::path(out_dir) / "plots";
+  nlohmann::json overall = nlohmann::json::object();
+  if (!t.slam.empty()) overall["slam"] = summarizeSlam(t.slam);
+  if (t.any_proposals) {
+    overall["proposals"] = proposalSection(t.proposals, (plots / "suite_proposals.png").string());
+    overall["proposals"]["misses"] = missesSection(t.misses);
+  }
+  if (t.any_recognition) {
+    overall["single_view"] = recognitionSection(t.single);
+    overall["multi_view_online"] = recognitionSection(t.online);
+    overall["multi_view_final"] = recognitionSection(t.final);
+    const std::string plot = (plots / "suite_pr.png").string();
+    drawPrCurves(t.single, t.online, t.final,
+                 "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
+    overall["single_view"]["plot"] = overall["multi_view_online"]["plot"] =
+        overall["multi_view_final"]["plot"] = plot;
+  }
+  if (t.scenes.size() >= 2) {
+    nlohmann::json& spread = overall["per_scene"];
+    spread = perSceneSection(*report, t.scenes, (plots / "per_scene_recall.png").string());
+    for (const char* key :
+         {"recall_iou50", "tracked_pct", "single_view_mAP", "multi_view_final_mAP"})
+      if (spread.contains(key) && spread[key].contains("worst"))
+        spdlog::info("per scene {}: median {:.1f}, worst {:.1f} ({})", key,
+                     spread[key]["median"].get<double>(), spread[key]["min"].get<double>(),
+                     spread[key]["worst"]["config"].get<std::string>());
+  }
+  if (!overall.empty()) (*report)["overall"] = overall;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "slamaware-eval: the pipeline on sequence folders, lockstep, scored against ground truth"};
-  std::string out, out_dir = "build/eval", system_path, slam_config, stages, log_level = "info";
+  std::string out, system_path, slam_config, stages, log_level = "info";
   std::vector<std::string> sequences;
   std::string proposals_config, objectmap_config;
-  int draw_frames = 0;
-  bool dump_boxes = false, dump_proposals = false;
-  bool offline = false, verbose = false, from_logs = false;
-  ProposalEvalOptions peo;
-  PipelineRunOptions pipeline;
+  EvalContext c;
+  c.out_dir = "build/eval";
+  PipelineRunOptions& pipeline = c.pipeline;
   pipeline.bin_dir = selfDir();
   app.add_option("sequences", sequences, "sequence folders")->required();
   app.add_option("--out", out, "JSON fragment to write")->required();
-  app.add_option("--out-dir", out_dir, "folder for recordings and plots");
+  app.add_option("--out-dir", c.out_dir, "folder for recordings and plots");
   app.add_option("--system", system_path, "system.yaml (bus URL, channels)");
   app.add_option("--lcm-url", pipeline.lcm_url, "bus URL (default: the system's)");
   app.add_option("--config-dir", pipeline.config_dir, "folder of the processes' <name>.yaml");
   app.add_option("--model", pipeline.recognizer_model, "recognizer model (default: config/recognizer.yaml's)");
   app.add_option("--stages", stages, "comma-separated stages to run (default: every built stage)");
-  app.add_flag("--offline", offline, "run the SLAM library in-process instead of the processes");
+  app.add_flag("--offline", c.offline, "run the SLAM library in-process instead of the processes");
   app.add_option("--slam-config", slam_config,
                  "offline: SLAM options file (default: <config-dir>/slam.yaml)");
-  app.add_flag("--verbose", verbose, "offline: a line per frame");
-  app.add_flag("--from-logs", from_logs, "score the recordings already in <out-dir>/logs (no run)");
+  app.add_flag("--verbose", c.verbose, "offline: a line per frame");
+  app.add_flag("--from-logs", c.from_logs,
+               "score the recordings already in <out-dir>/logs (no run)");
   app.add_option("--proposals-config", proposals_config,
                  "re-run the proposals stage on the recording with this options file");
   app.add_option("--objectmap-config", objectmap_config,
                  "re-run the object map on the recording with this options file (as the lockstep node) and "
                  "score its outputs instead of the recorded ones");
-  app.add_option("--draw-proposals", draw_frames,
-                 "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
-  app.add_option("--baseline-frames", peo.baseline_frames,
+  app.add_option(
+      "--draw-proposals", c.draw_frames,
+      "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");
+  app.add_option("--baseline-frames", c.peo.baseline_frames,
                  "frames per sequence for the selective-search baseline (0: none)");
-  app.add_option("--proposals-stride", peo.stride,
-                 "proposals section: every n-th frame is scored (default 5; 1 for a sparse real sequence)")
+  app.add_option(
+         "--proposals-stride", c.peo.stride,
+         "proposals section: every n-th frame is scored (default 5; 1 for a sparse real sequence)")
       ->check(CLI::PositiveNumber);
-  app.add_flag("--dump-proposals", dump_proposals,
-               "write every frame's proposal boxes to <out-dir>/proposal_boxes/<seq>.csv (slamaware-train --proposals)");
-  app.add_flag("--dump-boxes", dump_boxes,
-               "write every labelled box with its single-view and multi-view scores to <out-dir>/boxes/<seq>.csv");
+  app.add_flag("--dump-proposals", c.dump_proposals,
+               "write every frame's proposal boxes to <out-dir>/proposal_boxes/<seq>.csv "
+               "(slamaware-train --proposals)");
+  app.add_flag("--dump-boxes", c.dump_boxes,
+               "write every labelled box with its single-view and multi-view scores to "
+               "<out-dir>/boxes/<seq>.csv");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [eval] [%^%l%$] %v");
 
   try {
-    const SystemConfig system = loadSystemConfig(system_path, false);
-    if (pipeline.lcm_url.empty()) pipeline.lcm_url = system.bus.url;
+    c.system = loadSystemConfig(system_path, false);
+    if (pipeline.lcm_url.empty()) pipeline.lcm_url = c.system.bus.url;
     pipeline.system_path = system_path;
     pipeline.only = stageList(stages);
-    fs::create_directories(fs::path(out_dir) / "plots");
-    fs::create_directories(fs::path(out_dir) / "logs");
-    SlamOptions slam_options;
-    if (offline) {
+    fs::create_directories(fs::path(c.out_dir) / "plots");
+    fs::create_directories(fs::path(c.out_dir) / "logs");
+    if (c.offline) {
       if (slam_config.empty() && fs::exists(fs::path(pipeline.config_dir) / "slam.yaml"))
         slam_config = (fs::path(pipeline.config_dir) / "slam.yaml").string();
-      slam_options = loadConfig<SlamOptions>(slam_config, "slam", false);
+      c.slam_options = loadConfig<SlamOptions>(slam_config, "slam", false);
     }
-
-    std::optional<objectmap::ObjectMapOptions> objectmap_options;
     if (!objectmap_config.empty())
-      objectmap_options =
+      c.objectmap_options =
           loadConfig<objectmap::ObjectMapOptions>(objectmap_config, "objectmap", false);
-    RecognitionScores suite_single, suite_online, suite_final;
-    bool any_recognition = false;
-
-    nlohmann::json report = nlohmann::json::object();
-    std::vector<nlohmann::json> synthetic;
-    std::vector<SceneFolder> synthetic_scenes;
-    ProposalScores synthetic_proposals;
-    bool any_proposals = false;
-    const bool rerun = !proposals_config.empty();
+    c.rerun_proposals = !proposals_config.empty();
     // The options the recorded run used (to find why boxes were missed), or the ones to try.
     std::string proposals_path = proposals_config;
     if (proposals_path.empty() && fs::exists(fs::path(pipeline.config_dir) / "proposals.yaml"))
       proposals_path = (fs::path(pipeline.config_dir) / "proposals.yaml").string();
-    const proposals::ProposalOptions proposal_options =
-        loadConfig<proposals::ProposalOptions>(proposals_path, "proposals", false);
-    ProposalMisses synthetic_misses;
+    c.proposal_options = loadConfig<proposals::ProposalOptions>(proposals_path, "proposals", false);
+
+    nlohmann::json report = nlohmann::json::object();
+    SuiteTotals totals;
     int failures = 0;
-    for (const auto& dir : sequences) {
-      const std::string name = fs::path(dir).filename().string();
-      nlohmann::json section;
-      try {
-        const SequenceFolder seq = SequenceFolder::open(dir);
-        SlamRecording run;
-        const std::string log = (fs::path(out_dir) / "logs" / (name + ".lcm")).string();
-        bool have_proposals = rerun;
-        if (from_logs) {
-          run = readSlamRecording(log, system.channels);
-          have_proposals = true;
-        } else if (offline) {
-          run = runSlamOffline(seq, slam_options, verbose);
-        } else {
-          spdlog::info("{}: running the pipeline, recording {}", name, log);
-          PipelineRunOptions po = pipeline;
-          po.objectmap_dir = (fs::path(out_dir) / "objectmap" / name).string();
-          fs::remove_all(po.objectmap_dir);
-          const PipelineRun pr = runPipeline(dir, log, system, po);
-          section["pipeline_stages"] = pr.stages;
-          for (const auto& st : pr.stages) have_proposals = have_proposals || st == "proposals";
-          if (!pr.ok) {
-            section["pipeline_error"] = pr.error;
-            spdlog::error("{}: {}", name, pr.error);
-            ++failures;
-          }
-          run = readSlamRecording(log, system.channels);
-        }
-        SlamEvalOptions eo;
-        eo.plot_path = (fs::path(out_dir) / "plots" / (name + "_trajectory.png")).string();
-        nlohmann::json slam = evaluateSlam(run, seq, eo);
-        for (auto it = slam.begin(); it != slam.end(); ++it) section[it.key()] = it.value();
-        if (isSyntheticSequence(seq)) {
-          synthetic.push_back(slam);
-          synthetic_scenes.push_back({name, dir});
-        }
-        spdlog::info("{}: tracked {}%, ATE {} m ({}% of path), {} maps", name,
-                     slam.value("tracked_pct", 0.0), slam.value("ate_rmse", 0.0),
-                     slam.value("ate_rmse_pct_of_path", 0.0), slam.value("maps", 0));
-        if (have_proposals && !offline && seq.hasBoxes()) {
-          ProposalMisses misses;
-          const ProposalRecording rerun_pr =
-              rerunProposals(log, system.channels, proposal_options, &seq, peo.stride, &misses);
-          const ProposalRecording pr = rerun ? rerun_pr : readProposalRecording(log, system.channels);
-          const ProposalScores sc = scoreProposals(pr, seq, peo);
-          if (draw_frames > 0) {
-            const fs::path d = fs::path(out_dir) / "proposals" / name;
-            fs::create_directories(d);
-            drawProposalFrames(pr, seq, d.string(), peo.stride, draw_frames, 20);
-          }
-          if (dump_proposals) writeProposalBoxes(pr, (fs::path(out_dir) / "proposal_boxes" / (name + ".csv")).string());
-          nlohmann::json p = proposalSection(sc, (fs::path(out_dir) / "plots" / (name + "_proposals.png")).string());
-          p["misses"] = missesSection(misses);
-          report["sequences"][name]["proposals"] = p;
-          if (isSyntheticSequence(seq)) {
-            mergeScores(&synthetic_proposals, sc);
-            mergeMisses(&synthetic_misses, misses);
-            any_proposals = true;
-          }
-          spdlog::info("{}: proposals recall {:.1f}% at IoU 0.5 ({:.1f}% at 0.7), {} boxes per frame", name,
-                       p.value("recall_iou50", 0.0), p.value("recall_iou70", 0.0), p.value("boxes_per_frame", 0.0));
-        }
-        if (!offline) {
-          const RecognitionResult res =
-              recognitionSections(name, seq, log, system.channels, objectmap_options ? &*objectmap_options : nullptr,
-                                  out_dir, dump_boxes, report["sequences"][name]);
-          if (!res.classes.empty() && isSyntheticSequence(seq)) {
-            mergeRecognition(&suite_single, res.single);
-            mergeRecognition(&suite_online, res.online);
-            mergeRecognition(&suite_final, res.final);
-            any_recognition = true;
-          }
-        }
-      } catch (const std::exception& e) {
-        section["error"] = e.what();
-        spdlog::error("{}: {}", name, e.what());
-        ++failures;
-      }
-      report["sequences"][name]["slam"] = section;
-    }
-    if (!synthetic.empty()) report["overall"]["slam"] = summarizeSlam(synthetic);
-    if (any_proposals) {
-      report["overall"]["proposals"] =
-          proposalSection(synthetic_proposals, (fs::path(out_dir) / "plots" / "suite_proposals.png").string());
-      report["overall"]["proposals"]["misses"] = missesSection(synthetic_misses);
-    }
-    if (any_recognition) {
-      report["overall"]["single_view"] = recognitionSection(suite_single);
-      report["overall"]["multi_view_online"] = recognitionSection(suite_online);
-      report["overall"]["multi_view_final"] = recognitionSection(suite_final);
-      const std::string plot = (fs::path(out_dir) / "plots" / "suite_pr.png").string();
-      drawPrCurves(suite_single, suite_online, suite_final,
-                   "synthetic suite: precision-recall at IoU 0.5, every 5th frame", plot);
-      report["overall"]["single_view"]["plot"] = report["overall"]["multi_view_online"]["plot"] =
-          report["overall"]["multi_view_final"]["plot"] = plot;
-    }
-    if (synthetic_scenes.size() >= 2) {
-      nlohmann::json& spread = report["overall"]["per_scene"];
-      spread = perSceneSection(report, synthetic_scenes,
-                               (fs::path(out_dir) / "plots" / "per_scene_recall.png").string());
-      for (const char* key : {"recall_iou50", "tracked_pct", "single_view_mAP", "multi_view_final_mAP"})
-        if (spread.contains(key) && spread[key].contains("worst"))
-          spdlog::info("per scene {}: median {:.1f}, worst {:.1f} ({})", key, spread[key]["median"].get<double>(),
-                       spread[key]["min"].get<double>(), spread[key]["worst"]["config"].get<std::string>());
-    }
+    for (const auto& dir : sequences)
+      failures += evaluateSequence(dir, c, &report, &totals) ? 0 : 1;
+    addOverall(totals, c.out_dir, &report);
     std::ofstream(out) << report.dump(2) << "\n";
     return failures ? 1 : 0;
   } catch (const std::exception& e) {

@@ -5,6 +5,7 @@
 // the heartbeat timeout, and once the object map's newest save damaged while the map process is
 // stopped. Writes report.json, report.md and rss.png (tools/soak/README.md).
 #include <signal.h>
+#include <yaml-cpp/yaml.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -12,14 +13,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
-#include <numeric>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <regex>
 #include <set>
-#include <yaml-cpp/yaml.h>
 
 #include "common/bus/bus.h"
 #include "common/bus/frame_stamp.h"
@@ -124,6 +125,283 @@ std::string newestSave(const std::string& dir, const std::string& skip = "") {
   return best;
 }
 
+// What the soak sees on the bus: the processes' rows of PROC_STATUS, frames, latency camera ->
+// DETECTIONS, the newest OBJECT_MAP. Times in s since t0.
+struct Watch {
+  double t0 = now_s();
+  std::map<std::string, proc_info_t> procs;  // latest PROC_STATUS row per process
+  std::map<std::string, std::vector<Sample>> samples;
+  std::map<int32_t, double> camera_at;             // seq -> wall time of reception
+  std::vector<std::pair<double, double>> latency;  // (t, s) camera -> DETECTIONS
+  int64_t camera_frames = 0, poses = 0, detections = 0, fused = 0, max_seq = -1;
+  std::optional<object_map_t> last_map;
+  double last_map_t = -1;
+
+  double t() const { return now_s() - t0; }
+
+  void subscribe(Bus& bus, const SystemConfig& sys) {
+    const Channels& ch = sys.channels;
+    bus.subscribe<proc_status_t>(ch.proc_status, [this](const proc_status_t& s) {
+      for (const auto& p : s.procs) {
+        procs[p.name] = p;
+        auto& v = samples[p.name];
+        if (v.empty() || t() - v.back().t >= 0.9) v.push_back({t(), p.rss_kb, p.cpu_pct});
+      }
+    });
+    bus.subscribeRaw(
+        ch.camera,
+        [this](const Bus::RawMessage& m) {
+          if (auto st = peekFrameStamp(m.data, m.size)) {
+            camera_at[st->seq] = now_s();
+            max_seq = std::max<int64_t>(max_seq, st->seq);
+            ++camera_frames;
+          }
+        },
+        static_cast<size_t>(sys.bus.max_image_bytes));
+    bus.subscribeRaw(ch.slam_pose, [this](const Bus::RawMessage&) { ++poses; });
+    bus.subscribeRaw(ch.detections, [this](const Bus::RawMessage& m) {
+      if (auto st = peekFrameStamp(m.data, m.size)) {
+        ++detections;
+        auto it = camera_at.find(st->seq);
+        if (it != camera_at.end()) latency.emplace_back(t(), now_s() - it->second);
+      }
+    });
+    bus.subscribeRaw(ch.object_detections, [this](const Bus::RawMessage&) { ++fused; });
+    bus.subscribe<object_map_t>(ch.object_map, [this](const object_map_t& m) {
+      last_map = m;
+      last_map_t = t();
+    });
+  }
+
+  /// True when `name` runs under another pid than old_pid.
+  bool running(const std::string& name, int old_pid) const {
+    auto it = procs.find(name);
+    return it != procs.end() && it->second.state == proc_info_t::STATE_RUNNING &&
+           it->second.pid != old_pid && it->second.pid > 0;
+  }
+  int pidOf(const std::string& name) const { return procs.count(name) ? procs.at(name).pid : 0; }
+};
+
+// The attacks of --chaos (top of this file), one at a time: each waits until its process is back.
+class Chaos {
+ public:
+  Chaos(Bus& bus, const Channels& ch, Watch& watch, std::function<void(double)> pump, uint32_t seed,
+        double duration, std::string map_dir)
+      : bus_(bus),
+        ch_(ch),
+        watch_(watch),
+        pump_(std::move(pump)),
+        rng_(seed),
+        map_dir_(std::move(map_dir)),
+        stop_at_(duration * 0.35),
+        corrupt_at_(duration * 0.65) {
+    next_kill_ = 30 + std::uniform_real_distribution<double>(0, 10)(rng_);
+  }
+
+  /// Called between two pumps of the bus, at t s.
+  void step(double t) {
+    if (pending_)
+      checkPending(t);
+    else if (!stopped_once_ && t >= stop_at_)
+      stopProposals(t);
+    else if (!corrupted_once_ && t >= corrupt_at_)
+      damageNewestSave();
+    else if (t >= next_kill_)
+      killOne(t);
+  }
+
+  const std::vector<ChaosEvent>& events() const { return events_; }
+
+ private:
+  void checkPending(double t) {
+    ChaosEvent& e = *pending_;
+    if (watch_.running(e.process, e.old_pid)) {
+      e.back_s = t - e.t;
+      if (e.process == "objectmap" && !e.saved_objects.empty()) checkReloaded(t, &e);
+      spdlog::info("chaos: {} {} back after {:.2f} s", e.kind, e.process, e.back_s);
+    } else if (t - e.t > e.limit_s + 30) {
+      spdlog::warn("chaos: {} {} not back after {:.0f} s", e.kind, e.process, t - e.t);
+    } else {
+      return;
+    }
+    events_.push_back(e);
+    pending_.reset();
+  }
+
+  // Its first OBJECT_MAP after the restart must hold every object of the save it loaded (its
+  // heartbeat goes on while it loads: the map may come some seconds later).
+  void checkReloaded(double since, ChaosEvent* e) {
+    while (watch_.t() < since + 60 && !(watch_.last_map && watch_.last_map_t > since)) pump_(0.05);
+    if (!(watch_.last_map && watch_.last_map_t > since)) return;
+    std::set<int32_t> now_ids;
+    for (const auto& o : watch_.last_map->objects) now_ids.insert(o.id);
+    for (int32_t id : e->saved_objects)
+      if (!now_ids.count(id)) e->lost_objects.insert(id);
+    e->map_checked = true;
+  }
+
+  void stopProposals(double t) {
+    stopped_once_ = true;
+    ChaosEvent e;
+    e.kind = "stop", e.process = "proposals", e.t = t, e.old_pid = watch_.pidOf("proposals");
+    if (e.old_pid > 0 && kill(e.old_pid, SIGSTOP) == 0) {
+      e.limit_s = 10 + 2;  // heartbeat_timeout_s of config/system.yaml + 2 s
+      e.detail = "SIGSTOP; the supervisor must find it hung and restart it";
+      spdlog::info("chaos: SIGSTOP proposals (pid {})", e.old_pid);
+      pending_ = e;
+    }
+  }
+
+  void command(const std::string& target, int8_t what) {
+    proc_command_t c{};
+    c.utime = wallUtime();
+    c.target = target;
+    c.command = what;
+    bus_.publish(ch_.proc_command, c);
+  }
+
+  void damageNewestSave() {
+    corrupted_once_ = true;
+    ChaosEvent e;
+    e.kind = "corrupt", e.process = "objectmap", e.old_pid = watch_.pidOf("objectmap");
+    e.limit_s = 2;
+    command("objectmap", proc_command_t::COMMAND_STOP);
+    const double asked = now_s();
+    while (now_s() - asked < 15 && watch_.procs["objectmap"].state != proc_info_t::STATE_STOPPED)
+      pump_(0.05);
+    const std::string newest = newestSave(map_dir_);
+    const std::string previous = newestSave(map_dir_, newest);
+    if (!newest.empty()) {
+      std::fstream f(newest, std::ios::in | std::ios::out | std::ios::binary);
+      f.seekp(static_cast<std::streamoff>(fs::file_size(newest) / 2));
+      f.put('#');
+      e.saved_objects = savedObjects(previous);
+      e.detail = "damaged " + fs::path(newest).filename().string() + " while stopped; must load " +
+                 fs::path(previous).filename().string();
+    } else {
+      e.detail = "no save to damage yet";
+    }
+    spdlog::info("chaos: {}", e.detail);
+    command("objectmap", proc_command_t::COMMAND_START);
+    e.t = watch_.t();
+    pending_ = e;
+  }
+
+  void killOne(double t) {
+    static const std::vector<std::string> pipeline = {"slam", "proposals", "recognizer",
+                                                      "objectmap"};
+    const std::string name = pipeline[rng_() % pipeline.size()];
+    ChaosEvent e;
+    e.kind = "kill", e.process = name, e.t = t, e.old_pid = watch_.pidOf(name);
+    if (name == "objectmap") e.saved_objects = savedObjects(newestSave(map_dir_));
+    if (e.old_pid > 0 && kill(e.old_pid, SIGKILL) == 0) {
+      e.limit_s = 2;
+      spdlog::info("chaos: SIGKILL {} (pid {})", name, e.old_pid);
+      pending_ = e;
+    }
+    next_kill_ = t + std::uniform_real_distribution<double>(20, 40)(rng_);
+  }
+
+  Bus& bus_;
+  const Channels& ch_;
+  Watch& watch_;
+  std::function<void(double)> pump_;
+  std::mt19937 rng_;
+  std::string map_dir_;
+  double stop_at_, corrupt_at_, next_kill_ = 0;
+  bool stopped_once_ = false, corrupted_once_ = false;
+  std::optional<ChaosEvent> pending_;  // waiting for its process to come back
+  std::vector<ChaosEvent> events_;
+};
+
+// Per process: RSS after the first loop and at the end, CPU, restarts.
+json processFigures(const Watch& w, const std::map<std::string, proc_info_t>& final_procs,
+                    double base_from, double duration) {
+  json out = json::object();
+  for (const auto& [name, v] : w.samples) {
+    auto median_between = [&](double a, double b) {
+      std::vector<double> r;
+      for (const auto& s : v)
+        if (s.t >= a && s.t < b) r.push_back(static_cast<double>(s.rss_kb) / 1024.0);
+      return r.empty() ? 0.0 : median(r);
+    };
+    const double after_first = median_between(base_from, base_from + 30);
+    const double at_end = median_between(duration - 30, duration + 1);
+    std::vector<double> cpu;
+    for (const auto& s : v)
+      if (s.t >= base_from) cpu.push_back(s.cpu_pct);
+    json p;
+    p["rss_mb_after_first_loop"] = after_first;
+    p["rss_mb_at_end"] = at_end;
+    p["rss_growth_pct"] = after_first > 0 ? 100.0 * (at_end - after_first) / after_first : 0.0;
+    p["cpu_pct_mean"] = cpu.empty() ? 0.0
+                                    : std::accumulate(cpu.begin(), cpu.end(), 0.0) /
+                                          static_cast<double>(cpu.size());
+    p["restarts"] = final_procs.count(name) ? final_procs.at(name).restarts : -1;
+    out[name] = p;
+  }
+  return out;
+}
+
+// Latency p95 and median per window, and the spread of the p95 of the whole windows.
+void addLatencyWindows(const Watch& w, double window, double duration, json* report) {
+  std::vector<double> p95s;
+  for (double a = 0; a < duration; a += window) {
+    std::vector<double> l;
+    for (const auto& [t, s] : w.latency)
+      if (t >= a && t < a + window) l.push_back(s * 1000);
+    if (l.empty()) continue;
+    const double p95 = percentile(l, 0.95);
+    (*report)["latency_windows"].push_back(
+        {{"from_s", a}, {"frames", l.size()}, {"p95_ms", p95}, {"median_ms", percentile(l, 0.5)}});
+    if (a + window <= duration + 1) p95s.push_back(p95);
+  }
+  const double spread = p95s.size() > 1 ? *std::max_element(p95s.begin(), p95s.end()) /
+                                                  *std::min_element(p95s.begin(), p95s.end()) -
+                                              1
+                                        : 0;
+  (*report)["latency_p95_spread_pct"] = 100 * spread;
+}
+
+json eventsJson(const std::vector<ChaosEvent>& events) {
+  json out = json::array();
+  for (const auto& e : events) {
+    json j = {{"kind", e.kind},     {"process", e.process}, {"at_s", e.t},
+              {"back_s", e.back_s}, {"limit_s", e.limit_s}, {"detail", e.detail}};
+    if (!e.saved_objects.empty()) {
+      j["saved_objects"] = e.saved_objects.size();
+      j["map_checked"] = e.map_checked;
+      j["lost_objects"] = std::vector<int32_t>(e.lost_objects.begin(), e.lost_objects.end());
+    }
+    out.push_back(j);
+  }
+  return out;
+}
+
+// RSS over time, one curve per process.
+void plotRss(const Watch& w, double duration, const std::string& path) {
+  double max_mb = 1;
+  for (const auto& [name, v] : w.samples)
+    for (const auto& s : v) max_mb = std::max(max_mb, static_cast<double>(s.rss_kb) / 1024.0);
+  cv::Mat canvas(480, 900, CV_8UC3, cv::Scalar(255, 255, 255));
+  PlotAxis x{0, duration / 60, false, {}, "minutes"},
+      y{0, max_mb * 1.1, false, {}, "resident memory, MB"};
+  for (double m = 0; m <= duration / 60; m += std::max(1.0, std::round(duration / 600)))
+    x.ticks.push_back(m);
+  for (double m = 0; m <= max_mb * 1.1; m += std::max(50.0, std::round(max_mb / 500) * 100))
+    y.ticks.push_back(m);
+  PlotPanel panel(canvas, cv::Rect(0, 0, 900, 480), x, y, "RSS per process (PROC_STATUS, 1 Hz)");
+  const cv::Scalar colours[] = {{200, 80, 0},  {0, 140, 255},  {60, 160, 60},
+                                {40, 40, 220}, {160, 60, 160}, {90, 90, 90}};
+  int c = 0;
+  for (const auto& [name, v] : w.samples) {
+    std::vector<cv::Point2d> pts;
+    for (const auto& s : v) pts.emplace_back(s.t / 60, static_cast<double>(s.rss_kb) / 1024.0);
+    panel.curve(pts, colours[c++ % 6], name);
+  }
+  writeImage(path, canvas);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -149,250 +427,61 @@ int main(int argc, char** argv) {
     const int64_t loop_frames = framesOfSource(source);
     if (loop_frames <= 0) throw std::runtime_error(source + ": no camera frames");
     const SystemConfig sys = loadSystemConfig(system, false);
-    const Channels& ch = sys.channels;
     const std::string soak_system = writeSoakSystem(system, out_dir);
     const std::string map_dir = out_dir + "/objectmap";
     setenv("SLAMAWARE_SOURCE", source.c_str(), 1);
     setenv("SLAMAWARE_MAP_DIR", map_dir.c_str(), 1);
 
     Bus bus(sys.bus.url);
-    std::map<std::string, proc_info_t> procs;  // latest PROC_STATUS row per process
-    std::map<std::string, std::vector<Sample>> samples;
-    std::map<int32_t, double> camera_at;        // seq -> wall time of reception
-    std::vector<std::pair<double, double>> latency;  // (t, s) camera -> DETECTIONS
-    int64_t camera_frames = 0, poses = 0, detections = 0, fused = 0, max_seq = -1;
-    std::optional<object_map_t> last_map;
-    double last_map_t = -1;
-    const double t0 = now_s();
-    bus.subscribe<proc_status_t>(ch.proc_status, [&](const proc_status_t& s) {
-      const double t = now_s() - t0;
-      for (const auto& p : s.procs) {
-        procs[p.name] = p;
-        auto& v = samples[p.name];
-        if (v.empty() || t - v.back().t >= 0.9) v.push_back({t, p.rss_kb, p.cpu_pct});
-      }
-    });
-    bus.subscribeRaw(ch.camera, [&](const Bus::RawMessage& m) {
-      if (auto st = peekFrameStamp(m.data, m.size)) {
-        camera_at[st->seq] = now_s();
-        max_seq = std::max<int64_t>(max_seq, st->seq);
-        ++camera_frames;
-      }
-    }, static_cast<size_t>(sys.bus.max_image_bytes));
-    bus.subscribeRaw(ch.slam_pose, [&](const Bus::RawMessage&) { ++poses; });
-    bus.subscribeRaw(ch.detections, [&](const Bus::RawMessage& m) {
-      if (auto st = peekFrameStamp(m.data, m.size)) {
-        ++detections;
-        auto it = camera_at.find(st->seq);
-        if (it != camera_at.end()) latency.emplace_back(now_s() - t0, now_s() - it->second);
-      }
-    });
-    bus.subscribeRaw(ch.object_detections, [&](const Bus::RawMessage&) { ++fused; });
-    bus.subscribe<object_map_t>(ch.object_map, [&](const object_map_t& m) {
-      last_map = m;
-      last_map_t = now_s() - t0;
-    });
+    Watch watch;
+    watch.subscribe(bus, sys);
     auto pump = [&](double seconds) {
       const double end = now_s() + seconds;
       while (now_s() < end) bus.handle(20);
-      while (camera_at.size() > 2000) camera_at.erase(camera_at.begin());
-    };
-    auto command = [&](const std::string& target, int8_t what) {
-      proc_command_t c{};
-      c.utime = wallUtime();
-      c.target = target;
-      c.command = what;
-      bus.publish(ch.proc_command, c);
+      while (watch.camera_at.size() > 2000) watch.camera_at.erase(watch.camera_at.begin());
     };
 
     spdlog::info("soak{}: {} min on {} ({} frames per loop), reports in {}", chaos ? " with chaos" : "", minutes,
                  source, loop_frames, out_dir);
-    ChildProcess supervisor({bin_dir + "/slamaware-supervisor", "--system", soak_system, "--log-level", "warn"},
-                            out_dir + "/supervisor.log");
-    const std::vector<std::string> pipeline = {"slam", "proposals", "recognizer", "objectmap"};
-    std::mt19937 rng(seed);
-    std::vector<ChaosEvent> events;
+    ChildProcess supervisor(
+        {bin_dir + "/slamaware-supervisor", "--system", soak_system, "--log-level", "warn"},
+        out_dir + "/supervisor.log");
     const double duration = minutes * 60;
-    double next_kill = 30 + std::uniform_real_distribution<double>(0, 10)(rng);
-    const double stop_at = duration * 0.35, corrupt_at = duration * 0.65;
-    bool stopped_once = false, corrupted_once = false;
+    Chaos attacks(bus, sys.channels, watch, pump, seed, duration, map_dir);
     double first_loop_end = -1;
-    std::optional<ChaosEvent> pending;  // waiting for its process to come back
-
-    auto running = [&](const std::string& name, int old_pid) {
-      auto it = procs.find(name);
-      return it != procs.end() && it->second.state == proc_info_t::STATE_RUNNING && it->second.pid != old_pid &&
-             it->second.pid > 0;
-    };
-    while (now_s() - t0 < duration) {
+    while (watch.t() < duration) {
       pump(0.05);
-      const double t = now_s() - t0;
-      if (first_loop_end < 0 && max_seq >= loop_frames) first_loop_end = t;
-      if (!chaos) continue;
-      if (pending) {
-        if (running(pending->process, pending->old_pid)) {
-          pending->back_s = t - pending->t;
-          if (pending->process == "objectmap" && !pending->saved_objects.empty()) {
-            // Its first OBJECT_MAP after the restart must hold every object of the save it loaded
-            // (its heartbeat goes on while it loads: the map may come some seconds later).
-            const double since = t;
-            while (now_s() - t0 < since + 60 && !(last_map && last_map_t > since)) pump(0.05);
-            if (last_map && last_map_t > since) {
-              std::set<int32_t> now_ids;
-              for (const auto& o : last_map->objects) now_ids.insert(o.id);
-              for (int32_t id : pending->saved_objects)
-                if (!now_ids.count(id)) pending->lost_objects.insert(id);
-              pending->map_checked = true;
-            }
-          }
-          spdlog::info("chaos: {} {} back after {:.2f} s", pending->kind, pending->process, pending->back_s);
-          events.push_back(*pending);
-          pending.reset();
-        } else if (t - pending->t > pending->limit_s + 30) {
-          spdlog::warn("chaos: {} {} not back after {:.0f} s", pending->kind, pending->process, t - pending->t);
-          events.push_back(*pending);
-          pending.reset();
-        }
-        continue;
-      }
-      auto pidOf = [&](const std::string& name) { return procs.count(name) ? procs[name].pid : 0; };
-      if (!stopped_once && t >= stop_at) {
-        ChaosEvent e;
-        e.kind = "stop", e.process = "proposals", e.t = t, e.old_pid = pidOf("proposals");
-        if (e.old_pid > 0 && kill(e.old_pid, SIGSTOP) == 0) {
-          e.limit_s = 10 + 2;  // heartbeat_timeout_s of config/system.yaml + 2 s
-          e.detail = "SIGSTOP; the supervisor must find it hung and restart it";
-          spdlog::info("chaos: SIGSTOP proposals (pid {})", e.old_pid);
-          pending = e;
-        }
-        stopped_once = true;
-      } else if (!corrupted_once && t >= corrupt_at) {
-        corrupted_once = true;
-        const int old_pid = pidOf("objectmap");
-        command("objectmap", proc_command_t::COMMAND_STOP);
-        const double asked = now_s();
-        while (now_s() - asked < 15 && procs["objectmap"].state != proc_info_t::STATE_STOPPED) pump(0.05);
-        const std::string newest = newestSave(map_dir);
-        const std::string previous = newestSave(map_dir, newest);
-        ChaosEvent e;
-        e.kind = "corrupt", e.process = "objectmap", e.old_pid = old_pid;
-        e.limit_s = 2;
-        if (!newest.empty()) {
-          std::fstream f(newest, std::ios::in | std::ios::out | std::ios::binary);
-          f.seekp(static_cast<std::streamoff>(fs::file_size(newest) / 2));
-          f.put('#');
-          e.saved_objects = savedObjects(previous);
-          e.detail = "damaged " + fs::path(newest).filename().string() + " while stopped; must load " +
-                     fs::path(previous).filename().string();
-        } else {
-          e.detail = "no save to damage yet";
-        }
-        spdlog::info("chaos: {}", e.detail);
-        command("objectmap", proc_command_t::COMMAND_START);
-        e.t = now_s() - t0;
-        pending = e;
-      } else if (t >= next_kill) {
-        const std::string name = pipeline[rng() % pipeline.size()];
-        ChaosEvent e;
-        e.kind = "kill", e.process = name, e.t = t, e.old_pid = pidOf(name);
-        if (name == "objectmap") e.saved_objects = savedObjects(newestSave(map_dir));
-        if (e.old_pid > 0 && kill(e.old_pid, SIGKILL) == 0) {
-          e.limit_s = 2;
-          spdlog::info("chaos: SIGKILL {} (pid {})", name, e.old_pid);
-          pending = e;
-        }
-        next_kill = t + std::uniform_real_distribution<double>(20, 40)(rng);
-      }
+      const double t = watch.t();
+      if (first_loop_end < 0 && watch.max_seq >= loop_frames) first_loop_end = t;
+      if (chaos) attacks.step(t);
     }
     // Still producing detections at the end?
-    const int64_t detections_before = detections;
+    const int64_t detections_before = watch.detections;
     pump(5);
-    const int64_t detections_at_end = detections - detections_before;
-    std::map<std::string, proc_info_t> final_procs = procs;
+    const int64_t detections_at_end = watch.detections - detections_before;
+    const std::map<std::string, proc_info_t> final_procs = watch.procs;
     supervisor.stop(std::chrono::milliseconds(20000));
 
-    // Report.
     json report;
     report["minutes"] = minutes;
     report["chaos"] = chaos;
     report["source"] = source;
     report["frames_per_loop"] = loop_frames;
-    report["loops"] = static_cast<double>(max_seq + 1) / static_cast<double>(loop_frames);
+    report["loops"] = static_cast<double>(watch.max_seq + 1) / static_cast<double>(loop_frames);
     report["first_loop_end_s"] = first_loop_end;
-    report["frames"] = {{"camera", camera_frames},
-                        {"slam_pose", poses},
-                        {"detections", detections},
-                        {"object_detections", fused},
-                        {"frames_without_pose", camera_frames - poses},
-                        {"frames_without_detections", camera_frames - detections},
+    report["frames"] = {{"camera", watch.camera_frames},
+                        {"slam_pose", watch.poses},
+                        {"detections", watch.detections},
+                        {"object_detections", watch.fused},
+                        {"frames_without_pose", watch.camera_frames - watch.poses},
+                        {"frames_without_detections", watch.camera_frames - watch.detections},
                         {"detections_in_last_5_s", detections_at_end}};
-    const double base_from = first_loop_end > 0 ? first_loop_end : duration / 3;
-    for (const auto& [name, v] : samples) {
-      auto median_between = [&](double a, double b) {
-        std::vector<double> r;
-        for (const auto& s : v)
-          if (s.t >= a && s.t < b) r.push_back(static_cast<double>(s.rss_kb) / 1024.0);
-        return r.empty() ? 0.0 : median(r);
-      };
-      const double after_first = median_between(base_from, base_from + 30);
-      const double at_end = median_between(duration - 30, duration + 1);
-      std::vector<double> cpu;
-      for (const auto& s : v)
-        if (s.t >= base_from) cpu.push_back(s.cpu_pct);
-      json p;
-      p["rss_mb_after_first_loop"] = after_first;
-      p["rss_mb_at_end"] = at_end;
-      p["rss_growth_pct"] = after_first > 0 ? 100.0 * (at_end - after_first) / after_first : 0.0;
-      p["cpu_pct_mean"] = cpu.empty() ? 0.0 : std::accumulate(cpu.begin(), cpu.end(), 0.0) / static_cast<double>(cpu.size());
-      p["restarts"] = final_procs.count(name) ? final_procs[name].restarts : -1;
-      report["processes"][name] = p;
-    }
-    const double window = window_min * 60;
-    std::vector<double> p95s;
-    for (double a = 0; a < duration; a += window) {
-      std::vector<double> w;
-      for (const auto& [t, l] : latency)
-        if (t >= a && t < a + window) w.push_back(l * 1000);
-      if (w.empty()) continue;
-      const double p95 = percentile(w, 0.95);
-      report["latency_windows"].push_back({{"from_s", a}, {"frames", w.size()}, {"p95_ms", p95}, {"median_ms", percentile(w, 0.5)}});
-      if (a + window <= duration + 1) p95s.push_back(p95);
-    }
-    const double p95_spread = p95s.size() > 1 ? *std::max_element(p95s.begin(), p95s.end()) /
-                                                     *std::min_element(p95s.begin(), p95s.end()) - 1
-                                              : 0;
-    report["latency_p95_spread_pct"] = 100 * p95_spread;
-    for (const auto& e : events) {
-      json j = {{"kind", e.kind}, {"process", e.process}, {"at_s", e.t}, {"back_s", e.back_s}, {"limit_s", e.limit_s},
-                {"detail", e.detail}};
-      if (!e.saved_objects.empty()) {
-        j["saved_objects"] = e.saved_objects.size();
-        j["map_checked"] = e.map_checked;
-        j["lost_objects"] = std::vector<int32_t>(e.lost_objects.begin(), e.lost_objects.end());
-      }
-      report["chaos_events"].push_back(j);
-    }
+    report["processes"] = processFigures(
+        watch, final_procs, first_loop_end > 0 ? first_loop_end : duration / 3, duration);
+    addLatencyWindows(watch, window_min * 60, duration, &report);
+    if (!attacks.events().empty()) report["chaos_events"] = eventsJson(attacks.events());
     std::ofstream(out_dir + "/report.json") << report.dump(2) << "\n";
-
-    // RSS over time.
-    double max_mb = 1;
-    for (const auto& [name, v] : samples)
-      for (const auto& s : v) max_mb = std::max(max_mb, static_cast<double>(s.rss_kb) / 1024.0);
-    cv::Mat canvas(480, 900, CV_8UC3, cv::Scalar(255, 255, 255));
-    {
-      PlotAxis x{0, duration / 60, false, {}, "minutes"}, y{0, max_mb * 1.1, false, {}, "resident memory, MB"};
-      for (double m = 0; m <= duration / 60; m += std::max(1.0, std::round(duration / 600))) x.ticks.push_back(m);
-      for (double m = 0; m <= max_mb * 1.1; m += std::max(50.0, std::round(max_mb / 500) * 100)) y.ticks.push_back(m);
-      PlotPanel panel(canvas, cv::Rect(0, 0, 900, 480), x, y, "RSS per process (PROC_STATUS, 1 Hz)");
-      const cv::Scalar colours[] = {{200, 80, 0}, {0, 140, 255}, {60, 160, 60}, {40, 40, 220}, {160, 60, 160}, {90, 90, 90}};
-      int c = 0;
-      for (const auto& [name, v] : samples) {
-        std::vector<cv::Point2d> pts;
-        for (const auto& s : v) pts.emplace_back(s.t / 60, static_cast<double>(s.rss_kb) / 1024.0);
-        panel.curve(pts, colours[c++ % 6], name);
-      }
-    }
-    writeImage(out_dir + "/rss.png", canvas);
+    plotRss(watch, duration, out_dir + "/rss.png");
     std::printf("%s\n", report.dump(2).c_str());
     return 0;
   } catch (const std::exception& e) {
