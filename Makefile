@@ -89,7 +89,7 @@ sample: deps build
 # Retrains the shipped recognizer model models/recognizer.model (synthetic 5-class object set, the
 # photographed object sets of $(SHARED) when present, and the training scenes of config/training
 # with the boxes the proposals stage draws on them; options of config/train-model.yaml; JOBS
-# processes or threads at a time; about 52 minutes here on 2 cores without the renderings, 5.6 GB
+# processes or threads at a time; about 50 minutes here on 2 cores without the renderings, 4.5 GB
 # peak).
 model: deps build
 	FORCE=1 TRAIN_CONFIG=config/train-model.yaml PROPOSALS=1 scripts/demo-model
