@@ -1173,13 +1173,13 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                 [&](int64_t done, int64_t) { bar.update(done); });
     bar.finish();
   }
-  FrameEncoder encoder(model.params, model.pca, model.vocabulary);
   Workers workers;
   for (int w = 0; w < workerThreads(options.threads); ++w)
     workers.push_back(std::make_unique<FrameEncoder>(model.params, model.pca, model.vocabulary));
   Examples ex(model.params.vladDims(), model.params.pca_dims);
-  encodeCropExamples(d, options, encoder, &ex);
-  encodeCropsInContext(d, options, encoder, &ex);
+  // The crops on one thread: the first worker's encoder (no encoder's buffers held twice).
+  encodeCropExamples(d, options, *workers.front(), &ex);
+  encodeCropsInContext(d, options, *workers.front(), &ex);
   encodeBackgroundBoxes(d, options, workers, &ex);
   encodeSceneObjects(d, options, workers, &ex);
   ExampleSet& all = ex.all;
