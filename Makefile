@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test test-sanitize fuzz soak chaos demo teach eval eval-random bench record synth sample model spy clean
+.PHONY: all deps build test test-sanitize fuzz soak chaos demo teach eval eval-random bench record synth sample model configs spy clean
 
 all: build
 
@@ -93,6 +93,11 @@ sample: deps build
 # peak).
 model: deps build
 	FORCE=1 TRAIN_CONFIG=config/train-model.yaml PROPOSALS=1 scripts/demo-model
+
+# config/<process>.yaml written from the built-in defaults (`slamaware-<process> --print-config`);
+# tests fail when a file and the defaults differ.
+configs: build
+	for p in camera slam proposals recognizer objectmap; do $(BUILD)/bin/slamaware-$$p --print-config > config/$$p.yaml; done
 
 spy: build
 	scripts/lcm-spy

@@ -47,17 +47,29 @@ class OptionList {
     fields_.push_back(Field{prefix_ + key, Ref(&value), doc});
   }
   template <class Sub>
-  void section(const char* key, Sub& sub) {
+  void section(const char* key, Sub& sub, const char* doc = "") {
     const std::string saved = prefix_;
     prefix_ += std::string(key) + ".";
+    if (*doc) section_docs_.emplace_back(prefix_.substr(0, prefix_.size() - 1), doc);
     sub.visit(*this);
     prefix_ = saved;
   }
+  /// A remark on the options as a whole (units, conventions): a comment of the config file.
+  void note(const char* text) { notes_.emplace_back(text); }
   const std::vector<Field>& fields() const { return fields_; }
+  /// The documentation of a section by its dotted key ("" if none).
+  std::string sectionDoc(const std::string& key) const {
+    for (const auto& [k, d] : section_docs_)
+      if (k == key) return d;
+    return "";
+  }
+  const std::vector<std::string>& notes() const { return notes_; }
 
  private:
   std::string prefix_;
   std::vector<Field> fields_;
+  std::vector<std::pair<std::string, std::string>> section_docs_;
+  std::vector<std::string> notes_;
 };
 
 template <class Options>
@@ -98,6 +110,16 @@ class ConfigFile {
 std::string describeOptions(const OptionList& list);
 /// True when every field of `a` equals the same field of `b` (same struct type).
 bool optionsEqual(const OptionList& a, const OptionList& b);
+
+/// The text of config/<section>.yaml: a comment naming the process, `section:` and the options
+/// below it (describeOptions, indented). The shipped files are generated from the built-in
+/// defaults with this (`slamaware-<section> --print-config`, `make configs`), and tests compare.
+std::string configFileText(const std::string& section, const OptionList& list);
+template <class Options>
+std::string defaultConfigFileText(const std::string& section) {
+  Options defaults;
+  return configFileText(section, optionListOf(defaults));
+}
 
 /// Loads `section` of the YAML file at `path` into a default-constructed Options and logs the
 /// values. An empty path gives the defaults.

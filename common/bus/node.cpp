@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
 
 #include "common/bus/shutdown.h"
 #include "common/thread_priority.h"
@@ -21,6 +22,17 @@ void addNodeOptions(CLI::App& app, NodeArgs& args, bool with_lockstep_flag) {
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
   app.add_option("--name", args.name,
                  "process name when several of one kind run (status on <NAME>_STATUS; default: the kind)");
+}
+
+void addPrintConfigOption(CLI::App& app, std::function<std::string()> text) {
+  app.add_flag_callback(
+      "--print-config",
+      [text = std::move(text)] {
+        const std::string t = text();
+        std::fwrite(t.data(), 1, t.size(), stdout);
+        throw CLI::Success();  // CLI11_PARSE returns 0
+      },
+      "write the built-in options as a config file (what config/<kind>.yaml holds) and exit");
 }
 
 SystemConfig loadSystem(const NodeArgs& args) {

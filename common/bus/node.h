@@ -28,6 +28,10 @@ struct NodeArgs {
 /// own --lockstep (the camera, the replayer: --lockstep CHANNEL).
 void addNodeOptions(CLI::App& app, NodeArgs& args, bool with_lockstep_flag = true);
 
+/// Adds --print-config: writes `text()` (the process's built-in options as a config file,
+/// defaultConfigFileText, as config/<kind>.yaml is) to stdout and exits with 0.
+void addPrintConfigOption(CLI::App& app, std::function<std::string()> text);
+
 /// Loads the system config with the command-line overrides applied.
 SystemConfig loadSystem(const NodeArgs& args);
 

@@ -19,6 +19,7 @@
 #include "slamaware/camera_info_t.hpp"
 
 using namespace slamaware;
+using namespace slamaware::camera;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
                  "comma-separated *_STATUS channels to hear from before the first frame (lockstep start)");
   app.add_flag("--loop", loop, "start again at the end of the source");
   app.add_option("--max-frames", max_frames, "stop after this many frames (-1: all)");
+  addPrintConfigOption(app, [] { return defaultConfigFileText<CameraOptions>("camera"); });
   CLI11_PARSE(app, argc, argv);
 
   return runNode("camera", node, [&]() -> int {

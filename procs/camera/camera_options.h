@@ -1,9 +1,9 @@
 #pragma once
 #include <string>
 
-#include "procs/camera/frame_source.h"
+#include "common/frame_source.h"
 
-namespace slamaware {
+namespace slamaware::camera {
 
 struct CameraOptions {
   std::string pixel_format = "jpeg";  ///< jpeg or rgb8
@@ -20,8 +20,8 @@ struct CameraOptions {
     v("passthrough_jpeg", passthrough_jpeg, "publish .jpg frames of a sequence folder as they are");
     v("info_rate_hz", info_rate_hz, "Hz, CAMERA_INFO rate");
     v("frame_id", frame_id, "name of the camera frame in CAMERA_INFO");
-    v.section("source", source);
+    v.section("source", source, "intrinsics for video files and V4L devices (sequence folders carry their own)");
   }
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::camera

@@ -1,7 +1,11 @@
 #include "procs/camera/register_sources.h"
 
+#include "procs/camera/log_source.h"
 #include "procs/synth/synth_source.h"
 
-namespace slamaware {
-void registerBuiltinSourceSchemes() { registerSynthSource(); }
-}  // namespace slamaware
+namespace slamaware::camera {
+void registerBuiltinSourceSchemes() {
+  registerLogSource();
+  synth::registerSynthSource();
+}
+}  // namespace slamaware::camera

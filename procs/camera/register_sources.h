@@ -1,6 +1,6 @@
 #pragma once
 
-namespace slamaware {
+namespace slamaware::camera {
 /// Registers the source schemes built into the camera (e.g. "synth:" once linked). Idempotent.
 void registerBuiltinSourceSchemes();
-}  // namespace slamaware
+}  // namespace slamaware::camera

@@ -402,6 +402,7 @@ int main(int argc, char** argv) {
       "start from an empty map, whatever the folder holds (its map is replaced at the first save)");
   app.add_option("--export", export_dir,
                  "write the newest good saved map as DIR/map.ot and DIR/objects.json, then exit (no bus)");
+  addPrintConfigOption(app, [] { return defaultConfigFileText<ObjectMapOptions>("objectmap"); });
   CLI11_PARSE(app, argc, argv);
 
   if (!export_dir.empty()) {

@@ -128,9 +128,12 @@ struct ObjectMapOptions {
 
   template <class V>
   void visit(V& v) {
+    v.note(
+        "Lengths are in SLAM map units: the map's unit is about the median scene depth of the first "
+        "keyframe, so for a camera about 1 m from a table, 0.01 is about 1 cm.");
     v.section("occupancy", occupancy);
     v.section("voting", voting);
-    v.section("grouping", grouping);
+    v.section("grouping", grouping, "when two groups of candidates are one object");
     v("publish_period_s", publish_period_s, "s between periodic OBJECT_MAP messages (real time)");
     v("regroup_period_s", regroup_period_s,
       "real time: s between regroupings of the objects (lockstep and <= 0: after every DETECTIONS)");

@@ -17,6 +17,10 @@ struct FreeSpaceOptions {
 
   template <class V>
   void visit(V& v) {
+    v.note(
+        "A monocular map has no metric scale, so lengths (\"map units\") are fractions of the median "
+        "viewing distance when relative_lengths is true: for a camera about 1 m from the table, 0.1 is "
+        "about 10 cm.");
     v("bin_rad", bin_rad, "rad, angular bin of a keyframe's rays");
     v("margin", margin, "a point is seen through when nearer than (1 - margin) x the ray's end");
     v("min_violations", min_violations, "keyframes that must see through a point to drop it (0: off)");
@@ -151,7 +155,7 @@ struct ProposalOptions {
     v("band_colour_ratio", band_colour_ratio, "a band point is the candidate's when its colour's share of the candidate is over this x its share of the band");
     v("band_colour_bin", band_colour_bin, "RGB levels per bin of the candidate's and the band's colour histograms");
     v("band_reference_elsewhere", band_reference_elsewhere, "a candidate's band colours are compared with the band outside its bounds grown by band_grow (false: the whole band)");
-    v.section("free_space", free_space);
+    v.section("free_space", free_space, "free-space carving (free_space.h)");
     v("max_maps", max_maps, "SLAM maps whose candidates are kept (SLAM may return to an older one)");
     v("max_views", max_views, "camera poses kept for the up and look-at priors");
     v("recluster_interval_s", recluster_interval_s, "s of frame time between re-clusterings of a growing map (0: every change)");

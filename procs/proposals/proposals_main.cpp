@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   CLI::App app{"slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE, SLAM_KEYFRAME -> PROPOSALS)"};
   NodeArgs node;
   addNodeOptions(app, node);
+  addPrintConfigOption(app, [] { return defaultConfigFileText<ProposalOptions>("proposals"); });
   CLI11_PARSE(app, argc, argv);
 
   return runNode("proposals", node, [&]() -> int {

@@ -35,6 +35,7 @@
 #include "procs/recognizer/recognizer.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
@@ -124,6 +125,167 @@ std::shared_ptr<RecognizerModel> benchModel(const std::vector<cv::Mat>& frames, 
   return m;
 }
 
+// 1. Frames with 30 object-sized boxes (20x20 up to a quarter of the image), 5, 10 and 51 classes;
+// then about 12 boxes of 20 to 128 px, as many as a frame publishes.
+void benchPerFrame(const std::vector<cv::Mat>& frames, const std::shared_ptr<RecognizerModel>& model5,
+                   std::mt19937& rng, nlohmann::json& j) {
+  // The same encoding with 10 and 51 classes (+ background): only the classifier grows.
+  auto withClasses = [&](int classes) {
+    auto m = std::make_shared<RecognizerModel>(*model5);
+    setRandomClassifier(m.get(), classes);
+    return std::shared_ptr<const RecognizerModel>(m);
+  };
+  auto model10 = withClasses(10), model51 = withClasses(51);
+  RecognizerOptions opts;
+  Recognizer rec5(model5, opts), rec10(model10, opts), rec51(model51, opts);
+  std::vector<double> t5, t10, t51, feat, code, enc, score, decode;
+  int flair_frames = 0;
+  for (int r = 0; r < 3; ++r)
+    for (const cv::Mat& f : frames) {
+      const auto boxes = randomBoxes(rng, 30, 320, 240);
+      // JPEG decoding happens in the node before recognize(); measured apart.
+      const image_t msg = makeImageMessage(f, 0, 0, image_t::PIXEL_FORMAT_JPEG, 90);
+      auto t0 = Clock::now();
+      const cv::Mat decoded = decodeImageMessage(msg, "bench");
+      decode.push_back(msSince(t0));
+      const FrameDetections d5 = rec5.recognize(f, boxes);
+      const FrameDetections d10 = rec10.recognize(f, boxes);
+      const FrameDetections d51 = rec51.recognize(f, boxes);
+      if (r == 0) continue;  // warm-up pass
+      t5.push_back(d5.total_ms);
+      t10.push_back(d10.total_ms);
+      t51.push_back(d51.total_ms);
+      feat.push_back(d5.stats.features_ms);
+      code.push_back(d5.stats.coding_ms);
+      enc.push_back(d5.stats.encode_ms);
+      score.push_back(d5.total_ms - d5.stats.features_ms - d5.stats.coding_ms - d5.stats.encode_ms);
+      flair_frames += d5.stats.used == EncoderKind::kFlair;
+    }
+  j["recognizer_ms_per_frame"] = median(t5);
+  j["recognizer_ms_per_frame_10_classes"] = median(t10);
+  j["recognizer_ms_per_frame_51_classes"] = median(t51);
+  j["classes_runtime_ratio_51_vs_5"] = median(t51) / median(t5);
+  j["recognizer_features_ms"] = median(feat);
+  j["recognizer_pca_assign_ms"] = median(code);
+  j["recognizer_encode_ms_30_boxes"] = median(enc);
+  j["recognizer_score_ms_30_boxes"] = median(score);
+  j["recognizer_frames_using_flair_pct"] = 100.0 * flair_frames / std::max<size_t>(1, t5.size());
+  j["recognizer_jpeg_decode_ms"] = median(decode);
+  // About 12 boxes of 20 to 128 px, as many as a frame publishes (features and codes are
+  // computed only where a box is).
+  std::vector<double> t12;
+  for (int r = 0; r < 3; ++r)
+    for (const cv::Mat& f : frames) {
+      const double ms = rec5.recognize(f, randomBoxes(rng, 12, 128, 128)).total_ms;
+      if (r > 0) t12.push_back(ms);
+    }
+  j["recognizer_ms_per_frame_12_boxes"] = median(t12);
+}
+
+// 2. FLAIR against the direct encoder on 1000 boxes (both after the shared features and codes).
+// Returns the median time to build FLAIR's tables for a frame (ms).
+double benchFlairVsDirect(const std::vector<cv::Mat>& frames, const RecognizerModel& model, FrameEncoder& encoder,
+                          std::mt19937& rng, int reps, nlohmann::json& j) {
+  std::vector<double> flair_ms, direct_ms, build_ms, per_box_flair, per_box_direct, descriptors_per_box;
+  std::vector<double> crossover;
+  ReusableMatrix out_rows;
+  FlairEncoder flair_alone;
+  for (int r = 0; r < reps; ++r) {
+    const cv::Mat& f = frames[static_cast<size_t>(r) % frames.size()];
+    std::vector<PyramidBox> boxes;
+    double descriptors = 0;
+    for (const auto& b : randomBoxes(rng, 1000, 640, 480)) {
+      PyramidBox pb;
+      encoder.snap(b.x, b.y, b.w, b.h, 640, 480, &pb);
+      boxes.push_back(pb);
+      descriptors += static_cast<double>(pb.cells().area()) * model.params.features.descriptorsPerCell();
+    }
+    FrameEncoder::Stats sd, sf;
+    encoder.encode(f, boxes, EncoderKind::kDirect, &out_rows, &sd);
+    encoder.encode(f, boxes, EncoderKind::kFlair, &out_rows, &sf);
+    direct_ms.push_back(sd.encode_ms);
+    flair_ms.push_back(sf.encode_ms);
+    // FLAIR's build alone: the same frame and span, no boxes encoded (memory already mapped, as
+    // in the running process).
+    if (r == 0) flair_alone.build(encoder.codes(), model.vocabulary, encoder.codes().region);
+    auto t0 = Clock::now();
+    flair_alone.build(encoder.codes(), model.vocabulary, encoder.codes().region);
+    const double build = msSince(t0);
+    build_ms.push_back(build);
+    const double fpb = (sf.encode_ms - build) / boxes.size(), dpb = sd.encode_ms / boxes.size();
+    per_box_flair.push_back(fpb * 1000);
+    per_box_direct.push_back(dpb * 1000);
+    descriptors_per_box.push_back(descriptors / boxes.size());
+    crossover.push_back(dpb > fpb ? build / (dpb - fpb) : 1e9);
+  }
+  j["flair_ms_1000_boxes"] = median(flair_ms);
+  j["direct_ms_1000_boxes"] = median(direct_ms);
+  j["flair_speedup_vs_direct_1000_boxes"] = median(direct_ms) / median(flair_ms);
+  j["flair_table_build_ms_640x480"] = median(build_ms);
+  j["flair_us_per_box"] = median(per_box_flair);
+  j["direct_us_per_box_1000_box_distribution"] = median(per_box_direct);
+  j["direct_descriptors_per_box_1000_box_distribution"] = median(descriptors_per_box);
+  j["flair_crossover_boxes"] = median(crossover);
+  return median(build_ms);
+}
+
+// 3. FLAIR time per box against box area (tables built once; each box encoded many times), and
+// the direct encoder's time model from the same two boxes.
+void benchCostModel(const cv::Mat& f, const RecognizerModel& model, FrameEncoder& encoder, double build_ms,
+                    nlohmann::json& j) {
+  ReusableMatrix out_rows;
+  PyramidBox full, small;
+  encoder.snap(0, 0, 640, 480, 640, 480, &full);
+  encoder.snap(304, 224, 32, 32, 640, 480, &small);
+  encoder.encode(f, {full}, EncoderKind::kDirect, &out_rows);
+  FlairEncoder flair;
+  flair.build(encoder.codes(), model.vocabulary, encoder.codes().region);
+  std::vector<float> v(static_cast<size_t>(model.params.vladDims()));
+  auto perBox = [&](const PyramidBox& b) {
+    std::vector<double> batches;
+    for (int r = 0; r < 15; ++r) {
+      auto t0 = Clock::now();
+      for (int k = 0; k < 40; ++k) flair.encode(b, v.data());
+      batches.push_back(msSince(t0) * 1000 / 40);
+    }
+    return median(batches);
+  };
+  perBox(full);
+  const double us_full = perBox(full), us_small = perBox(small);
+  j["flair_us_per_box_full_image"] = us_full;
+  j["flair_us_per_box_32px"] = us_small;
+  j["flair_area_ratio_full_vs_32px"] = us_full / us_small;
+  // The direct encoder's time model (EncoderCostModel): a fixed part per box plus a part per
+  // descriptor, from the same two boxes.
+  DirectEncoder direct(encoder.codes(), model.vocabulary);
+  auto directPerBox = [&](const PyramidBox& b) {
+    std::vector<double> batches;
+    for (int r = 0; r < 9; ++r) {
+      auto t0 = Clock::now();
+      for (int k = 0; k < 10; ++k) direct.encode(b, v.data());
+      batches.push_back(msSince(t0) * 1000 / 10);
+    }
+    return median(batches);
+  };
+  const double per_cell = model.params.features.descriptorsPerCell();
+  const double d_full = directPerBox(full), d_small = directPerBox(small);
+  const double n_full = full.cells().area() * per_cell, n_small = small.cells().area() * per_cell;
+  const double ns_per_descriptor = (d_full - d_small) / (n_full - n_small) * 1000;
+  j["cost_direct_ns_per_descriptor"] = ns_per_descriptor;
+  j["cost_direct_us_per_box"] = d_small - n_small * ns_per_descriptor / 1000;
+  j["cost_flair_us_per_box"] = 0.5 * (us_full + us_small);
+  j["cost_flair_ns_per_corner"] = build_ms * 1e6 / (81.0 * 61.0);
+}
+
+void writeJson(const nlohmann::json& j, const std::string& out) {
+  fs::path p(out);
+  if (p.has_parent_path()) fs::create_directories(p.parent_path());
+  std::ofstream f(out);
+  f << j.dump(2) << "\n";
+  if (!f) throw std::runtime_error(out + ": cannot write");
+  std::cout << j.dump(2) << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -142,168 +304,19 @@ int main(int argc, char** argv) {
   try {
     const std::vector<cv::Mat> frames = benchFrames(shared, frames_n);
     auto model5 = benchModel(frames, 5);
-    // The same encoding with 10 and 51 classes (+ background): only the classifier grows.
-    auto withClasses = [&](int classes) {
-      auto m = std::make_shared<RecognizerModel>(*model5);
-      setRandomClassifier(m.get(), classes);
-      return std::shared_ptr<const RecognizerModel>(m);
-    };
-    auto model10 = withClasses(10), model51 = withClasses(51);
     nlohmann::json j;
-
-    // 1. Frames with 30 object-sized boxes (20x20 up to a quarter of the image), 5 and 51 classes.
-    RecognizerOptions opts;
-    Recognizer rec5(model5, opts), rec10(model10, opts), rec51(model51, opts);
     std::mt19937 rng(11);
-    std::vector<double> t5, t10, t51, feat, code, enc, score, decode;
-    int flair_frames = 0;
-    for (int r = 0; r < 3; ++r)
-      for (const cv::Mat& f : frames) {
-        const auto boxes = randomBoxes(rng, 30, 320, 240);
-        // JPEG decoding happens in the node before recognize(); measured apart.
-        const image_t msg = makeImageMessage(f, 0, 0, image_t::PIXEL_FORMAT_JPEG, 90);
-        auto t0 = Clock::now();
-        const cv::Mat decoded = decodeImageMessage(msg, "bench");
-        decode.push_back(msSince(t0));
-        const FrameDetections d5 = rec5.recognize(f, boxes);
-        const FrameDetections d10 = rec10.recognize(f, boxes);
-        const FrameDetections d51 = rec51.recognize(f, boxes);
-        if (r == 0) continue;  // warm-up pass
-        t5.push_back(d5.total_ms);
-        t10.push_back(d10.total_ms);
-        t51.push_back(d51.total_ms);
-        feat.push_back(d5.stats.features_ms);
-        code.push_back(d5.stats.coding_ms);
-        enc.push_back(d5.stats.encode_ms);
-        score.push_back(d5.total_ms - d5.stats.features_ms - d5.stats.coding_ms - d5.stats.encode_ms);
-        flair_frames += d5.stats.used == EncoderKind::kFlair;
-      }
-    j["recognizer_ms_per_frame"] = median(t5);
-    j["recognizer_ms_per_frame_10_classes"] = median(t10);
-    j["recognizer_ms_per_frame_51_classes"] = median(t51);
-    j["classes_runtime_ratio_51_vs_5"] = median(t51) / median(t5);
-    j["recognizer_features_ms"] = median(feat);
-    j["recognizer_pca_assign_ms"] = median(code);
-    j["recognizer_encode_ms_30_boxes"] = median(enc);
-    j["recognizer_score_ms_30_boxes"] = median(score);
-    j["recognizer_frames_using_flair_pct"] = 100.0 * flair_frames / std::max<size_t>(1, t5.size());
-    j["recognizer_jpeg_decode_ms"] = median(decode);
-    // About 12 boxes of 20 to 128 px, as many as a frame publishes (features and codes are
-    // computed only where a box is).
-    std::vector<double> t12;
-    for (int r = 0; r < 3; ++r)
-      for (const cv::Mat& f : frames) {
-        const double ms = rec5.recognize(f, randomBoxes(rng, 12, 128, 128)).total_ms;
-        if (r > 0) t12.push_back(ms);
-      }
-    j["recognizer_ms_per_frame_12_boxes"] = median(t12);
-
-    if (classes_only) {
-      std::ofstream f(out);
-      f << j.dump(2) << "\n";
-      std::cout << j.dump(2) << "\n";
-      return f ? 0 : 1;
+    benchPerFrame(frames, model5, rng, j);
+    if (!classes_only) {
+      FrameEncoder encoder(model5->params, model5->pca, model5->vocabulary);
+      const double build_ms = benchFlairVsDirect(frames, *model5, encoder, rng, reps, j);
+      benchCostModel(frames[0], *model5, encoder, build_ms, j);
+      j["flair_table_mb"] = FlairEncoder::tableBytesFor(CellRect{0, 0, 80, 60}, model5->params.vocabulary_size,
+                                                        model5->params.pca_dims) /
+                            1e6;
+      j["recognizer_bench_frames"] = frames.size();
     }
-
-    // 2. FLAIR against the direct encoder on 1000 boxes (both after the shared features and codes).
-    FrameEncoder encoder(model5->params, model5->pca, model5->vocabulary);
-    std::vector<double> flair_ms, direct_ms, build_ms, per_box_flair, per_box_direct, descriptors_per_box;
-    std::vector<double> crossover;
-    ReusableMatrix out_rows;
-    FlairEncoder flair_alone;
-    for (int r = 0; r < reps; ++r) {
-      const cv::Mat& f = frames[static_cast<size_t>(r) % frames.size()];
-      std::vector<PyramidBox> boxes;
-      double descriptors = 0;
-      for (const auto& b : randomBoxes(rng, 1000, 640, 480)) {
-        PyramidBox pb;
-        encoder.snap(b.x, b.y, b.w, b.h, 640, 480, &pb);
-        boxes.push_back(pb);
-        descriptors += static_cast<double>(pb.cells().area()) * model5->params.features.descriptorsPerCell();
-      }
-      FrameEncoder::Stats sd, sf;
-      encoder.encode(f, boxes, EncoderKind::kDirect, &out_rows, &sd);
-      encoder.encode(f, boxes, EncoderKind::kFlair, &out_rows, &sf);
-      direct_ms.push_back(sd.encode_ms);
-      flair_ms.push_back(sf.encode_ms);
-      // FLAIR's build alone: the same frame and span, no boxes encoded (memory already mapped, as
-      // in the running process).
-      if (r == 0) flair_alone.build(encoder.codes(), model5->vocabulary, encoder.codes().region);
-      auto t0 = Clock::now();
-      flair_alone.build(encoder.codes(), model5->vocabulary, encoder.codes().region);
-      const double build = msSince(t0);
-      build_ms.push_back(build);
-      const double fpb = (sf.encode_ms - build) / boxes.size(), dpb = sd.encode_ms / boxes.size();
-      per_box_flair.push_back(fpb * 1000);
-      per_box_direct.push_back(dpb * 1000);
-      descriptors_per_box.push_back(descriptors / boxes.size());
-      crossover.push_back(dpb > fpb ? build / (dpb - fpb) : 1e9);
-    }
-    j["flair_ms_1000_boxes"] = median(flair_ms);
-    j["direct_ms_1000_boxes"] = median(direct_ms);
-    j["flair_speedup_vs_direct_1000_boxes"] = median(direct_ms) / median(flair_ms);
-    j["flair_table_build_ms_640x480"] = median(build_ms);
-    j["flair_us_per_box"] = median(per_box_flair);
-    j["direct_us_per_box_1000_box_distribution"] = median(per_box_direct);
-    j["direct_descriptors_per_box_1000_box_distribution"] = median(descriptors_per_box);
-    j["flair_crossover_boxes"] = median(crossover);
-
-    // 3. FLAIR time per box against box area (tables built once; each box encoded many times).
-    {
-      const cv::Mat& f = frames[0];
-      PyramidBox full, small;
-      encoder.snap(0, 0, 640, 480, 640, 480, &full);
-      encoder.snap(304, 224, 32, 32, 640, 480, &small);
-      encoder.encode(f, {full}, EncoderKind::kDirect, &out_rows);
-      FlairEncoder flair;
-      flair.build(encoder.codes(), model5->vocabulary, encoder.codes().region);
-      std::vector<float> v(static_cast<size_t>(model5->params.vladDims()));
-      auto perBox = [&](const PyramidBox& b) {
-        std::vector<double> batches;
-        for (int r = 0; r < 15; ++r) {
-          auto t0 = Clock::now();
-          for (int k = 0; k < 40; ++k) flair.encode(b, v.data());
-          batches.push_back(msSince(t0) * 1000 / 40);
-        }
-        return median(batches);
-      };
-      perBox(full);
-      const double us_full = perBox(full), us_small = perBox(small);
-      j["flair_us_per_box_full_image"] = us_full;
-      j["flair_us_per_box_32px"] = us_small;
-      j["flair_area_ratio_full_vs_32px"] = us_full / us_small;
-      // The direct encoder's time model (EncoderCostModel): a fixed part per box plus a part per
-      // descriptor, from the same two boxes.
-      DirectEncoder direct(encoder.codes(), model5->vocabulary);
-      auto directPerBox = [&](const PyramidBox& b) {
-        std::vector<double> batches;
-        for (int r = 0; r < 9; ++r) {
-          auto t0 = Clock::now();
-          for (int k = 0; k < 10; ++k) direct.encode(b, v.data());
-          batches.push_back(msSince(t0) * 1000 / 10);
-        }
-        return median(batches);
-      };
-      const double per_cell = model5->params.features.descriptorsPerCell();
-      const double d_full = directPerBox(full), d_small = directPerBox(small);
-      const double n_full = full.cells().area() * per_cell, n_small = small.cells().area() * per_cell;
-      const double ns_per_descriptor = (d_full - d_small) / (n_full - n_small) * 1000;
-      j["cost_direct_ns_per_descriptor"] = ns_per_descriptor;
-      j["cost_direct_us_per_box"] = d_small - n_small * ns_per_descriptor / 1000;
-      j["cost_flair_us_per_box"] = 0.5 * (us_full + us_small);
-      j["cost_flair_ns_per_corner"] = median(build_ms) * 1e6 / (81.0 * 61.0);
-    }
-    j["flair_table_mb"] =
-        FlairEncoder::tableBytesFor(CellRect{0, 0, 80, 60}, model5->params.vocabulary_size, model5->params.pca_dims) /
-        1e6;
-    j["recognizer_bench_frames"] = frames.size();
-
-    fs::path p(out);
-    if (p.has_parent_path()) fs::create_directories(p.parent_path());
-    std::ofstream f(out);
-    f << j.dump(2) << "\n";
-    if (!f) throw std::runtime_error(out + ": cannot write");
-    std::cout << j.dump(2) << "\n";
+    writeJson(j, out);
   } catch (const std::exception& e) {
     std::cerr << "slamaware-bench-recognizer: " << e.what() << "\n";
     return 1;

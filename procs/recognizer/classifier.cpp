@@ -10,7 +10,7 @@
 
 #include "common/parallel.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -222,4 +222,4 @@ double calibrate(const MatrixRM& scores, const std::vector<int>& labels,
   return best;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -17,7 +17,7 @@
 #include "procs/recognizer/encoding_params.h"
 #include "procs/recognizer/example_set.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 struct SgdOptions {
   double lambda = 1e-4;    ///< L2 regularisation weight
@@ -72,4 +72,4 @@ LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std
 double calibrate(const MatrixRM& scores, const std::vector<int>& labels,
                  LinearClassifier* classifier);
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -12,7 +12,7 @@
 
 #include "procs/recognizer/dense_sift.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -223,4 +223,4 @@ void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out
   }
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -14,7 +14,7 @@
 
 #include "procs/recognizer/encoding_params.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 /// A rectangle of pooling cells, half-open: [u0, u1) x [v0, v1).
 struct CellRect {
@@ -82,4 +82,4 @@ class DenseFeatureExtractor {
   std::vector<float> norms_;   ///< scratch
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

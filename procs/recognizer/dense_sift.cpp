@@ -19,7 +19,7 @@ extern "C" {
 #include <vl/mathop.h>
 }
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -345,4 +345,4 @@ void denseSiftVlfeat(const float* image, int width, int height, const DsiftGeome
   }
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

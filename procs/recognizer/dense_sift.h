@@ -14,7 +14,7 @@
 // vl_dsift itself.
 #include <cstddef>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 /// The frames of one scale: frame (i, j) starts at (min_x + step * i, min_y + step * j) (VLFeat's
 /// frame origin: its first bin centre) and has its centre 1.5 bins further.
@@ -38,4 +38,4 @@ void denseSiftFlat(const float* image, int width, int height, const DsiftGeometr
 void denseSiftVlfeat(const float* image, int width, int height, const DsiftGeometry& geometry,
                      float* descriptors, size_t stride, float* norms);
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

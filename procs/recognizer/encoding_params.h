@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 /// Row-major float matrix: one descriptor (or encoded box) per row.
 using MatrixRM = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -96,4 +96,4 @@ struct EncodingParams {
   int64_t vladDims() const { return int64_t{kPyramidCells} * vocabulary_size * pca_dims; }
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 // A row's bytes: uint32 n, then n int32 block indices, n float scales, n * block_dims int8 values,
 // padded to a multiple of 4 bytes.
@@ -152,4 +152,4 @@ ExampleSet ExampleSet::select(const std::function<bool(int64_t)>& keep) const {
   return out;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -15,7 +15,7 @@
 #include <functional>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 class ExampleSet {
  public:
@@ -72,4 +72,4 @@ class ExampleSet {
   std::vector<Row> rows_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -4,7 +4,7 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -145,4 +145,4 @@ double FrameEncoder::warmUp(int width, int height, EncoderKind kind) {
   return msSince(t0);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -8,7 +8,7 @@
 
 #include "procs/recognizer/vlad.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 enum class EncoderKind { kAuto, kDirect, kFlair };
 /// "auto", "direct", "flair"; throws std::invalid_argument otherwise.
@@ -90,4 +90,4 @@ class FrameEncoder {
   FlairEncoder flair_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -9,7 +9,7 @@
 
 #include "common/atomic_file.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -355,4 +355,4 @@ RecognizerModel loadModel(const std::string& path) {
   return m;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

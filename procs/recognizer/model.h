@@ -23,7 +23,7 @@
 #include "procs/recognizer/example_set.h"
 #include "procs/recognizer/pca_vocabulary.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 constexpr uint32_t kModelFormatVersion = 2;
 
@@ -60,4 +60,4 @@ void saveModel(const RecognizerModel& model, const std::string& path);
 /// corrupt (checksum), of another format version, or inconsistent.
 RecognizerModel loadModel(const std::string& path);
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

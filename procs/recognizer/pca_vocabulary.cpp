@@ -11,7 +11,7 @@ extern "C" {
 #include <vl/kmeans.h>
 }
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 Pca Pca::fit(const MatrixRM& samples, int out_dims) {
   const int64_t n = samples.rows();
@@ -111,4 +111,4 @@ void Vocabulary::assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t
   }
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -5,7 +5,7 @@
 
 #include "procs/recognizer/encoding_params.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 /// y = (x - mean)^T basis: the leading principal directions of the training features.
 struct Pca {
@@ -38,4 +38,4 @@ struct Vocabulary {
   void assign(const Eigen::Ref<const MatrixRM>& y, std::vector<int16_t>* words) const;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -9,7 +9,7 @@
 #include "common/config.h"
 #include "common/geometry.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 Recognizer::Recognizer(std::shared_ptr<const RecognizerModel> model,
                        const RecognizerOptions& options)
@@ -156,4 +156,4 @@ int suppressOverlaps(FrameDetections* d, double max_iou, bool per_class) {
   return removed;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -10,7 +10,7 @@
 #include "procs/recognizer/model.h"
 #include "procs/recognizer/view_selector.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 struct RecognizerOptions {
   std::string model = "models/recognizer.model";  ///< model file (slamaware-train)
@@ -53,8 +53,9 @@ struct RecognizerOptions {
       "true: only boxes of the same most probable object class suppress each other");
     v("missing_background_log_prob", missing_background_log_prob,
       "log p(background) published when the model has no background class");
-    v.section("cost", cost);
-    v.section("view_selection", view_selection);
+    v.section("cost", cost, "time model that picks the encoder (slamaware-bench-recognizer measures it)");
+    v.section("view_selection", view_selection,
+              "which boxes are classified; the others carry their candidate's last result");
     v("frame_buffer", frame_buffer, "CAMERA frames kept for joining with PROPOSALS");
     v("proposals_buffer", proposals_buffer, "PROPOSALS waiting for their frame");
     v("pending_timeout_s", pending_timeout_s, "s a PROPOSALS message waits for its CAMERA frame");
@@ -149,4 +150,4 @@ class Recognizer {
   MatrixRM scores_, log_p_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -45,6 +45,7 @@
 #include "slamaware/proposals_t.hpp"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -364,6 +365,7 @@ int main(int argc, char** argv) {
   std::string model;
   addNodeOptions(app, node);
   app.add_option("--model", model, "model file (overrides recognizer.model)");
+  addPrintConfigOption(app, [] { return defaultConfigFileText<RecognizerOptions>("recognizer"); });
   CLI11_PARSE(app, argc, argv);
 
   return runNode("recognizer", node, [&]() -> int {

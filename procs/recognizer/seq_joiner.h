@@ -15,7 +15,7 @@
 #include <optional>
 #include <utility>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 template <class Frame, class Proposals>
 class SeqJoiner {
@@ -129,4 +129,4 @@ class SeqJoiner {
   std::deque<Job> ready_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

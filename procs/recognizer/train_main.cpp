@@ -16,6 +16,7 @@
 #include "procs/recognizer/trainer.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 
 int main(int argc, char** argv) {
   CLI::App app{

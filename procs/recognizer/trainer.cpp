@@ -22,7 +22,7 @@
 #include "common/parallel.h"
 #include "common/progress.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -1364,6 +1364,96 @@ HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const Tra
                        options, progress, r);
 }
 
+namespace {
+
+// The classes of a model with `categories` added to the base's (background stays last); fills
+// r.added and r.replaced. A category the base has is refused unless `replace`.
+std::vector<std::string> classesWithAdded(const RecognizerModel& base, const std::set<std::string>& categories,
+                                          bool replace, AddClassesReport& r) {
+  const std::vector<std::string>& old = base.classifier.classes;  // background last
+  std::vector<std::string> classes(old.begin(), old.end() - 1);
+  r.added.clear();
+  r.replaced.clear();
+  for (const auto& c : categories) {
+    if (std::find(classes.begin(), classes.end(), c) == classes.end()) {
+      r.added.push_back(c);
+    } else if (!replace) {
+      throw std::runtime_error("class '" + c + "' is already in the base model (--replace trains it from these views instead)");
+    } else {
+      r.replaced.push_back(c);
+    }
+  }
+  classes.insert(classes.end(), r.added.begin(), r.added.end());
+  classes.push_back("background");
+  return classes;
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+// The base's exemplars, relabelled to `classes`, but those of the replaced classes.
+ExampleSet keptExemplars(const RecognizerModel& base, const std::vector<std::string>& classes,
+                         const std::vector<std::string>& replaced) {
+  const std::vector<std::string>& old = base.classifier.classes;
+  const int64_t dims = base.params.vladDims();
+  ExampleSet set(dims, base.params.pca_dims);
+  std::vector<float> row(static_cast<size_t>(dims));
+  for (int64_t i = 0; i < base.exemplars.size(); ++i) {
+    const std::string& name = old[static_cast<size_t>(base.exemplars.label(i))];
+    if (contains(replaced, name)) continue;
+    base.exemplars.get(i, row.data());
+    set.add(row.data(), indexOf(classes, name), -1, base.exemplars.domain(i));
+  }
+  return set;
+}
+
+// The base's classifier rows for the classes it keeps, `fresh`'s rows (one per `trained` class)
+// for the new and replaced ones; the base's calibration.
+LinearClassifier mergedClassifier(const RecognizerModel& base, const std::vector<std::string>& classes,
+                                  const std::vector<std::string>& trained, const LinearClassifier& fresh) {
+  const std::vector<std::string>& old = base.classifier.classes;
+  const int C = static_cast<int>(classes.size());
+  LinearClassifier clf;
+  clf.classes = classes;
+  clf.weights.resize(C, base.params.vladDims());
+  clf.bias.resize(C);
+  for (size_t i = 0; i < old.size(); ++i) {
+    if (contains(trained, old[i])) continue;
+    const int c = indexOf(classes, old[i]);
+    clf.weights.row(c) = base.classifier.weights.row(static_cast<int64_t>(i));
+    clf.bias[c] = base.classifier.bias[static_cast<int64_t>(i)];
+  }
+  for (size_t t = 0; t < trained.size(); ++t) {
+    const int c = indexOf(classes, trained[t]);
+    clf.weights.row(c) = fresh.weights.row(static_cast<int64_t>(t));
+    clf.bias[c] = fresh.bias[static_cast<int64_t>(t)];
+  }
+  clf.temperature = base.classifier.temperature;
+  clf.uniform_mix = base.classifier.uniform_mix;
+  return clf;
+}
+
+std::string addedClassesProvenance(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
+                                   const AddClassesReport& r) {
+  nlohmann::json j;
+  j["kind"] = "classes added";
+  j["added_classes"] = r.added;
+  j["replaced_classes"] = r.replaced;
+  j["object_sets"] = object_dirs;
+  j["views"] = r.views;
+  j["examples"] = {{"classes", r.positives}, {"background", r.background}, {"base_exemplars", r.exemplars}};
+  j["seconds"] = r.seconds;
+  try {
+    j["base"] = nlohmann::json::parse(base.provenance);
+  } catch (const nlohmann::json::exception&) {
+    j["base"] = base.provenance;
+  }
+  return j.dump();
+}
+
+}  // namespace
+
 RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
                            const TrainOptions& options, bool replace, AddClassesReport* report) {
   const auto started = Clock::now();
@@ -1384,39 +1474,10 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
     if (c.category != "background") categories.insert(c.category);
   if (categories.empty())
     throw DatasetError(fmt::format("{}: no views of any class (only background)", fmt::join(object_dirs, ", ")));
-  const std::vector<std::string>& old = base.classifier.classes;  // background last
-  std::vector<std::string> classes(old.begin(), old.end() - 1);  // background last, below
-  r.added.clear();
-  r.replaced.clear();
-  for (const auto& c : categories) {
-    if (std::find(classes.begin(), classes.end(), c) == classes.end()) {
-      r.added.push_back(c);
-    } else if (!replace) {
-      throw std::runtime_error("class '" + c + "' is already in the base model (--replace trains it from these views instead)");
-    } else {
-      r.replaced.push_back(c);
-    }
-  }
-  classes.insert(classes.end(), r.added.begin(), r.added.end());
-  classes.push_back("background");
+  const std::vector<std::string> classes = classesWithAdded(base, categories, replace, r);
   const int C = static_cast<int>(classes.size()), bg = C - 1;
-  const auto isReplaced = [&](const std::string& c) {
-    return std::find(r.replaced.begin(), r.replaced.end(), c) != r.replaced.end();
-  };
-  std::vector<int> old_to_new(old.size());
-  for (size_t i = 0; i < old.size(); ++i) old_to_new[i] = indexOf(classes, old[i]);
 
-  const int64_t dims = base.params.vladDims();
-  ExampleSet set(dims, base.params.pca_dims);
-  {
-    std::vector<float> row(static_cast<size_t>(dims));
-    for (int64_t i = 0; i < base.exemplars.size(); ++i) {
-      const std::string& name = old[static_cast<size_t>(base.exemplars.label(i))];
-      if (isReplaced(name)) continue;
-      base.exemplars.get(i, row.data());
-      set.add(row.data(), old_to_new[static_cast<size_t>(base.exemplars.label(i))], -1, base.exemplars.domain(i));
-    }
-  }
+  ExampleSet set = keptExemplars(base, classes, r.replaced);
   r.exemplars = set.size();
   ExampleSet fresh;
   {
@@ -1440,7 +1501,7 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   // classes), which all take one label here.
   std::vector<std::string> trained;
   for (const auto& c : classes)
-    if (std::find(r.added.begin(), r.added.end(), c) != r.added.end() || isReplaced(c)) trained.push_back(c);
+    if (contains(r.added, c) || contains(r.replaced, c)) trained.push_back(c);
   ExampleSet relabelled = set.select([](int64_t) { return true; });
   const int rest = static_cast<int>(trained.size());
   for (int64_t i = 0; i < relabelled.size(); ++i) {
@@ -1453,45 +1514,16 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   const LinearClassifier fresh_rows = trainOneVsAll(
       relabelled, trained_and_rest, options.sgd, [&](int e) { bar.update(e); }, options.threads);
   bar.finish();
-  LinearClassifier clf;
-  clf.classes = classes;
-  clf.weights.resize(C, dims);
-  clf.bias.resize(C);
-  for (size_t i = 0; i < old.size(); ++i) {
-    if (isReplaced(old[i])) continue;
-    clf.weights.row(old_to_new[i]) = base.classifier.weights.row(static_cast<int64_t>(i));
-    clf.bias[old_to_new[i]] = base.classifier.bias[static_cast<int64_t>(i)];
-  }
-  for (int t = 0; t < rest; ++t) {
-    const int c = indexOf(classes, trained[static_cast<size_t>(t)]);
-    clf.weights.row(c) = fresh_rows.weights.row(t);
-    clf.bias[c] = fresh_rows.bias[t];
-  }
-  clf.temperature = base.classifier.temperature;
-  clf.uniform_mix = base.classifier.uniform_mix;
 
   RecognizerModel model;
   model.params = base.params;
   model.pca = base.pca;
   model.vocabulary = base.vocabulary;
-  model.classifier = std::move(clf);
+  model.classifier = mergedClassifier(base, classes, trained, fresh_rows);
   model.exemplars = set.select([&](int64_t i) { return i < r.exemplars; });
   model.exemplars.append(pickExemplars(fresh, C, bg, options.exemplars_per_class));
   r.seconds = std::chrono::duration<double>(Clock::now() - started).count();
-  nlohmann::json j;
-  j["kind"] = "classes added";
-  j["added_classes"] = r.added;
-  j["replaced_classes"] = r.replaced;
-  j["object_sets"] = object_dirs;
-  j["views"] = r.views;
-  j["examples"] = {{"classes", r.positives}, {"background", r.background}, {"base_exemplars", r.exemplars}};
-  j["seconds"] = r.seconds;
-  try {
-    j["base"] = nlohmann::json::parse(base.provenance);
-  } catch (const nlohmann::json::exception&) {
-    j["base"] = base.provenance;
-  }
-  model.provenance = j.dump();
+  model.provenance = addedClassesProvenance(base, object_dirs, r);
   model.check("model with added classes");
   return model;
 }
@@ -1563,4 +1595,4 @@ std::string provenanceText(const RecognizerModel& model) {
   return o.str();
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

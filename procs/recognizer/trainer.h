@@ -43,7 +43,7 @@
 #include "procs/recognizer/frame_encoder.h"
 #include "procs/recognizer/model.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 struct TrainOptions {
   EncodingParams encoding;
@@ -316,4 +316,4 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
                            const std::string& proposals_dir = "",
                            const std::vector<std::string>& background_object_dirs = {});
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

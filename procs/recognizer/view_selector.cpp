@@ -4,7 +4,7 @@
 #include <cmath>
 #include <set>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -57,4 +57,4 @@ void ViewSelector::remember(int32_t map_id, int32_t seq, const CandidateView& vi
   last_[std::make_pair(map_id, view.candidate_id)] = Remembered{view, CarriedView{seq, log_prob}};
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -20,7 +20,7 @@
 #include <utility>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 struct ViewSelectionOptions {
   bool enabled = true;     ///< false: every box of every frame is classified
@@ -89,4 +89,4 @@ class ViewSelector {
   std::optional<int32_t> newest_seq_;                       ///< newest frame selected
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

@@ -11,7 +11,7 @@
 #include <immintrin.h>
 #endif
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 namespace {
 
@@ -394,4 +394,4 @@ void FlairEncoder::encode(const PyramidBox& box, float* out) {
   finishVlad(out, box_counts_.data(), K, D);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

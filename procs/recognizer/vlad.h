@@ -22,7 +22,7 @@
 #include "procs/recognizer/dense_features.h"
 #include "procs/recognizer/pca_vocabulary.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 
 /// A box on the pooling grid with the boundaries of its 4x4 pyramid cells (cell (i, j) =
 /// [u[i], u[i+1]) x [v[j], v[j+1])).
@@ -163,4 +163,4 @@ class FlairEncoder {
   std::vector<float> row_sums_, row_counts_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

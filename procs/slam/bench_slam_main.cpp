@@ -11,12 +11,13 @@
 #include <opencv2/core/utility.hpp>
 
 #include "common/config.h"
-#include "procs/camera/frame_source.h"
+#include "common/frame_source.h"
 #include "procs/slam/slam_options.h"
 #include "procs/slam/slam_system.h"
 #include "procs/synth/synth_source.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 namespace {
 double median(std::vector<double> v) {
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   spdlog::set_pattern("[%H:%M:%S.%e] [bench-slam] [%^%l%$] %v");
   try {
-    registerSynthSource();
+    synth::registerSynthSource();
     cv::setNumThreads(1);  // as the node
     std::unique_ptr<FrameSource> src = openSource(source, SourceOptions());
     std::vector<SourceFrame> frames;

@@ -6,7 +6,7 @@
 #include <thread>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// Runs job(k) for k in [0, count) on min(threads, count) threads and returns when all are done.
 /// `job` must not throw.
@@ -22,4 +22,4 @@ void runShared(int count, int threads, Job&& job) {
   for (auto& h : helpers) h.join();
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -4,7 +4,7 @@
 
 #include "common/thread_priority.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 SerialWorker::SerialWorker(bool threaded, std::string name, int nice)
     : threaded_(threaded), name_(std::move(name)), nice_(nice) {
@@ -69,4 +69,4 @@ void SerialWorker::run() {
   idle_cv_.notify_all();
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

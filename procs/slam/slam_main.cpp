@@ -23,6 +23,7 @@
 #include "procs/slam/slam_system.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 namespace {
 
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
       "SLAM_KEYFRAME, SLAM_MAP)"};
   NodeArgs node;
   addNodeOptions(app, node);
+  addPrintConfigOption(app, [] { return defaultConfigFileText<SlamOptions>("slam"); });
   CLI11_PARSE(app, argc, argv);
 
   return runNode("slam", node, [&]() -> int {

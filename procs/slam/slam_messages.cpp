@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 pose_t toMessage(const PoseOutput& p) {
   pose_t m;
@@ -72,4 +72,4 @@ point_cloud_t toMessage(const CloudOutput& c) {
 }
 
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -10,10 +10,10 @@
 #include "slamaware/point_cloud_t.hpp"
 #include "slamaware/pose_t.hpp"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 pose_t toMessage(const PoseOutput& pose);
 keyframe_t toMessage(const KeyframeOutput& kf);
 point_cloud_t toMessage(const CloudOutput& cloud);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// ORB features on an image pyramid (Rublee et al. 2011, distributed as in ORB-SLAM).
 struct OrbOptions {
@@ -260,4 +260,4 @@ struct SlamOptions {
   }
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

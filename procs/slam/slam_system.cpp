@@ -14,7 +14,7 @@
 #include "procs/slam/serial_worker.h"
 #include "procs/slam/tracking/tracker.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 const char* poseStateName(PoseState s) {
   switch (s) {
@@ -435,4 +435,4 @@ SlamStats SlamSystem::stats() const {
   return s;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

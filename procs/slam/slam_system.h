@@ -19,7 +19,7 @@
 #include "common/geometry.h"
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class OrbExtractor;
 class Tracker;
@@ -185,4 +185,4 @@ class SlamSystem {
   SlamStats stats_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

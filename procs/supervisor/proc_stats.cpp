@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 std::optional<ProcSample> sampleProcess(pid_t pid) {
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
@@ -34,4 +34,4 @@ double cpuPercent(const ProcSample& before, const ProcSample& after, double dt_s
   return 100.0 * static_cast<double>(after.cpu_ticks - before.cpu_ticks) / sysconf(_SC_CLK_TCK) / dt_s;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <optional>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 struct ProcSample {
   uint64_t cpu_ticks = 0;  ///< utime + stime, clock ticks
@@ -17,4 +17,4 @@ std::optional<ProcSample> sampleProcess(pid_t pid);
 /// % of one core used between two samples taken dt_s apart.
 double cpuPercent(const ProcSample& before, const ProcSample& after, double dt_s);
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

@@ -7,7 +7,7 @@
 #include "common/bus/system_config.h"
 #include "common/config.h"
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 int signalNumber(const std::string& name) {
   static const std::pair<const char*, int> table[] = {{"INT", SIGINT},   {"TERM", SIGTERM}, {"HUP", SIGHUP},
@@ -73,4 +73,4 @@ SupervisorConfig loadSupervisorConfig(const std::string& path) {
   return cfg;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

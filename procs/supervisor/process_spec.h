@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 /// One supervised process (an item of the `processes` list).
 struct ProcessSpec {
@@ -77,4 +77,4 @@ std::vector<std::string> expandEnvironment(const std::vector<std::string>& comma
 /// The signal number of a name in ProcessSpec::stop_signal; -1 if unknown.
 int signalNumber(const std::string& name);
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 RestartPolicy::Mode RestartPolicy::parse(const std::string& s) {
   if (s == "never") return Mode::kNever;
@@ -30,4 +30,4 @@ double RestartPolicy::ended(double now, bool failed) {
   return delay;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

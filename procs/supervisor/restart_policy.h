@@ -4,7 +4,7 @@
 // Pure logic on a caller-given clock (seconds), unit-tested without processes.
 #include <string>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 class RestartPolicy {
  public:
@@ -29,4 +29,4 @@ class RestartPolicy {
   int quick_failures_ = 0;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

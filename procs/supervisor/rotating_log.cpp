@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 RotatingLog::RotatingLog(std::string path, size_t max_bytes, int keep)
     : path_(std::move(path)), max_bytes_(max_bytes), keep_(keep) {
@@ -52,4 +52,4 @@ void RotatingLog::note(const std::string& line) {
   write(text.data(), text.size());
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 class RotatingLog {
  public:
@@ -30,4 +30,4 @@ class RotatingLog {
   bool failed_ = false;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

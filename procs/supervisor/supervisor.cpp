@@ -13,7 +13,7 @@
 #include <optional>
 #include <thread>
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 const char* procStateName(ProcState s) {
   switch (s) {
@@ -396,4 +396,4 @@ bool Supervisor::takeChanged() {
   return c;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

@@ -14,7 +14,7 @@
 #include "procs/supervisor/restart_policy.h"
 #include "procs/supervisor/rotating_log.h"
 
-namespace slamaware {
+namespace slamaware::supervisor {
 
 enum class ProcState { kStopped = 0, kStarting = 1, kRunning = 2, kStopping = 3, kBackoff = 4, kFailed = 5, kHung = 6 };
 const char* procStateName(ProcState s);
@@ -81,4 +81,4 @@ class Supervisor {
   bool changed_ = true;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::supervisor

@@ -18,6 +18,7 @@
 #include "slamaware/status_t.hpp"
 
 using namespace slamaware;
+using namespace slamaware::supervisor;
 
 namespace {
 

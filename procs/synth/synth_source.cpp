@@ -7,7 +7,7 @@
 #include "common/image_codec.h"
 #include "procs/synth/scene.h"
 
-namespace slamaware {
+namespace slamaware::synth {
 
 namespace {
 
@@ -99,4 +99,4 @@ std::unique_ptr<FrameSource> openSynthSource(const std::string& arg) {
 
 void registerSynthSource() { registerSourceScheme("synth", openSynthSource); }
 
-}  // namespace slamaware
+}  // namespace slamaware::synth

@@ -7,15 +7,15 @@
 #include <memory>
 #include <string>
 
-#include "procs/camera/frame_source.h"
+#include "common/frame_source.h"
 
-namespace slamaware {
+namespace slamaware::synth {
 
 /// Opens "CONFIG[?seed=N&frames=M]" (the part after "synth:"); throws SourceError naming the
 /// argument for a bad config or query.
 std::unique_ptr<FrameSource> openSynthSource(const std::string& arg);
 
-/// Registers the "synth" scheme with the camera's source registry.
+/// Registers the "synth" scheme with the source registry (common/frame_source.h).
 void registerSynthSource();
 
-}  // namespace slamaware
+}  // namespace slamaware::synth

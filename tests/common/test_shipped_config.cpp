@@ -18,7 +18,9 @@ TEST(ShippedConfig, SystemYamlEqualsDefaults) {
 }
 
 TEST(ShippedConfig, CameraYamlEqualsDefaults) {
-  CameraOptions file = loadConfig<CameraOptions>(test::sourcePath("config/camera.yaml"), "camera", false);
-  CameraOptions defaults;
+  camera::CameraOptions file = loadConfig<camera::CameraOptions>(test::sourcePath("config/camera.yaml"), "camera", false);
+  camera::CameraOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/camera.yaml")), defaultConfigFileText<camera::CameraOptions>("camera"))
+      << "config/camera.yaml is generated from the built-in defaults: make configs";
 }

@@ -145,7 +145,7 @@ TEST(ProposalBoxes, WhatTheEvaluatorDumpsTheTrainerReadsBack) {
   run.boxes[12] = {{600.5, 400, 39.5, 80}};
   const std::string path = test::tempDir("proposal_boxes_round_trip") + "/sub/scene.csv";
   writeProposalBoxes(run, path);
-  const auto read = readProposalBoxes(path);
+  const auto read = recognizer::readProposalBoxes(path);
   ASSERT_EQ(read.size(), 2u);
   EXPECT_EQ(read.at(0), (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2.25, 3, 4)}));
   EXPECT_EQ(read.at(12), (std::vector<cv::Rect2d>{cv::Rect2d(600.5, 400, 39.5, 80)}));

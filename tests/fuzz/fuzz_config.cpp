@@ -34,13 +34,13 @@ Loader section(const char* name) {
 
 const Loader kLoaders[] = {
     [](const std::string& p) { slamaware::loadSystemConfig(p, false); },
-    [](const std::string& p) { slamaware::loadSupervisorConfig(p); },
-    section<slamaware::CameraOptions>("camera"),
-    section<slamaware::SlamOptions>("slam"),
+    [](const std::string& p) { slamaware::supervisor::loadSupervisorConfig(p); },
+    section<slamaware::camera::CameraOptions>("camera"),
+    section<slamaware::slam::SlamOptions>("slam"),
     section<slamaware::proposals::ProposalOptions>("proposals"),
-    section<slamaware::RecognizerOptions>("recognizer"),
+    section<slamaware::recognizer::RecognizerOptions>("recognizer"),
     section<slamaware::objectmap::ObjectMapOptions>("objectmap"),
-    section<slamaware::TrainOptions>("train"),
+    section<slamaware::recognizer::TrainOptions>("train"),
     [](const std::string& p) { slamaware::synth::loadSceneOptions(p); },
     [](const std::string& p) { slamaware::synth::loadObjectSetOptions(p); },
     [](const std::string& p) { slamaware::readSequenceInfo(p); },

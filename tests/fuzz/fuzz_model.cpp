@@ -13,6 +13,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace slamaware;
+  using namespace slamaware::recognizer;
   if (size < 1) return 0;
   const std::vector<uint8_t> bytes(data + 1, data + size);
   const std::vector<uint8_t> file = (data[0] & 1) ? modelFileBytes(bytes) : bytes;

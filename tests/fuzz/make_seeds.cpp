@@ -28,6 +28,7 @@
 namespace fs = std::filesystem;
 using namespace slamaware;
 using namespace slamaware::objectmap;
+using namespace slamaware::recognizer;
 
 namespace {
 

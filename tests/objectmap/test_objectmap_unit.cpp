@@ -844,4 +844,6 @@ TEST(ObjectMapConfig, ShippedYamlEqualsDefaults) {
       loadConfig<ObjectMapOptions>(test::sourcePath("config/objectmap.yaml"), "objectmap", false);
   ObjectMapOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/objectmap.yaml")), defaultConfigFileText<ObjectMapOptions>("objectmap"))
+      << "config/objectmap.yaml is generated from the built-in defaults: make configs";
 }

@@ -784,4 +784,6 @@ TEST(ShippedConfig, ProposalsYamlEqualsDefaults) {
       loadConfig<ProposalOptions>(test::sourcePath("config/proposals.yaml"), "proposals", false);
   ProposalOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/proposals.yaml")), defaultConfigFileText<ProposalOptions>("proposals"))
+      << "config/proposals.yaml is generated from the built-in defaults: make configs";
 }

@@ -12,6 +12,7 @@
 #include "tests/recognizer/synthetic_data.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 
 namespace {
 

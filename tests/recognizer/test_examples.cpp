@@ -10,6 +10,7 @@
 #include "procs/recognizer/example_set.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 
 namespace {
 

@@ -20,6 +20,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 using namespace std::chrono_literals;
 
 namespace {

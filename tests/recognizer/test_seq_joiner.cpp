@@ -12,6 +12,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 
 using Joiner = SeqJoiner<std::string, int>;
 
@@ -129,6 +130,8 @@ TEST(ShippedConfig, RecognizerYamlEqualsDefaults) {
                                                          "recognizer", false);
   RecognizerOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/recognizer.yaml")), defaultConfigFileText<RecognizerOptions>("recognizer"))
+      << "config/recognizer.yaml is generated from the built-in defaults: make configs";
 }
 
 TEST(RecognizerConfig, AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSizeIsRefusedNamingTheKey) {

@@ -23,6 +23,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 namespace fs = std::filesystem;
 
 namespace {

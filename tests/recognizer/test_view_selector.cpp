@@ -6,7 +6,7 @@
 
 #include "procs/recognizer/view_selector.h"
 
-namespace slamaware {
+namespace slamaware::recognizer {
 namespace {
 
 // Candidate `id` seen from `deg` degrees round the vertical axis, at `depth`, with a w x h box.
@@ -109,4 +109,4 @@ TEST(ViewSelector, DisabledOrClearedEveryBoxIsClassified) {
 }
 
 }  // namespace
-}  // namespace slamaware
+}  // namespace slamaware::recognizer

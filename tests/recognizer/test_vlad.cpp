@@ -8,6 +8,7 @@
 #include "procs/recognizer/vlad.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 
 namespace {
 

@@ -8,6 +8,7 @@
 #include "tests/slam/synthetic_scene.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 TEST(BundleAdjustment, LowersTheErrorAndRecoversAPerturbedPose) {
   const test::PinholeCamera cam;

@@ -11,6 +11,7 @@
 #include "procs/slam/matching/matcher.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 namespace {
 cv::Mat texturedImage(uint64_t seed) {

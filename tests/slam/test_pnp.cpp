@@ -10,6 +10,7 @@
 #include "tests/slam/synthetic_scene.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 namespace {
 

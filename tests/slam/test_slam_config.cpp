@@ -9,11 +9,14 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 TEST(SlamConfig, ShippedFileEqualsTheDefaults) {
   SlamOptions file = loadConfig<SlamOptions>(test::sourcePath("config/slam.yaml"), "slam", false);
   SlamOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/slam.yaml")), defaultConfigFileText<SlamOptions>("slam"))
+      << "config/slam.yaml is generated from the built-in defaults: make configs";
 }
 
 TEST(SlamConfig, AMisspeltKeyIsRefused) {

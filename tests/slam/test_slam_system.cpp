@@ -21,6 +21,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::slam;
 
 namespace {
 

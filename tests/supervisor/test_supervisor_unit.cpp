@@ -14,6 +14,7 @@
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
+using namespace slamaware::supervisor;
 
 TEST(RestartPolicy, BackoffDoublesUpToTheCapAndResetsAfterAStableRun) {
   RestartPolicy p(RestartPolicy::Mode::kOnFailure, 0.01, 1.0, 10.0);

@@ -38,6 +38,13 @@ std::string tempDir(const std::string& name) {
   return p.string();
 }
 
+std::string readTextFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
 std::string testUrl() { return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"; }
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& log_path) : log_path_(log_path) {
@@ -83,12 +90,7 @@ int ChildProcess::stop(std::chrono::milliseconds grace) {
   return rc;
 }
 
-std::string ChildProcess::log() const {
-  std::ifstream in(log_path_);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+std::string ChildProcess::log() const { return readTextFile(log_path_); }
 
 const char* const BusRecorder::kProbeChannel = "TEST_RECORDER_PROBE";
 

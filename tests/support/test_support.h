@@ -20,6 +20,8 @@ std::string sourcePath(const std::string& relative);
 std::string sharedData(const std::string& relative);
 /// A fresh empty folder under the build tree for one test.
 std::string tempDir(const std::string& name);
+/// The whole content of a file ("" if it cannot be read).
+std::string readTextFile(const std::string& path);
 /// The bus URL tests use (inside their own network namespace).
 std::string testUrl();
 

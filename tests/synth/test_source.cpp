@@ -5,7 +5,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "procs/camera/frame_source.h"
+#include "common/frame_source.h"
 #include "procs/synth/scene.h"
 #include "procs/synth/synth_source.h"
 #include "procs/synth/writers.h"
@@ -23,7 +23,7 @@ std::vector<uint8_t> readBytes(const std::string& path) {
 }  // namespace
 
 TEST(SynthSource, StreamsTheSameFramesAsTheWrittenFolder) {
-  registerSynthSource();
+  synth::registerSynthSource();
   const std::string cfg = test::sourcePath("config/scenes/cafe_small.yaml");
   std::unique_ptr<FrameSource> src =
       openSource("synth:" + cfg + "?frames=4&seed=9", SourceOptions{});
@@ -55,7 +55,7 @@ TEST(SynthSource, StreamsTheSameFramesAsTheWrittenFolder) {
 }
 
 TEST(SynthSource, BadArgumentsAreRefused) {
-  registerSynthSource();
+  synth::registerSynthSource();
   const std::string cfg = test::sourcePath("config/scenes/cafe_small.yaml");
   auto error = [](const std::string& spec) {
     try {

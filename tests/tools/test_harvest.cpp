@@ -21,6 +21,7 @@
 
 using namespace slamaware;
 using namespace slamaware::objectmap;
+using namespace slamaware::recognizer;
 
 namespace {
 

@@ -169,7 +169,7 @@ int runLogs(const NodeArgs& node, const std::string& name, int lines, bool follo
     std::fprintf(stderr, "logs: --system FILE is needed to find the supervisor's log folder\n");
     return 2;
   }
-  const SupervisorConfig cfg = loadSupervisorConfig(node.system);
+  const supervisor::SupervisorConfig cfg = supervisor::loadSupervisorConfig(node.system);
   const std::string path = cfg.options.log_dir + "/" + name + ".log";
   std::ifstream in(path);
   if (!in) {

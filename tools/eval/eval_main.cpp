@@ -128,7 +128,7 @@ struct EvalContext {
   PipelineRunOptions pipeline;
   std::string out_dir;
   bool from_logs = false, offline = false, verbose = false;
-  SlamOptions slam_options;                     // offline
+  slam::SlamOptions slam_options;                     // offline
   proposals::ProposalOptions proposal_options;  // of the recorded run, or the ones to try
   bool rerun_proposals = false;  // score proposal_options' boxes, not the recorded ones
   ProposalEvalOptions peo;
@@ -337,7 +337,7 @@ int main(int argc, char** argv) {
     if (c.offline) {
       if (slam_config.empty() && fs::exists(fs::path(pipeline.config_dir) / "slam.yaml"))
         slam_config = (fs::path(pipeline.config_dir) / "slam.yaml").string();
-      c.slam_options = loadConfig<SlamOptions>(slam_config, "slam", false);
+      c.slam_options = loadConfig<slam::SlamOptions>(slam_config, "slam", false);
     }
     if (!objectmap_config.empty())
       c.objectmap_options =

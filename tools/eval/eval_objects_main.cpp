@@ -39,6 +39,7 @@
 #include "tools/eval/recognition_metrics.h"
 
 using namespace slamaware;
+using namespace slamaware::recognizer;
 namespace fs = std::filesystem;
 
 namespace {
@@ -233,161 +234,173 @@ std::vector<std::string> extraTrainingFor(const std::string& name, const std::ve
   return dirs;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"slamaware-eval-objects: recognizer accuracy on held-out object instances"};
-  std::vector<std::string> objects, sequences;
+struct Args {
+  std::vector<std::string> objects, sequences, extra, held_out;
   std::string model_path = "models/recognizer.model";
   std::string out, config, shared = "../shared/data", protocol = "auto", log_level = "info";
-  int max_views = -1, loio_max = 16;
-  app.add_option("--objects", objects, "object set folders (default: every set in <shared>/objects and build/data/objects)");
-  app.add_option("--out", out, "JSON fragment to write")->required();
-  app.add_option("--config", config, "YAML file with a 'train' section (default: built-in options)")
+  int max_views = -1, loio_max = 16, ss_boxes = 300, ss_width = 320;
+  bool skip_sets = false;
+};
+
+void addOptions(CLI::App& app, Args& a) {
+  app.add_option("--objects", a.objects, "object set folders (default: every set in <shared>/objects and build/data/objects)");
+  app.add_option("--out", a.out, "JSON fragment to write")->required();
+  app.add_option("--config", a.config, "YAML file with a 'train' section (default: built-in options)")
       ->check(CLI::ExistingFile);
-  app.add_option("--shared", shared, "the shared data folder");
-  app.add_option("--protocol", protocol, "auto, loio (leave-one-instance-out) or holdout (one instance per category)")
+  app.add_option("--shared", a.shared, "the shared data folder");
+  app.add_option("--protocol", a.protocol, "auto, loio (leave-one-instance-out) or holdout (one instance per category)")
       ->check(CLI::IsMember({"auto", "loio", "holdout"}));
-  app.add_option("--loio-max-instances", loio_max, "auto: leave-one-instance-out up to this many instances");
-  std::vector<std::string> extra, held_out;
+  app.add_option("--loio-max-instances", a.loio_max, "auto: leave-one-instance-out up to this many instances");
   // One value per occurrence (repeat the option for more): a list would swallow the sequence
   // folders that follow it on the command line (make eval passes them last).
-  app.add_option("--hold-out", held_out,
+  app.add_option("--hold-out", a.held_out,
                  "leave-one-instance-out: only this instance's folds (e.g. ball_1; repeat for more; default: "
                  "every instance)")
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  app.add_option("--extra-training", extra,
+  app.add_option("--extra-training", a.extra,
                  "[SET=]DIR: an object set (e.g. rendered by slamaware-synth objects) whose crops of the "
                  "categories of the evaluated set SET (default: of every set but itself) are added to the "
                  "training data of every fold; never tested; repeat for more")
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  app.add_option("--max-views", max_views, "views per instance (overrides train.max_views_per_instance)");
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error");
-  app.add_option("sequences", sequences,
+  app.add_option("--max-views", a.max_views, "views per instance (overrides train.max_views_per_instance)");
+  app.add_option("--log-level", a.log_level, "trace, debug, info, warn, error");
+  app.add_option("sequences", a.sequences,
                  "sequence folders: their ground-truth boxes are classified with --model (objects of other "
                  "categories count as background)");
-  app.add_option("--model", model_path, "model for the ground-truth boxes of the sequences");
-  int ss_boxes = 300, ss_width = 320;
-  app.add_option("--ss-boxes", ss_boxes,
+  app.add_option("--model", a.model_path, "model for the ground-truth boxes of the sequences");
+  app.add_option("--ss-boxes", a.ss_boxes,
                  "photographed sequences: selective-search boxes per frame classified as detections (0: none)");
-  app.add_option("--ss-width", ss_width, "px, frames are downscaled to this width for selective search");
-  bool skip_sets = false;
-  app.add_flag("--no-object-sets", skip_sets, "only the ground-truth boxes of the sequences");
+  app.add_option("--ss-width", a.ss_width, "px, frames are downscaled to this width for selective search");
+  app.add_flag("--no-object-sets", a.skip_sets, "only the ground-truth boxes of the sequences");
+}
+
+void printConfusion(const std::vector<std::string>& classes, const std::vector<std::vector<int64_t>>& confusion) {
+  for (size_t i = 0; i < classes.size(); ++i) {
+    std::cout << "  " << classes[i];
+    for (int64_t n : confusion[i]) std::cout << " " << n;
+    std::cout << "\n";
+  }
+}
+
+// One object set: held-out accuracy (leave-one-instance-out or one instance per category out),
+// or why it cannot be split.
+nlohmann::json evaluateObjectSet(const std::string& dir, const Args& a, const TrainOptions& options) {
+  std::unique_ptr<ProgressBar> bar;
+  std::string current;
+  auto progress = [&](const std::string& stage, int64_t done, int64_t total) {
+    if (stage != current) {
+      if (bar) bar->finish();
+      bar = std::make_unique<ProgressBar>(stage, total);
+      current = stage;
+    }
+    bar->update(done);
+  };
+  const ObjectSet set = ObjectSet::open(dir);
+  size_t instances = 0;
+  for (const auto& [c, list] : set.instances()) instances += list.size();
+  // Photographed sets are small and are what counts: every instance is held out in turn.
+  const bool loio = a.protocol == "loio" ||
+                    (a.protocol == "auto" && (!set.rendered() || static_cast<int>(instances) <= a.loio_max));
+  const std::string name = folderName(dir);
+  const std::string why_not = whyNotSplit(set, loio);
+  if (!why_not.empty()) {
+    std::cout << name << ": skipped, " << why_not << "\n";
+    return {{"skipped", why_not}};
+  }
+  const std::vector<std::string> extra_dirs = extraTrainingFor(name, a.extra);
+  const HeldOutResult r = loio ? leaveOneInstanceOut(dir, options, progress, extra_dirs, a.held_out)
+                               : oneInstancePerCategoryOut(dir, options, progress, extra_dirs);
+  if (bar) bar->finish();
+  nlohmann::json entry;
+  entry["accuracy"] = r.accuracy();
+  entry["confusion"] = r.confusion;
+  entry["classes"] = r.classes;
+  entry["protocol"] = r.protocol;
+  entry["crops"] = r.crops;
+  if (!extra_dirs.empty()) {
+    entry["extra_training"] = extra_dirs;
+    entry["extra_training_crops"] = r.extra_crops;
+  }
+  entry["instance_accuracy"] = r.instance_accuracy;
+  std::cout << name << " (" << r.protocol << "): category accuracy " << r.accuracy() << "% (" << r.correct << "/"
+            << r.crops << ")\nconfusion (rows: true, columns: predicted):\n";
+  printConfusion(r.classes, r.confusion);
+  for (const auto& [inst, acc] : r.instance_accuracy) std::cout << "  " << inst << ": " << acc << "%\n";
+  return entry;
+}
+
+// The ground-truth boxes of every boxed sequence through the model, and on photographed ones
+// selective search + the recognizer as detections; into j["sequences"] and j["overall"].
+void evaluateSequences(const Args& a, nlohmann::json& j) {
+  auto model = std::make_shared<const RecognizerModel>(loadModel(a.model_path));
+  const RecognizerOptions recognizer_options;
+  Recognizer recognizer(model, recognizer_options);
+  BoxTally suite;
+  for (const auto& dir : a.sequences) {
+    const SequenceFolder seq = SequenceFolder::open(dir);
+    if (!seq.hasBoxes()) continue;
+    const BoxTally t = classifySceneBoxes(recognizer, seq, 5);
+    const std::string name = folderName(dir);
+    j["sequences"][name]["gt_boxes"] = t.json();
+    std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
+              << " ground-truth boxes right (jittered: " << t.json()["jittered_accuracy"].get<double>() << "%)\n";
+    t.print(std::cout);
+    if (isSyntheticSequence(seq)) {
+      suite.merge(t);
+      continue;
+    }
+    const std::vector<std::string> evaluated = evaluatedClasses(recognizer.classes(), seq);
+    if (evaluated.empty() || a.ss_boxes <= 0) continue;
+    const nlohmann::json ss =
+        selectiveSearchDetection(recognizer, recognizer_options, seq, evaluated, 5, a.ss_boxes, a.ss_width);
+    j["sequences"][name]["single_view_ss"] = ss;
+    std::cout << name << ": selective search + recognizer, single-view mAP " << ss["mAP"] << " ("
+              << ss["boxes_per_frame_after_suppression"] << " boxes per frame)\n";
+  }
+  if (suite.boxes > 0) {
+    j["overall"]["gt_boxes"] = suite.json();
+    std::cout << "suite: " << suite.json()["accuracy"].get<double>() << "% of " << suite.boxes
+              << " ground-truth boxes right; confusion (rows: true, columns: predicted):\n";
+    printConfusion(suite.classes, suite.confusion);
+  }
+}
+
+void writeJson(const nlohmann::json& j, const std::string& out) {
+  fs::path p(out);
+  if (p.has_parent_path()) fs::create_directories(p.parent_path());
+  std::ofstream f(out);
+  f << j.dump(2) << "\n";
+  if (!f) throw std::runtime_error(out + ": cannot write");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"slamaware-eval-objects: recognizer accuracy on held-out object instances"};
+  Args a;
+  addOptions(app, a);
   CLI11_PARSE(app, argc, argv);
-  spdlog::set_level(spdlog::level::from_str(log_level));
+  spdlog::set_level(spdlog::level::from_str(a.log_level));
   try {
-    TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
-    if (max_views >= 0) options.max_views_per_instance = max_views;
-    if (objects.empty() && !skip_sets) objects = defaultObjectSets(shared);
-    if (objects.empty() && !skip_sets) throw std::runtime_error("no object sets found (give --objects DIR)");
-    for (const auto& a : extra) {
-      const ExtraTraining e(a);
-      if (!e.set.empty() &&
-          std::none_of(objects.begin(), objects.end(), [&](const std::string& d) { return folderName(d) == e.set; }))
-        throw std::runtime_error("--extra-training " + a + ": no evaluated object set is named " + e.set);
+    TrainOptions options = loadConfig<TrainOptions>(a.config, "train", false);
+    if (a.max_views >= 0) options.max_views_per_instance = a.max_views;
+    if (a.objects.empty() && !a.skip_sets) a.objects = defaultObjectSets(a.shared);
+    if (a.objects.empty() && !a.skip_sets) throw std::runtime_error("no object sets found (give --objects DIR)");
+    for (const auto& arg : a.extra) {
+      const ExtraTraining e(arg);
+      if (!e.set.empty() && std::none_of(a.objects.begin(), a.objects.end(),
+                                         [&](const std::string& d) { return folderName(d) == e.set; }))
+        throw std::runtime_error("--extra-training " + arg + ": no evaluated object set is named " + e.set);
     }
     nlohmann::json j = nlohmann::json::object();
     j["objects"] = nlohmann::json::object();
-    for (const auto& dir : objects) {
-      std::unique_ptr<ProgressBar> bar;
-      std::string current;
-      auto progress = [&](const std::string& stage, int64_t done, int64_t total) {
-        if (stage != current) {
-          if (bar) bar->finish();
-          bar = std::make_unique<ProgressBar>(stage, total);
-          current = stage;
-        }
-        bar->update(done);
-      };
-      const ObjectSet set = ObjectSet::open(dir);
-      const size_t instances = [&] {
-        size_t n = 0;
-        for (const auto& [c, list] : set.instances()) n += list.size();
-        return n;
-      }();
-      // Photographed sets are small and are what counts: every instance is held out in turn.
-      const bool loio = protocol == "loio" ||
-                        (protocol == "auto" && (!set.rendered() || static_cast<int>(instances) <= loio_max));
-      const std::string name = folderName(dir);
-      const std::string why_not = whyNotSplit(set, loio);
-      if (!why_not.empty()) {
-        j["objects"][name] = {{"skipped", why_not}};
-        std::cout << name << ": skipped, " << why_not << "\n";
-        continue;
-      }
-      const std::vector<std::string> extra_dirs = extraTrainingFor(name, extra);
-      const HeldOutResult r =
-          loio ? leaveOneInstanceOut(dir, options, progress, extra_dirs, held_out)
-               : oneInstancePerCategoryOut(dir, options, progress, extra_dirs);
-      if (bar) bar->finish();
-      nlohmann::json entry;
-      entry["accuracy"] = r.accuracy();
-      entry["confusion"] = r.confusion;
-      entry["classes"] = r.classes;
-      entry["protocol"] = r.protocol;
-      entry["crops"] = r.crops;
-      if (!extra_dirs.empty()) {
-        entry["extra_training"] = extra_dirs;
-        entry["extra_training_crops"] = r.extra_crops;
-      }
-      entry["instance_accuracy"] = r.instance_accuracy;
-      j["objects"][name] = entry;
-      std::cout << name << " (" << r.protocol << "): category accuracy " << r.accuracy() << "% (" << r.correct << "/"
-                << r.crops << ")\nconfusion (rows: true, columns: predicted):\n";
-      for (size_t i = 0; i < r.classes.size(); ++i) {
-        std::cout << "  " << r.classes[i];
-        for (int64_t n : r.confusion[i]) std::cout << " " << n;
-        std::cout << "\n";
-      }
-      for (const auto& [inst, acc] : r.instance_accuracy) std::cout << "  " << inst << ": " << acc << "%\n";
-    }
-    if (!sequences.empty()) {
-      auto model = std::make_shared<const RecognizerModel>(loadModel(model_path));
-      const RecognizerOptions recognizer_options;
-      Recognizer recognizer(model, recognizer_options);
-      BoxTally suite;
-      for (const auto& dir : sequences) {
-        const SequenceFolder seq = SequenceFolder::open(dir);
-        if (!seq.hasBoxes()) continue;
-        const BoxTally t = classifySceneBoxes(recognizer, seq, 5);
-        const std::string name = folderName(dir);
-        j["sequences"][name]["gt_boxes"] = t.json();
-        std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
-                  << " ground-truth boxes right (jittered: " << t.json()["jittered_accuracy"].get<double>()
-                  << "%)\n";
-        t.print(std::cout);
-        if (isSyntheticSequence(seq)) {
-          suite.merge(t);
-          continue;
-        }
-        const std::vector<std::string> evaluated = evaluatedClasses(recognizer.classes(), seq);
-        if (evaluated.empty() || ss_boxes <= 0) continue;
-        const nlohmann::json ss =
-            selectiveSearchDetection(recognizer, recognizer_options, seq, evaluated, 5, ss_boxes, ss_width);
-        j["sequences"][name]["single_view_ss"] = ss;
-        std::cout << name << ": selective search + recognizer, single-view mAP " << ss["mAP"] << " ("
-                  << ss["boxes_per_frame_after_suppression"] << " boxes per frame)\n";
-      }
-      if (suite.boxes > 0) {
-        j["overall"]["gt_boxes"] = suite.json();
-        std::cout << "suite: " << suite.json()["accuracy"].get<double>() << "% of " << suite.boxes
-                  << " ground-truth boxes right; confusion (rows: true, columns: predicted):\n";
-        for (size_t i = 0; i < suite.classes.size(); ++i) {
-          std::cout << "  " << suite.classes[i];
-          for (int64_t n : suite.confusion[i]) std::cout << " " << n;
-          std::cout << "\n";
-        }
-      }
-    }
-    fs::path p(out);
-    if (p.has_parent_path()) fs::create_directories(p.parent_path());
-    std::ofstream f(out);
-    f << j.dump(2) << "\n";
-    if (!f) throw std::runtime_error(out + ": cannot write");
+    for (const auto& dir : a.objects) j["objects"][folderName(dir)] = evaluateObjectSet(dir, a, options);
+    if (!a.sequences.empty()) evaluateSequences(a, j);
+    writeJson(j, a.out);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

@@ -10,18 +10,18 @@
 
 namespace slamaware {
 
-SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options,
+SlamRecording runSlamOffline(const SequenceFolder& sequence, const slam::SlamOptions& options,
                              bool verbose, OfflineRunStats* stats) {
   SlamRecording run;
   cv::setNumThreads(1);  // as the node does: our own threads are the parallelism
-  SlamSystem slam(options, true);
-  slam.setCamera(sequence.info().camera);
+  slam::SlamSystem system(options, true);
+  system.setCamera(sequence.info().camera);
   int64_t depth_updates = 0;
   for (size_t i = 0; i < sequence.size(); ++i) {
     const cv::Mat bgr = readImage(sequence.framePath(i));
     const int64_t utime = static_cast<int64_t>(std::llround(sequence.timestamp(i) * 1e6));
-    const SlamOutput out = slam.processFrame(utime, static_cast<int32_t>(i), bgr);
-    const SlamStats st = slam.stats();
+    const slam::SlamOutput out = system.processFrame(utime, static_cast<int32_t>(i), bgr);
+    const slam::SlamStats st = system.stats();
     if (stats) {
       stats->track_ms.push_back(st.track_ms);
       if (st.depth_updates != depth_updates) stats->depth_ms.push_back(st.depth_update_ms);
@@ -46,13 +46,13 @@ SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& 
       spdlog::info(
           "seq {:4d} {:12s} map {} tracked {:4d} kfs {:3d} points {:5d} seeds {:6d} dpts {:7d} "
           "track {:.1f} ms (orb {:.1f}) depth {:.1f} ms",
-          i, poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked, st.keyframes,
+          i, slam::poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked, st.keyframes,
           st.points, st.depth_seeds, st.depth_points, st.track_ms, st.extract_ms,
           st.depth_update_ms);
       for (const auto& e : out.events) spdlog::info("  {}", e);
     }
   }
-  slam.flush();
+  system.flush();
   return run;
 }
 

@@ -15,7 +15,7 @@ struct OfflineRunStats {
 };
 
 /// verbose: one log line per frame.
-SlamRecording runSlamOffline(const SequenceFolder& sequence, const SlamOptions& options,
+SlamRecording runSlamOffline(const SequenceFolder& sequence, const slam::SlamOptions& options,
                              bool verbose, OfflineRunStats* stats = nullptr);
 
 }  // namespace slamaware

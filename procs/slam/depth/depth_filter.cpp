@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 constexpr int kSeedBorder = 8;  // px: host samples along the epipolar line need room
@@ -288,4 +288,4 @@ DepthFilterStats DepthFilter::stats() const {
   return stats_;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

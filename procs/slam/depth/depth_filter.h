@@ -22,7 +22,7 @@
 #include "procs/slam/depth/seed.h"
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// A new keyframe to seed.
 struct DepthKeyframeInput {
@@ -137,4 +137,4 @@ class DepthFilter {
   DepthFilterStats stats_;                      ///< guarded by store_mutex_
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -6,7 +6,7 @@
 #include <limits>
 #include <vector>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -154,4 +154,4 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   return m;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -10,7 +10,7 @@
 
 #include "procs/slam/depth/seed.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 struct EpipolarSearchParams {
   float fx = 1, fy = 1, cx = 0, cy = 0;  ///< pinhole camera of both images (undistorted)
@@ -34,4 +34,4 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame,
                              const Eigen::Matrix3f& R_cur_host, const Eigen::Vector3f& t_cur_host,
                              const DepthSeed& seed, const EpipolarSearchParams& params);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

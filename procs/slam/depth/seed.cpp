@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 DepthSeed makeSeed(float u, float v, const Eigen::Vector3f& bearing, float mean_depth,
                    float min_depth) {
@@ -65,4 +65,4 @@ double depthUncertainty(const Eigen::Vector3d& t, const Eigen::Vector3d& f, doub
   return std::abs(z_plus - z);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

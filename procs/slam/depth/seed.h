@@ -6,7 +6,7 @@
 // inverse depth times a Beta(a, b) on pi.
 #include <Eigen/Core>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 struct DepthSeed {
   float u = 0, v = 0;                            ///< px, undistorted pixel in the host keyframe
@@ -38,4 +38,4 @@ void updateSeed(DepthSeed* seed, float x, float tau2);
 double depthUncertainty(const Eigen::Vector3d& t, const Eigen::Vector3d& f, double z,
                         double px_error_angle);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -9,7 +9,7 @@
 #include <random>
 #include <thread>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -330,4 +330,4 @@ int descriptorDistance(const uint8_t* a, const uint8_t* b) {
          __builtin_popcountll(pa[2] ^ pb[2]) + __builtin_popcountll(pa[3] ^ pb[3]);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

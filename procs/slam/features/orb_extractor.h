@@ -9,7 +9,7 @@
 
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// Scales of the pyramid levels and the position noise of a feature found at each.
 struct ScalePyramid {
@@ -62,4 +62,4 @@ class OrbExtractor {
 /// Hamming distance of two 32-byte descriptors.
 int descriptorDistance(const uint8_t* a, const uint8_t* b);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

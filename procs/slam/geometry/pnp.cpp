@@ -6,7 +6,7 @@
 
 #include "procs/slam/optimization/pose_optimizer.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -95,4 +95,4 @@ PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& pw,
   return result;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

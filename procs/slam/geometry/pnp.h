@@ -7,7 +7,7 @@
 
 #include "common/geometry.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 struct PnpOptions {
   int iterations = 200;  ///< at most; fewer when the inlier ratio allows (99% confidence)
@@ -29,4 +29,4 @@ PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_world,
                          double fx, double fy, double cx, double cy, const PnpOptions& options,
                          uint64_t seed);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

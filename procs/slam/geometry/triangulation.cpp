@@ -3,7 +3,7 @@
 #include <Eigen/SVD>
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 bool triangulateDlt(const SE3& T1, const SE3& T2, const Eigen::Vector3d& ray1,
                     const Eigen::Vector3d& ray2, Eigen::Vector3d* p_world) {
@@ -26,4 +26,4 @@ double parallaxCos(const Eigen::Vector3d& p, const Eigen::Vector3d& c1, const Ei
   return n > 0 ? a.dot(b) / n : 1.0;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

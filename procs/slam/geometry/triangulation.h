@@ -4,7 +4,7 @@
 
 #include "common/geometry.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// Linear (DLT) triangulation: the point seen along ray1 (x, y, 1) from camera 1 and ray2 from
 /// camera 2, both poses T_camera_world. False when the system is degenerate or the point is at
@@ -17,4 +17,4 @@ bool triangulateDlt(const SE3& T1_camera_world, const SE3& T2_camera_world,
 double parallaxCos(const Eigen::Vector3d& p, const Eigen::Vector3d& center1,
                    const Eigen::Vector3d& center2);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

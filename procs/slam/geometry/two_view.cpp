@@ -13,7 +13,7 @@
 #include "procs/slam/optimization/bundle_adjustment.h"
 #include "procs/slam/run_shared.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -606,4 +606,4 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
   return r;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -14,7 +14,7 @@
 #include "common/geometry.h"
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 struct TwoViewResult {
   bool ok = false;
@@ -36,4 +36,4 @@ TwoViewResult reconstructTwoView(const std::vector<Eigen::Vector2d>& px_ref,
                                  const Eigen::Matrix3d& K, const InitOptions& options,
                                  uint64_t seed);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

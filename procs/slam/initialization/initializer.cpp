@@ -8,7 +8,7 @@
 #include "procs/slam/matching/matcher.h"
 #include "procs/slam/optimization/bundle_adjustment.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 constexpr int kInitMatchDistance = 64;  // bits: looser than tracking, views may be far apart
@@ -148,4 +148,4 @@ std::shared_ptr<Map> Initializer::buildMap(const Frame& reference, Frame& frame,
   return map;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

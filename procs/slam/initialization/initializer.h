@@ -11,7 +11,7 @@
 #include "procs/slam/map/map.h"
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class Initializer {
  public:
@@ -37,4 +37,4 @@ class Initializer {
   int attempts_ = 0;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -5,7 +5,7 @@
 
 #include "procs/slam/map/map_point.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 Intrinsics::Intrinsics(const CameraModel& cam, const ScalePyramid& pyr)
     : fx(cam.fx()),
@@ -76,4 +76,4 @@ int Frame::countInliers() const {
   return n;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -11,7 +11,7 @@
 #include "common/geometry.h"
 #include "procs/slam/features/orb_extractor.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class MapPoint;
 class KeyFrame;
@@ -88,4 +88,4 @@ struct Frame {
   }
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

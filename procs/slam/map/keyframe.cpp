@@ -5,7 +5,7 @@
 
 #include "procs/slam/map/map_point.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 KeyFrame::KeyFrame(int64_t id_, int map_id_, const Frame& frame)
     : id(id_),
@@ -134,4 +134,4 @@ double KeyFrame::thumbnailSimilarity(const cv::Mat& a, const cv::Mat& b) {
   return a.dot(b);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -13,7 +13,7 @@
 
 #include "procs/slam/map/frame.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class MapPoint;
 
@@ -72,4 +72,4 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> ordered_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

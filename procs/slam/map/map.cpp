@@ -1,6 +1,6 @@
 #include "procs/slam/map/map.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 Map::~Map() {
   for (auto& [id, kf] : keyframes) {
@@ -69,4 +69,4 @@ void Map::replacePoint(const std::shared_ptr<MapPoint>& a, const std::shared_ptr
   points.erase(a->id);
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -10,7 +10,7 @@
 #include "procs/slam/map/keyframe.h"
 #include "procs/slam/map/map_point.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class Map {
  public:
@@ -46,4 +46,4 @@ struct IdSource {
   std::atomic<int> next_map{1};
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -6,7 +6,7 @@
 #include "procs/slam/features/orb_extractor.h"
 #include "procs/slam/map/keyframe.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 MapPoint::MapPoint(int64_t id_, int map_id_, const Eigen::Vector3d& p,
                    const std::shared_ptr<KeyFrame>& ref)
@@ -81,4 +81,4 @@ std::shared_ptr<MapPoint> MapPoint::resolve(std::shared_ptr<MapPoint> p) {
   return p;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

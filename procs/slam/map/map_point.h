@@ -11,7 +11,7 @@
 #include <map>
 #include <memory>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class KeyFrame;
 struct ScalePyramid;
@@ -61,4 +61,4 @@ class MapPoint {
   static std::shared_ptr<MapPoint> resolve(std::shared_ptr<MapPoint> p);
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

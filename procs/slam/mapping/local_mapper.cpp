@@ -12,7 +12,7 @@
 #include "procs/slam/matching/matcher.h"
 #include "procs/slam/optimization/bundle_adjustment.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 LocalMapper::LocalMapper(const SlamOptions& options, IdSource& ids, bool allow_abort, int nice)
     : options_(options),
@@ -401,4 +401,4 @@ void LocalMapper::cullKeyFrames(Map& map, const std::shared_ptr<KeyFrame>& kf,
   }
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

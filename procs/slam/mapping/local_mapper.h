@@ -20,7 +20,7 @@
 #include "procs/slam/map/map.h"
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// Keyframes whose pose local mapping changed or that it removed.
 struct MappingEvents {
@@ -77,4 +77,4 @@ class LocalMapper {
   std::thread thread_;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

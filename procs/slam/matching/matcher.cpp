@@ -9,7 +9,7 @@
 #include "procs/slam/map/map.h"
 #include "procs/slam/map/map_point.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -310,4 +310,4 @@ int fuse(Map& map, const std::shared_ptr<KeyFrame>& kf,
   return fused;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

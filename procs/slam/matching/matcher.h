@@ -12,7 +12,7 @@
 #include "common/geometry.h"
 #include "procs/slam/map/frame.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 class KeyFrame;
 class MapPoint;
@@ -76,4 +76,4 @@ int fuse(Map& map, const std::shared_ptr<KeyFrame>& kf,
 Eigen::Matrix3d fundamentalFromPoses(const SE3& T1_camera_world, const SE3& T2_camera_world,
                                      const Eigen::Matrix3d& K);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -141,4 +141,4 @@ BaSummary bundleAdjust(BaProblem* problem, const BaOptions& options) {
   return summary;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

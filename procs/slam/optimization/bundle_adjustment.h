@@ -7,7 +7,7 @@
 
 #include "common/geometry.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 struct BaCamera {
   SE3 T_camera_world = SE3::Identity();
@@ -56,4 +56,4 @@ BaSummary bundleAdjust(BaProblem* problem, const BaOptions& options);
 /// estimates; *in_front is false when the point is behind the camera.
 double observationChi2(const BaProblem& problem, const BaObservation& obs, bool* in_front);
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

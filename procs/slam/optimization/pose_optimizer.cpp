@@ -3,7 +3,7 @@
 #include <Eigen/Cholesky>
 #include <cmath>
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -96,4 +96,4 @@ int optimizePose(SE3* T, std::vector<PoseObservation>& obs, double fx, double fy
   return inliers;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

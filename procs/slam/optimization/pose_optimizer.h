@@ -8,7 +8,7 @@
 
 #include "common/geometry.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 struct Intrinsics;
 
@@ -30,4 +30,4 @@ struct PoseOptimizerOptions {
 int optimizePose(SE3* T_camera_world, std::vector<PoseObservation>& observations, double fx,
                  double fy, double cx, double cy, const PoseOptimizerOptions& options = {});
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

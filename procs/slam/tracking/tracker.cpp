@@ -10,7 +10,7 @@
 #include "procs/slam/geometry/pnp.h"
 #include "procs/slam/optimization/pose_optimizer.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 namespace {
 
@@ -432,4 +432,4 @@ TrackResult Tracker::track(Frame& frame, bool continuous, bool mapper_idle) {
   return r;
 }
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

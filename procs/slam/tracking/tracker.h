@@ -19,7 +19,7 @@
 #include "procs/slam/matching/matcher.h"
 #include "procs/slam/slam_options.h"
 
-namespace slamaware {
+namespace slamaware::slam {
 
 /// What the tracker concluded about one frame.
 enum class TrackOutcome {
@@ -92,4 +92,4 @@ class Tracker {
   int64_t lost_since_utime_ = 0;
 };
 
-}  // namespace slamaware
+}  // namespace slamaware::slam

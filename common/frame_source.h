@@ -1,7 +1,8 @@
 #pragma once
 // Where camera frames come from: a sequence folder (DATASETS.md §1), a video file, a V4L
-// device, or (registered by the synthetic generator) a rendered scene. The camera node paces
-// and publishes what a FrameSource yields; sources know nothing of LCM.
+// device, or a registered scheme: an LCM log (registered by the camera, "log:PATH" or any
+// *.lcm path) or a rendered scene (registered by the synthetic generator, "synth:CONFIG"). The
+// camera node paces and publishes what a FrameSource yields; this library knows nothing of LCM.
 #include <functional>
 #include <memory>
 #include <opencv2/core/mat.hpp>
@@ -63,8 +64,9 @@ struct SourceOptions {
   }
 };
 
-/// Makes a source from a --source argument: a sequence folder, a video file, "v4l:N", or
-/// "<scheme>:ARG" for a registered scheme. Throws SourceError naming the argument.
+/// Makes a source from a --source argument: a sequence folder, a video file, "v4l:N",
+/// "<scheme>:ARG" for a registered scheme, or a *.lcm path (the "log" scheme). Throws SourceError
+/// naming the argument.
 std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options);
 
 /// Lets another part add a source scheme (e.g. the synthetic generator: "synth:CONFIG").
