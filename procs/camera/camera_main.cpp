@@ -40,6 +40,58 @@ camera_info_t makeInfo(const FrameSource& src, const std::string& frame_id) {
   return info;
 }
 
+// The wire format of config's camera.pixel_format; a ConfigError naming the file otherwise.
+int8_t pixelFormatOf(const CameraOptions& opts, const std::string& config) {
+  if (opts.pixel_format == "jpeg") return image_t::PIXEL_FORMAT_JPEG;
+  if (opts.pixel_format == "rgb8") return image_t::PIXEL_FORMAT_RGB8;
+  throw ConfigError((config.empty() ? std::string("defaults") : config) +
+                    ": key 'camera.pixel_format': expected jpeg or rgb8, got '" + opts.pixel_format + "'");
+}
+
+// A frame as a CAMERA message: a JPEG file's own bytes when they may pass through, else encoded.
+image_t frameMessage(SourceFrame& frame, int8_t format, const CameraOptions& opts) {
+  if (format != image_t::PIXEL_FORMAT_JPEG || !opts.passthrough_jpeg || frame.jpeg.empty())
+    return makeImageMessage(frame.bgr, frame.utime, frame.seq, format, opts.jpeg_quality);
+  image_t msg{};
+  msg.utime = frame.utime;
+  msg.seq = frame.seq;
+  msg.width = frame.bgr.cols;
+  msg.height = frame.bgr.rows;
+  msg.pixel_format = image_t::PIXEL_FORMAT_JPEG;
+  msg.data = std::move(frame.jpeg);
+  msg.size = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+// Pacing against the source's own clock: a frame is due `speed` times faster than its utime says
+// after the first frame's (speed 0 or a live device: at once).
+class Pacer {
+ public:
+  Pacer(double speed, bool live) : speed_(live ? 0 : speed) {}
+  /// Calls wait(ms) (at most 20 ms each) until the frame of `utime` is due or `stop()`.
+  template <class Wait, class Stop>
+  void until(int64_t utime, Wait wait, Stop stop) {
+    if (!have_first_) {
+      have_first_ = true;
+      first_utime_ = utime;
+      t0_ = Clock::now();
+      return;
+    }
+    if (speed_ <= 0) return;
+    const auto due = t0_ + std::chrono::microseconds(static_cast<int64_t>((utime - first_utime_) / speed_));
+    while (Clock::now() < due && !stop()) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(due - Clock::now()).count();
+      wait(static_cast<int>(std::clamp<int64_t>(left, 0, 20)));
+    }
+  }
+
+ private:
+  double speed_;
+  bool have_first_ = false;
+  int64_t first_utime_ = 0;
+  Clock::time_point t0_;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -67,10 +119,7 @@ int main(int argc, char** argv) {
     registerBuiltinSourceSchemes();
     const SystemConfig sys = loadSystem(node);
     const CameraOptions opts = loadConfig<CameraOptions>(node.config, "camera");
-    if (opts.pixel_format != "jpeg" && opts.pixel_format != "rgb8")
-      throw ConfigError((node.config.empty() ? std::string("defaults") : node.config) +
-                        ": key 'camera.pixel_format': expected jpeg or rgb8, got '" + opts.pixel_format + "'");
-    const int8_t format = opts.pixel_format == "jpeg" ? image_t::PIXEL_FORMAT_JPEG : image_t::PIXEL_FORMAT_RGB8;
+    const int8_t format = pixelFormatOf(opts, node.config);
     std::unique_ptr<FrameSource> src = openSource(source, opts.source);
     const bool lockstep = !lockstep_channel.empty();
     if (lockstep && speed == 1.0 && !app.count("--speed")) speed = 0;  // lockstep alone: as fast as acks come
@@ -109,10 +158,8 @@ int main(int argc, char** argv) {
 
     SourceFrame frame;
     int64_t published = 0, corrupt = 0, timeouts = 0;
-    int64_t first_utime = 0;
-    Clock::time_point t0;
     int32_t last_published_seq = -1;
-    bool have_first = false;
+    Pacer pacer(speed, src->live());
     int exit_code = 0;
     while (!shutdownRequested()) {
       if (max_frames >= 0 && published >= max_frames) break;
@@ -137,32 +184,14 @@ int main(int argc, char** argv) {
         spdlog::warn("skipping frame {}: {}", frame.seq, frame.error);
         continue;
       }
-      // Pacing against the sequence's own clock.
-      if (!have_first) {
-        have_first = true;
-        first_utime = frame.utime;
-        t0 = Clock::now();
-      } else if (speed > 0 && !src->live()) {
-        const auto due = t0 + std::chrono::microseconds(
-                                  static_cast<int64_t>((frame.utime - first_utime) / speed));
-        while (Clock::now() < due && !shutdownRequested()) {
-          const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(due - Clock::now()).count();
-          bus.handle(static_cast<int>(std::clamp<int64_t>(left, 0, 20)));
-          idle();
-        }
-      }
-      image_t msg{};
-      if (format == image_t::PIXEL_FORMAT_JPEG && opts.passthrough_jpeg && !frame.jpeg.empty()) {
-        msg.utime = frame.utime;
-        msg.seq = frame.seq;
-        msg.width = frame.bgr.cols;
-        msg.height = frame.bgr.rows;
-        msg.pixel_format = image_t::PIXEL_FORMAT_JPEG;
-        msg.data = std::move(frame.jpeg);
-        msg.size = static_cast<int32_t>(msg.data.size());
-      } else {
-        msg = makeImageMessage(frame.bgr, frame.utime, frame.seq, format, opts.jpeg_quality);
-      }
+      pacer.until(
+          frame.utime,
+          [&](int ms) {
+            bus.handle(ms);
+            idle();
+          },
+          shutdownRequested);
+      const image_t msg = frameMessage(frame, format, opts);
       if (!bus.publish(ch.camera, msg)) {
         exit_code = 1;
         break;

@@ -1,7 +1,7 @@
 #include "procs/camera/register_sources.h"
 
 #include "procs/camera/log_source.h"
-#include "procs/synth/synth_source.h"
+#include "tools/synth/synth_source.h"
 
 namespace slamaware::camera {
 void registerBuiltinSourceSchemes() {

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "procs/proposals/proposal_engine.h"
-#include "procs/recognizer/trainer.h"
+#include "tools/train/trainer.h"
 #include "procs/proposals/synthetic_map.h"
 #include "tests/eval/eval_test_data.h"
 #include "tests/support/test_support.h"

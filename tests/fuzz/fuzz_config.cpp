@@ -17,10 +17,10 @@
 #include "procs/objectmap/objectmap_options.h"
 #include "procs/proposals/proposal_options.h"
 #include "procs/recognizer/recognizer.h"
-#include "procs/recognizer/trainer.h"
+#include "tools/train/trainer.h"
 #include "procs/slam/slam_options.h"
 #include "procs/supervisor/process_spec.h"
-#include "procs/synth/synth_options.h"
+#include "tools/synth/synth_options.h"
 #include "tests/fuzz/fuzz_support.h"
 
 namespace {

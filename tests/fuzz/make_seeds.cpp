@@ -60,6 +60,97 @@ struct LoggedMessage {
   std::string channel, bytes;
 };
 
+// A log of those messages (lcm-logger's format).
+void seedLog(const std::vector<LoggedMessage>& log) {
+  const std::string path = out_dir + "/session.lcm.tmp";
+  {
+    lcm::LogFile file(path, "w");
+    int64_t t = 1000000;
+    for (const auto& m : log) {
+      lcm::LogEvent ev{};
+      ev.timestamp = t += 33333;
+      ev.channel = m.channel;
+      ev.datalen = static_cast<int32_t>(m.bytes.size());
+      ev.data = const_cast<char*>(m.bytes.data());
+      file.writeEvent(&ev);
+    }
+  }
+  seed("fuzz_log_reader", "session", readAll(path));
+  fs::remove(path);
+}
+
+// The object map's own save of that world.
+void seedMapStore(const ObjectMapEngine& engine) {
+  const std::string dir = out_dir + "/map.tmp";
+  MapStore(dir).save(engine.snapshot());
+  std::string content, ot;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > 5 && name.substr(name.size() - 5) == ".json") content = readAll(e.path());
+    if (name.size() > 3 && name.substr(name.size() - 3) == ".ot") ot = readAll(e.path());
+  }
+  seed("fuzz_map_store", "files", byteString(0) + fuzz::joinParts({content, ot}));
+  const size_t begin = content.find("\n\"content\":") + 11;
+  seed("fuzz_map_store", "content", byteString(1) + fuzz::joinParts({content.substr(begin, content.size() - begin - 2), ot}));
+  fs::remove_all(dir);
+}
+
+// A tiny model that passes every check: 2 PCA dimensions, 2 codewords, 2 classes.
+void seedModel() {
+  RecognizerModel m;
+  m.params.pca_dims = 2;
+  m.params.vocabulary_size = 2;
+  std::mt19937 rng(1);
+  std::normal_distribution<float> g;
+  m.pca.mean = Eigen::RowVectorXf::NullaryExpr(kFeatureDims, [&] { return g(rng); });
+  m.pca.basis = Eigen::MatrixXf::NullaryExpr(kFeatureDims, 2, [&] { return g(rng); });
+  m.pca.variance = Eigen::VectorXf::Ones(2);
+  m.vocabulary.centers = MatrixRM::NullaryExpr(2, 2, [&] { return g(rng); });
+  m.classifier.classes = {"mug", "background"};
+  m.classifier.weights = MatrixRM::NullaryExpr(2, m.params.vladDims(), [&] { return g(rng); });
+  m.classifier.bias = Eigen::VectorXf::Zero(2);
+  m.classifier.uniform_mix = 0.1f;
+  m.provenance = "{\"seed\":true}";
+  const std::string path = out_dir + "/tiny.model.tmp";
+  saveModel(m, path);
+  const std::string file = readAll(path);
+  fs::remove(path);
+  seed("fuzz_model", "file", byteString(0) + file);
+  seed("fuzz_model", "payload", byteString(1) + file.substr(28));
+}
+
+// The shipped configs, each for its loader (fuzz_config.cpp's order), and a sequence.yaml.
+void seedConfigs(const std::string& source) {
+  const std::vector<std::pair<std::string, uint8_t>> configs = {
+      {"system.yaml", 0}, {"system.yaml", 1}, {"camera.yaml", 2}, {"slam.yaml", 3}, {"proposals.yaml", 4},
+      {"recognizer.yaml", 5}, {"objectmap.yaml", 6}, {"train-quick.yaml", 7}, {"scenes/sample.yaml", 8},
+      {"objects/apple_ball.yaml", 9}};
+  for (const auto& [file, loader] : configs) {
+    std::string name = file;
+    std::replace(name.begin(), name.end(), '/', '_');
+    seed("fuzz_config", std::to_string(loader) + "_" + name, byteString(loader) + readAll(source + "/config/" + file));
+  }
+  seed("fuzz_config", "10_sequence.yaml",
+       byteString(10) + "name: s\nsource: camera\nfps: 30\nframes: 2\ncamera:\n  width: 640\n  height: 480\n"
+                        "  fx: 525\n  fy: 525\n  cx: 319.5\n  cy: 239.5\n  distortion: [0, 0, 0, 0, 0]\n"
+                        "classes: [bowl, cap]\n");
+}
+
+// Dataset folders: a sequence (its sequence.yaml as seeded for fuzz_config) and an object set.
+void seedDatasets() {
+  const std::string sequence_yaml = readAll(out_dir + "/fuzz_config/10_sequence.yaml").substr(1);
+  seed("fuzz_datasets", "sequence",
+       byteString(0) + fuzz::joinParts({sequence_yaml, "frame,x,y,w,h,class,instance\n0,10,20,30,40,bowl,bowl_1\n",
+                                        "instance,class,cx,cy,cz,sx,sy,sz\nbowl_1,bowl,0,0,1,0.1,0.1,0.05\n",
+                                        "0.0 0 0 0 0 0 0 1\n0.033 0.01 0 0 0 0 0 1\n", "0 0.0\n1 0.033\n",
+                                        "000000.png\n000001.png\n"}));
+  seed("fuzz_datasets", "object_set",
+       byteString(1) + fuzz::joinParts({"source: synth\n",
+                                        "bowl/bowl_1/bowl_1_1_1_crop.png\nbowl/bowl_1/bowl_1_1_1_maskcrop.png\n"
+                                        "bowl/bowl_1/bowl_1_1_1_loc.txt\nmug/mug_2/mug_2_2_5_crop.png\n",
+                                        "", "", "120,88\n", ""}));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -130,96 +221,15 @@ int main(int argc, char** argv) {
   message(kImage, "image_rgb8", "CAMERA", encoded(makeImageMessage(image, 1033333, 1, image_t::PIXEL_FORMAT_RGB8)));
   message(kImage, "image_gray8", "CAMERA", encoded(makeImageMessage(image, 1066666, 2, image_t::PIXEL_FORMAT_GRAY8)));
 
-  // A log of those messages (lcm-logger's format).
-  {
-    const std::string path = out_dir + "/session.lcm.tmp";
-    {
-      lcm::LogFile file(path, "w");
-      int64_t t = 1000000;
-      for (const auto& m : log) {
-        lcm::LogEvent ev{};
-        ev.timestamp = t += 33333;
-        ev.channel = m.channel;
-        ev.datalen = static_cast<int32_t>(m.bytes.size());
-        ev.data = const_cast<char*>(m.bytes.data());
-        file.writeEvent(&ev);
-      }
-    }
-    seed("fuzz_log_reader", "session", readAll(path));
-    fs::remove(path);
-  }
-
-  // The object map's own save of that world.
-  {
-    const std::string dir = out_dir + "/map.tmp";
-    MapStore(dir).save(engine.snapshot());
-    std::string content, ot;
-    for (const auto& e : fs::directory_iterator(dir)) {
-      const std::string name = e.path().filename().string();
-      if (name.size() > 5 && name.substr(name.size() - 5) == ".json") content = readAll(e.path());
-      if (name.size() > 3 && name.substr(name.size() - 3) == ".ot") ot = readAll(e.path());
-    }
-    seed("fuzz_map_store", "files", byteString(0) + fuzz::joinParts({content, ot}));
-    const size_t begin = content.find("\n\"content\":") + 11;
-    seed("fuzz_map_store", "content", byteString(1) + fuzz::joinParts({content.substr(begin, content.size() - begin - 2), ot}));
-    fs::remove_all(dir);
-  }
-
-  // A tiny model that passes every check: 2 PCA dimensions, 2 codewords, 2 classes.
-  {
-    RecognizerModel m;
-    m.params.pca_dims = 2;
-    m.params.vocabulary_size = 2;
-    std::mt19937 rng(1);
-    std::normal_distribution<float> g;
-    m.pca.mean = Eigen::RowVectorXf::NullaryExpr(kFeatureDims, [&] { return g(rng); });
-    m.pca.basis = Eigen::MatrixXf::NullaryExpr(kFeatureDims, 2, [&] { return g(rng); });
-    m.pca.variance = Eigen::VectorXf::Ones(2);
-    m.vocabulary.centers = MatrixRM::NullaryExpr(2, 2, [&] { return g(rng); });
-    m.classifier.classes = {"mug", "background"};
-    m.classifier.weights = MatrixRM::NullaryExpr(2, m.params.vladDims(), [&] { return g(rng); });
-    m.classifier.bias = Eigen::VectorXf::Zero(2);
-    m.classifier.uniform_mix = 0.1f;
-    m.provenance = "{\"seed\":true}";
-    const std::string path = out_dir + "/tiny.model.tmp";
-    saveModel(m, path);
-    const std::string file = readAll(path);
-    fs::remove(path);
-    seed("fuzz_model", "file", byteString(0) + file);
-    seed("fuzz_model", "payload", byteString(1) + file.substr(28));
-  }
-
-  // The shipped configs, each for its loader (fuzz_config.cpp's order).
-  const std::vector<std::pair<std::string, uint8_t>> configs = {
-      {"system.yaml", 0}, {"system.yaml", 1}, {"camera.yaml", 2}, {"slam.yaml", 3}, {"proposals.yaml", 4},
-      {"recognizer.yaml", 5}, {"objectmap.yaml", 6}, {"train-quick.yaml", 7}, {"scenes/sample.yaml", 8},
-      {"objects/apple_ball.yaml", 9}};
-  for (const auto& [file, loader] : configs) {
-    std::string name = file;
-    std::replace(name.begin(), name.end(), '/', '_');
-    seed("fuzz_config", std::to_string(loader) + "_" + name, byteString(loader) + readAll(source + "/config/" + file));
-  }
-  seed("fuzz_config", "10_sequence.yaml",
-       byteString(10) + "name: s\nsource: camera\nfps: 30\nframes: 2\ncamera:\n  width: 640\n  height: 480\n"
-                        "  fx: 525\n  fy: 525\n  cx: 319.5\n  cy: 239.5\n  distortion: [0, 0, 0, 0, 0]\n"
-                        "classes: [bowl, cap]\n");
-
-  // Images.
+  seedLog(log);
+  seedMapStore(engine);
+  seedModel();
+  seedConfigs(source);
   seed("fuzz_image", "jpeg", byteString(0) + [&] { const auto b = encodeJpeg(image, 80); return std::string(b.begin(), b.end()); }());
   seed("fuzz_image", "png", byteString(1) + [&] { const auto b = encodePng(image); return std::string(b.begin(), b.end()); }());
 
-  // Dataset folders.
-  const std::string sequence_yaml = readAll(out_dir + "/fuzz_config/10_sequence.yaml").substr(1);
-  seed("fuzz_datasets", "sequence",
-       byteString(0) + fuzz::joinParts({sequence_yaml, "frame,x,y,w,h,class,instance\n0,10,20,30,40,bowl,bowl_1\n",
-                                        "instance,class,cx,cy,cz,sx,sy,sz\nbowl_1,bowl,0,0,1,0.1,0.1,0.05\n",
-                                        "0.0 0 0 0 0 0 0 1\n0.033 0.01 0 0 0 0 0 1\n", "0 0.0\n1 0.033\n",
-                                        "000000.png\n000001.png\n"}));
-  seed("fuzz_datasets", "object_set",
-       byteString(1) + fuzz::joinParts({"source: synth\n",
-                                        "bowl/bowl_1/bowl_1_1_1_crop.png\nbowl/bowl_1/bowl_1_1_1_maskcrop.png\n"
-                                        "bowl/bowl_1/bowl_1_1_1_loc.txt\nmug/mug_2/mug_2_2_5_crop.png\n",
-                                        "", "", "120,88\n", ""}));
+  seedDatasets();
+
   std::printf("seeds written to %s\n", out_dir.c_str());
   return 0;
 }

@@ -11,7 +11,7 @@
 #include "common/bus/bus.h"
 #include "common/bus/image_msg.h"
 #include "procs/recognizer/model.h"
-#include "procs/recognizer/trainer.h"
+#include "tools/train/trainer.h"
 #include "slamaware/detections_t.hpp"
 #include "slamaware/image_t.hpp"
 #include "slamaware/proposals_t.hpp"

@@ -16,9 +16,9 @@
 #include "common/dataset.h"
 #include "common/image_codec.h"
 #include "procs/recognizer/recognizer.h"
-#include "procs/recognizer/trainer.h"
-#include "procs/synth/synth_options.h"
-#include "procs/synth/writers.h"
+#include "tools/train/trainer.h"
+#include "tools/synth/synth_options.h"
+#include "tools/synth/writers.h"
 #include "tests/recognizer/synthetic_data.h"
 #include "tests/support/test_support.h"
 

@@ -16,7 +16,7 @@
 #include "common/bus/log_reader.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
-#include "procs/synth/scene.h"
+#include "tools/synth/scene.h"
 #include "slamaware/camera_info_t.hpp"
 #include "slamaware/pose_t.hpp"
 #include "slamaware/status_t.hpp"

@@ -17,7 +17,7 @@
 
 #include "common/geometry.h"
 #include "procs/slam/slam_system.h"
-#include "procs/synth/scene.h"
+#include "tools/synth/scene.h"
 #include "tests/support/test_support.h"
 
 using namespace slamaware;

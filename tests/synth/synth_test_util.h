@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "procs/synth/render_scene.h"
+#include "tools/synth/render_scene.h"
 
 namespace slamaware::synth::synth_test {
 

@@ -6,11 +6,11 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
-#include "procs/synth/categories.h"
-#include "procs/synth/rasterizer.h"
-#include "procs/synth/sensor.h"
-#include "procs/synth/textures.h"
-#include "procs/synth/writers.h"
+#include "tools/synth/categories.h"
+#include "tools/synth/rasterizer.h"
+#include "tools/synth/sensor.h"
+#include "tools/synth/textures.h"
+#include "tools/synth/writers.h"
 
 using namespace slamaware::synth;
 namespace fs = std::filesystem;

@@ -11,9 +11,9 @@
 
 #include "common/dataset.h"
 #include "common/image_codec.h"
-#include "procs/synth/categories.h"
-#include "procs/synth/synth_options.h"
-#include "procs/synth/writers.h"
+#include "tools/synth/categories.h"
+#include "tools/synth/synth_options.h"
+#include "tools/synth/writers.h"
 #include "tests/support/test_support.h"
 #include "tests/synth/synth_test_util.h"
 

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "procs/synth/rasterizer.h"
-#include "procs/synth/scene.h"
+#include "tools/synth/rasterizer.h"
+#include "tools/synth/scene.h"
 
 using namespace slamaware::synth;
 

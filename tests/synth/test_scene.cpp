@@ -17,9 +17,9 @@
 #include "common/config.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
-#include "procs/synth/random_scene.h"
-#include "procs/synth/scene.h"
-#include "procs/synth/writers.h"
+#include "tools/synth/random_scene.h"
+#include "tools/synth/scene.h"
+#include "tools/synth/writers.h"
 #include "tests/support/test_support.h"
 #include "tests/synth/synth_test_util.h"
 

@@ -6,9 +6,9 @@
 #include <iterator>
 
 #include "common/frame_source.h"
-#include "procs/synth/scene.h"
-#include "procs/synth/synth_source.h"
-#include "procs/synth/writers.h"
+#include "tools/synth/scene.h"
+#include "tools/synth/synth_source.h"
+#include "tools/synth/writers.h"
 #include "tests/support/test_support.h"
 
 using namespace slamaware;

@@ -13,8 +13,8 @@
 
 #include "common/bus/system_config.h"
 #include "common/dataset.h"
-#include "procs/synth/random_scene.h"
-#include "procs/synth/writers.h"
+#include "tools/synth/random_scene.h"
+#include "tools/synth/writers.h"
 #include "tests/support/test_support.h"
 #include "tests/system/lockstep_pipeline.h"
 #include "tools/eval/pipeline_run.h"

@@ -15,7 +15,7 @@
 #include "common/bus/image_msg.h"
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
-#include "procs/recognizer/trainer.h"
+#include "tools/train/trainer.h"
 #include "tests/objectmap/synthetic_world.h"
 #include "tests/support/test_support.h"
 

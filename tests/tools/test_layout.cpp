@@ -1,7 +1,7 @@
 // The layout rule of docs/architecture.md §1: a stage's algorithm library (slamaware_<stage>, the
 // sources its CMakeLists.txt lists, and the headers of its own folder they include, followed
 // transitively) includes no LCM header (generated slamaware/*.hpp, <lcm/...>, common/bus/) and no
-// header of another stage's folder. The checker is first shown to catch both on a made-up stage.
+// header of another folder of procs/ or tools/. The checker is first shown to catch both on a made-up stage.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -23,16 +23,16 @@ std::string readText(const fs::path& p) {
   return s.str();
 }
 
-// The .cpp files of `add_library(slamaware_<stage> STATIC ...)` in procs/<stage>/CMakeLists.txt.
-std::vector<std::string> librarySources(const fs::path& root, const std::string& stage) {
-  const std::string cmake = readText(root / "procs" / stage / "CMakeLists.txt");
+// The .cpp files of `add_library(slamaware_<stage> STATIC ...)` in <folder>/CMakeLists.txt.
+std::vector<std::string> librarySources(const fs::path& root, const std::string& folder, const std::string& stage) {
+  const std::string cmake = readText(root / folder / "CMakeLists.txt");
   const std::regex lib("add_library\\(slamaware_" + stage + " STATIC([^)]*)\\)");
   std::smatch m;
   if (!std::regex_search(cmake, m, lib)) return {};
   std::vector<std::string> files;
   std::istringstream words(m[1].str());
   for (std::string w; words >> w;)
-    if (w.size() > 4 && w.substr(w.size() - 4) == ".cpp") files.push_back("procs/" + stage + "/" + w);
+    if (w.size() > 4 && w.substr(w.size() - 4) == ".cpp") files.push_back(folder + "/" + w);
   return files;
 }
 
@@ -40,10 +40,12 @@ struct Violation {
   std::string file, include;
 };
 
-// Every forbidden include reachable from the stage library's sources; `scanned` counts the files.
-std::vector<Violation> forbiddenIncludes(const fs::path& root, const std::string& stage, int* scanned) {
-  const std::string own = "procs/" + stage + "/";
-  std::vector<std::string> todo = librarySources(root, stage);
+// Every forbidden include reachable from the sources of the library slamaware_<stage> in
+// `folder` (procs/<stage>, or tools/synth for the generator); `scanned` counts the files.
+std::vector<Violation> forbiddenIncludes(const fs::path& root, const std::string& folder, const std::string& stage,
+                                         int* scanned) {
+  const std::string own = folder + "/";
+  std::vector<std::string> todo = librarySources(root, folder, stage);
   std::set<std::string> seen(todo.begin(), todo.end());
   std::vector<Violation> bad;
   const std::regex include_re("^\\s*#\\s*include\\s*[<\"]([^>\"]+)[>\"]");
@@ -59,7 +61,8 @@ std::vector<Violation> forbiddenIncludes(const fs::path& root, const std::string
       if (!std::regex_search(line, m, include_re)) continue;
       const std::string inc = m[1].str();
       const bool lcm = inc.rfind("slamaware/", 0) == 0 || inc.rfind("lcm/", 0) == 0 || inc.rfind("common/bus/", 0) == 0;
-      const bool other_stage = inc.rfind("procs/", 0) == 0 && inc.rfind(own, 0) != 0;
+      const bool other_stage =
+          (inc.rfind("procs/", 0) == 0 || inc.rfind("tools/", 0) == 0) && inc.rfind(own, 0) != 0;
       if (lcm || other_stage) bad.push_back({file, inc});
       if (inc.rfind(own, 0) == 0 && seen.insert(inc).second) todo.push_back(inc);
     }
@@ -83,7 +86,7 @@ TEST(Layout, TheCheckerFindsLcmAndOtherStagesInAMadeUpStage) {
   std::ofstream(root / "procs/demo/b.cpp") << "#include \"procs/slam/map/map.h\"\n#include \"common/geometry.h\"\n";
   std::ofstream(root / "procs/demo/main.cpp") << "#include \"common/bus/node.h\"\n";  // the node may
   int scanned = 0;
-  const std::vector<Violation> bad = forbiddenIncludes(root, "demo", &scanned);
+  const std::vector<Violation> bad = forbiddenIncludes(root, "procs/demo", "demo", &scanned);
   EXPECT_EQ(scanned, 3);  // a.cpp, a.h (through a.cpp), b.cpp; not the node
   ASSERT_EQ(bad.size(), 2u) << describe(bad);
   EXPECT_EQ(bad[0].include + " " + bad[1].include, "procs/slam/map/map.h slamaware/pose_t.hpp");
@@ -92,8 +95,9 @@ TEST(Layout, TheCheckerFindsLcmAndOtherStagesInAMadeUpStage) {
 TEST(Layout, StageLibrariesIncludeNoLcmAndNoOtherStage) {
   const fs::path root = slamaware::test::sourcePath("");
   for (const std::string stage : {"slam", "proposals", "recognizer", "objectmap", "synth"}) {
+    const std::string folder = (stage == "synth" ? "tools/" : "procs/") + stage;
     int scanned = 0;
-    const std::vector<Violation> bad = forbiddenIncludes(root, stage, &scanned);
+    const std::vector<Violation> bad = forbiddenIncludes(root, folder, stage, &scanned);
     EXPECT_GE(scanned, 5) << stage << ": the library's sources were not found in its CMakeLists.txt";
     EXPECT_TRUE(bad.empty()) << "slamaware_" << stage << " must not include LCM or another stage:\n"
                              << describe(bad);

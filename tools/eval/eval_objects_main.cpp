@@ -35,7 +35,7 @@
 #include "common/progress.h"
 #include "common/image_codec.h"
 #include "procs/recognizer/recognizer.h"
-#include "procs/recognizer/trainer.h"
+#include "tools/train/trainer.h"
 #include "tools/eval/recognition_metrics.h"
 
 using namespace slamaware;

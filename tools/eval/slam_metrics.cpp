@@ -101,6 +101,66 @@ void SlamRecording::addCloud(int map_id, bool full, int64_t keyframe_id,
   pts.insert(pts.end(), cloud_points.begin(), cloud_points.end());
 }
 
+// Semi-dense depth against depth/ (16-bit PNG, mm): each point's depth in its keyframe, scaled
+// by its map's Sim(3), against the true depth at the pixel it projects to; and points per keyframe.
+void addDepthFigures(const SlamRecording& run, const SequenceFolder& sequence, const std::map<int, MapAlignment>& maps,
+                     nlohmann::json& s) {
+  const int frames = static_cast<int>(sequence.size());
+  std::map<int64_t, int> points_per_keyframe;
+  int64_t total_points = 0;
+  for (const auto& [map_id, pts] : run.points) {
+    total_points += static_cast<int64_t>(pts.size());
+    for (const auto& p : pts) ++points_per_keyframe[p.keyframe_id];
+  }
+  std::vector<double> per_kf;
+  for (const auto& [id, n] : points_per_keyframe) per_kf.push_back(n);
+  s["semi_dense_points"] = total_points;
+  if (!per_kf.empty()) {
+    double sum = 0;
+    for (double n : per_kf) sum += n;
+    // Over the keyframes whose points were published (the last keyframes of a run, still
+    // being filtered when it ended, have none).
+    s["keyframes_with_points"] = static_cast<int64_t>(per_kf.size());
+    s["points_per_keyframe_mean"] = round3(sum / per_kf.size());
+    s["points_per_keyframe_median"] = median(per_kf);
+  }
+  const bool has_depth = frames > 0 && !sequence.depthPath(0).empty();
+  if (!has_depth) return;
+  std::vector<double> rel;
+  std::map<int32_t, cv::Mat> depth_cache;
+  const CameraModel& camera = sequence.info().camera;
+  for (const auto& [map_id, pts] : run.points) {
+    auto m = maps.find(map_id);
+    if (m == maps.end()) continue;
+    for (const auto& p : pts) {
+      auto kf = run.keyframes.find(p.keyframe_id);
+      if (kf == run.keyframes.end() || kf->second.seq < 0 || kf->second.seq >= frames) continue;
+      const int32_t seq = kf->second.seq;
+      auto d = depth_cache.find(seq);
+      if (d == depth_cache.end()) {
+        const std::string dp = sequence.depthPath(seq);
+        d = depth_cache.emplace(seq, dp.empty() ? cv::Mat() : readImageUnchanged(dp)).first;
+      }
+      if (d->second.empty() || d->second.type() != CV_16UC1) continue;
+      const Eigen::Vector3d pc = kf->second.T_world_camera.inverse() * p.p_world.cast<double>();
+      Eigen::Vector2d px;
+      if (!camera.project(pc, &px) || !camera.inImage(px)) continue;
+      const uint16_t mm = d->second.at<uint16_t>(static_cast<int>(std::lround(px.y())),
+                                                 static_cast<int>(std::lround(px.x())));
+      if (mm == 0) continue;
+      const double truth = mm / 1000.0, estimate = m->second.sim.s * pc.z();
+      rel.push_back(std::abs(estimate - truth) / truth);
+    }
+  }
+  s["depth_points_evaluated"] = static_cast<int64_t>(rel.size());
+  if (!rel.empty()) {
+    s["depth_rel_err_median_pct"] = round3(100.0 * median(rel));
+    int within = 0;
+    for (double r : rel) within += r <= 0.03;
+    s["depth_within_3pct"] = round3(100.0 * within / rel.size());
+  }
+}
+
 nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequence,
                             const SlamEvalOptions& options) {
   nlohmann::json s;
@@ -182,62 +242,7 @@ nlohmann::json evaluateSlam(const SlamRecording& run, const SequenceFolder& sequ
     s["ate_rmse_pct_of_extent"] = round3(extent > 0 ? 100.0 * ate / extent : 0);
   }
 
-  // Semi-dense depth against depth/ (16-bit PNG, mm): each point's depth in its keyframe, scaled
-  // by its map's Sim(3), against the true depth at the pixel it projects to.
-  std::map<int64_t, int> points_per_keyframe;
-  int64_t total_points = 0;
-  for (const auto& [map_id, pts] : run.points) {
-    total_points += static_cast<int64_t>(pts.size());
-    for (const auto& p : pts) ++points_per_keyframe[p.keyframe_id];
-  }
-  std::vector<double> per_kf;
-  for (const auto& [id, n] : points_per_keyframe) per_kf.push_back(n);
-  s["semi_dense_points"] = total_points;
-  if (!per_kf.empty()) {
-    double sum = 0;
-    for (double n : per_kf) sum += n;
-    // Over the keyframes whose points were published (the last keyframes of a run, still
-    // being filtered when it ended, have none).
-    s["keyframes_with_points"] = static_cast<int64_t>(per_kf.size());
-    s["points_per_keyframe_mean"] = round3(sum / per_kf.size());
-    s["points_per_keyframe_median"] = median(per_kf);
-  }
-  const bool has_depth = frames > 0 && !sequence.depthPath(0).empty();
-  if (has_depth) {
-    std::vector<double> rel;
-    std::map<int32_t, cv::Mat> depth_cache;
-    const CameraModel& camera = sequence.info().camera;
-    for (const auto& [map_id, pts] : run.points) {
-      auto m = maps.find(map_id);
-      if (m == maps.end()) continue;
-      for (const auto& p : pts) {
-        auto kf = run.keyframes.find(p.keyframe_id);
-        if (kf == run.keyframes.end() || kf->second.seq < 0 || kf->second.seq >= frames) continue;
-        const int32_t seq = kf->second.seq;
-        auto d = depth_cache.find(seq);
-        if (d == depth_cache.end()) {
-          const std::string dp = sequence.depthPath(seq);
-          d = depth_cache.emplace(seq, dp.empty() ? cv::Mat() : readImageUnchanged(dp)).first;
-        }
-        if (d->second.empty() || d->second.type() != CV_16UC1) continue;
-        const Eigen::Vector3d pc = kf->second.T_world_camera.inverse() * p.p_world.cast<double>();
-        Eigen::Vector2d px;
-        if (!camera.project(pc, &px) || !camera.inImage(px)) continue;
-        const uint16_t mm = d->second.at<uint16_t>(static_cast<int>(std::lround(px.y())),
-                                                   static_cast<int>(std::lround(px.x())));
-        if (mm == 0) continue;
-        const double truth = mm / 1000.0, estimate = m->second.sim.s * pc.z();
-        rel.push_back(std::abs(estimate - truth) / truth);
-      }
-    }
-    s["depth_points_evaluated"] = static_cast<int64_t>(rel.size());
-    if (!rel.empty()) {
-      s["depth_rel_err_median_pct"] = round3(100.0 * median(rel));
-      int within = 0;
-      for (double r : rel) within += r <= 0.03;
-      s["depth_within_3pct"] = round3(100.0 * within / rel.size());
-    }
-  }
+  addDepthFigures(run, sequence, maps, s);
   if (!options.plot_path.empty()) {
     char title[160];
     std::snprintf(title, sizeof(title), "%s  ATE %.3f m (%.2f%% of path), tracked %.1f%%",

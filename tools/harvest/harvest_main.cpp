@@ -219,27 +219,16 @@ void writeView(const std::string& out, const Target& t, int32_t seq, const cv::M
   std::ofstream(base + "_loc.txt") << v.box.x << "," << v.box.y << "\n";
 }
 
-int harvest(const std::string& log, const std::string& map_dir, const std::string& out, const HarvestOptions& o,
-            const ObjectMapOptions& map_options, const Channels& ch) {
-  MapStore store(map_dir);
-  std::optional<ObjectMapEngine> engine;
-  const LoadReport report = store.load([&](const MapSnapshot& s) {
-    ObjectMapEngine e(map_options);
-    e.restore(s);
-    engine = std::move(e);
-  });
-  for (const auto& f : report.failures) spdlog::error("refused {}", f);
-  if (!engine) {
-    spdlog::error("{}: no usable map", map_dir);
-    return 1;
-  }
-  const auto& classes = engine->classes();
+// The objects to harvest: every one a user labelled, and with o.background those the map fused
+// as background; their voxels, per segment. Labelled ones first.
+std::vector<Target> collectTargets(const ObjectMapEngine& engine, const HarvestOptions& o,
+                                   std::map<int32_t, Segment3d>* segments, int* labelled) {
+  const auto& classes = engine.classes();
   const int background = classes.empty() || classes.back() != "background" ? -1 : static_cast<int>(classes.size()) - 1;
-  std::map<int32_t, Segment3d> segments;
   std::vector<Target> targets;
-  int labelled = 0;
-  for (const auto& [sid, seg] : engine->segments()) {
-    Segment3d& s = segments[sid];
+  *labelled = 0;
+  for (const auto& [sid, seg] : engine.segments()) {
+    Segment3d& s = (*segments)[sid];
     s.slam_map_id = seg->slam_map_id;
     s.resolution = seg->occupancy.resolution();
     for (const auto& [oid, obj] : seg->table.objects()) {
@@ -259,25 +248,67 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
       t.keys.erase(std::unique(t.keys.begin(), t.keys.end()), t.keys.end());
       for (VoxelKey k : t.keys) t.voxels.push_back(voxelCentre(k, s.resolution));
       if (t.voxels.empty()) continue;
-      labelled += user;
+      *labelled += user;
       targets.push_back(std::move(t));
     }
   }
   // Labelled objects first: a background view inside one of the frame's labelled views is a part.
   std::stable_partition(targets.begin(), targets.end(), [](const Target& t) { return t.labelled; });
-  for (const auto& [sid, seg] : engine->segments()) {
-    // Voxel owners: the first target holding each voxel.
+  return targets;
+}
+
+// Each segment's occupied voxels with their owner: the first target holding the voxel (-1: none).
+void assignVoxelOwners(const ObjectMapEngine& engine, const std::vector<Target>& targets,
+                       std::map<int32_t, Segment3d>* segments) {
+  for (const auto& [sid, seg] : engine.segments()) {
     std::unordered_map<VoxelKey, int> owner_of;
     for (size_t i = 0; i < targets.size(); ++i)
       if (targets[i].segment == sid)
         for (VoxelKey k : targets[i].keys) owner_of.emplace(k, static_cast<int>(i));
-    Segment3d& s = segments[sid];
+    Segment3d& s = (*segments)[sid];
     for (const OccupiedVoxel& v : seg->occupancy.occupied()) {
       s.occupied.push_back(v.centre.cast<double>());
       auto it = owner_of.find(v.key);
       s.owner.push_back(it == owner_of.end() ? -1 : it->second);
     }
   }
+}
+
+// The object set's set.yaml, and a table of what became of each object's views.
+void finishSet(const std::string& out, const std::string& log, const std::string& map_dir,
+               const std::vector<Target>& targets, int64_t unposed, int64_t seen) {
+  std::filesystem::create_directories(out);
+  std::ofstream(out + "/set.yaml") << "name: " << std::filesystem::path(out).filename().string()
+                                   << "\nsource: harvest\nsession: " << log << "\nmap: " << map_dir
+                                   << "\nnotes: views of the objects labelled in the map (slamaware-harvest); "
+                                      "background: objects the map fused as background\n";
+  std::printf("%-8s %-24s %7s %8s %11s %9s %7s %6s %5s\n", "OBJECT", "INSTANCE", "FRAMES", "WRITTEN",
+              "OUT_OF_VIEW", "TRUNCATED", "HIDDEN", "SMALL", "PART");
+  for (const Target& t : targets)
+    std::printf("%-8d %-24s %7d %8d %11d %9d %7d %6d %5d\n", t.object_id, t.instance.c_str(), t.frames, t.written,
+                t.out_of_view, t.truncated, t.hidden, t.small, t.part);
+  std::printf("%lld of %lld frames had no localised pose\n", static_cast<long long>(unposed),
+              static_cast<long long>(seen));
+}
+
+int harvest(const std::string& log, const std::string& map_dir, const std::string& out, const HarvestOptions& o,
+            const ObjectMapOptions& map_options, const Channels& ch) {
+  MapStore store(map_dir);
+  std::optional<ObjectMapEngine> engine;
+  const LoadReport report = store.load([&](const MapSnapshot& s) {
+    ObjectMapEngine e(map_options);
+    e.restore(s);
+    engine = std::move(e);
+  });
+  for (const auto& f : report.failures) spdlog::error("refused {}", f);
+  if (!engine) {
+    spdlog::error("{}: no usable map", map_dir);
+    return 1;
+  }
+  std::map<int32_t, Segment3d> segments;
+  int labelled = 0;
+  std::vector<Target> targets = collectTargets(*engine, o, &segments, &labelled);
+  assignVoxelOwners(*engine, targets, &segments);
   if (labelled == 0)
     spdlog::warn("{}: no object has a user's label (slamaware-ctl label OBJECT_ID CLASS); harvesting only "
                  "background", report.json_path);
@@ -351,18 +382,7 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
   }
   bar.finish();
 
-  std::filesystem::create_directories(out);
-  std::ofstream(out + "/set.yaml") << "name: " << std::filesystem::path(out).filename().string()
-                                   << "\nsource: harvest\nsession: " << log << "\nmap: " << map_dir
-                                   << "\nnotes: views of the objects labelled in the map (slamaware-harvest); "
-                                      "background: objects the map fused as background\n";
-  std::printf("%-8s %-24s %7s %8s %11s %9s %7s %6s %5s\n", "OBJECT", "INSTANCE", "FRAMES", "WRITTEN",
-              "OUT_OF_VIEW", "TRUNCATED", "HIDDEN", "SMALL", "PART");
-  for (const Target& t : targets)
-    std::printf("%-8d %-24s %7d %8d %11d %9d %7d %6d %5d\n", t.object_id, t.instance.c_str(), t.frames, t.written,
-                t.out_of_view, t.truncated, t.hidden, t.small, t.part);
-  std::printf("%lld of %lld frames had no localised pose\n", static_cast<long long>(unposed),
-              static_cast<long long>(seen));
+  finishSet(out, log, map_dir, targets, unposed, seen);
   return 0;
 }
 

@@ -130,6 +130,51 @@ void DepthFilter::updateHost(Host& host, const DepthFrameInput& input,
   host.seeds.resize(kept);
 }
 
+void DepthFilter::addHost(const DepthKeyframeInput& kf) {
+  Host host;
+  host.grey = kf.grey;
+  host.bgr = kf.bgr;
+  host.T_world_camera = kf.T_world_camera;
+  {
+    std::lock_guard<std::mutex> lock(store_mutex_);
+    SemiDenseKeyframe& s = store_[kf.id];
+    s.id = kf.id;
+    s.map_id = kf.map_id;
+    s.utime = kf.utime;
+    s.seq = kf.seq;
+    s.T_world_camera = kf.T_world_camera;
+    host.store = &s;
+    // A young map (no seed of it converged yet to speak of) starts from the keyframe's
+    // triangulated features, so that its objects are there before the seeds converge.
+    if (options_.enabled && converged_per_map_[kf.map_id] < options_.young_map_points) {
+      for (const auto& [px, p_camera] : kf.sparse) {
+        if (!(p_camera.z() > 0) || px.x() < 0 || px.y() < 0 || px.x() >= kf.bgr.cols ||
+            px.y() >= kf.bgr.rows)
+          continue;
+        SemiDensePoint p;
+        p.p_camera = p_camera;
+        p.depth_std = static_cast<float>(options_.sparse_depth_std * p_camera.norm());
+        rgbAt(kf.bgr, px, p.rgb);
+        s.points.push_back(p);
+      }
+      s.from_features = s.points.size();
+      host.young = options_.young_convergence_ratio > 0;
+      stats_.points += static_cast<int64_t>(s.points.size());
+    }
+  }
+  const float mean_depth = static_cast<float>(kf.mean_depth),
+              min_depth = static_cast<float>(kf.min_depth);
+  for (const Eigen::Vector2i& px : selectSeedPixels(kf.grey)) {
+    const Eigen::Vector3f f =
+        Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f)
+            .normalized();
+    DepthSeed seed = makeSeed(float(px.x()), float(px.y()), f, mean_depth, min_depth);
+    if (!kf.bgr.empty()) rgbAt(kf.bgr, px, seed.rgb);
+    host.seeds.push_back(seed);
+  }
+  if (options_.enabled) hosts_[kf.id] = std::move(host);
+}
+
 std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<int64_t> finished;
@@ -203,50 +248,7 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       ++it;
   }
 
-  for (const auto& kf : input.new_keyframes) {
-    Host host;
-    host.grey = kf.grey;
-    host.bgr = kf.bgr;
-    host.T_world_camera = kf.T_world_camera;
-    {
-      std::lock_guard<std::mutex> lock(store_mutex_);
-      SemiDenseKeyframe& s = store_[kf.id];
-      s.id = kf.id;
-      s.map_id = kf.map_id;
-      s.utime = kf.utime;
-      s.seq = kf.seq;
-      s.T_world_camera = kf.T_world_camera;
-      host.store = &s;
-      // A young map (no seed of it converged yet to speak of) starts from the keyframe's
-      // triangulated features, so that its objects are there before the seeds converge.
-      if (options_.enabled && converged_per_map_[kf.map_id] < options_.young_map_points) {
-        for (const auto& [px, p_camera] : kf.sparse) {
-          if (!(p_camera.z() > 0) || px.x() < 0 || px.y() < 0 || px.x() >= kf.bgr.cols ||
-              px.y() >= kf.bgr.rows)
-            continue;
-          SemiDensePoint p;
-          p.p_camera = p_camera;
-          p.depth_std = static_cast<float>(options_.sparse_depth_std * p_camera.norm());
-          rgbAt(kf.bgr, px, p.rgb);
-          s.points.push_back(p);
-        }
-        s.from_features = s.points.size();
-        host.young = options_.young_convergence_ratio > 0;
-        stats_.points += static_cast<int64_t>(s.points.size());
-      }
-    }
-    const float mean_depth = static_cast<float>(kf.mean_depth),
-                min_depth = static_cast<float>(kf.min_depth);
-    for (const Eigen::Vector2i& px : selectSeedPixels(kf.grey)) {
-      const Eigen::Vector3f f =
-          Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f)
-              .normalized();
-      DepthSeed seed = makeSeed(float(px.x()), float(px.y()), f, mean_depth, min_depth);
-      if (!kf.bgr.empty()) rgbAt(kf.bgr, px, seed.rgb);
-      host.seeds.push_back(seed);
-    }
-    if (options_.enabled) hosts_[kf.id] = std::move(host);
-  }
+  for (const auto& kf : input.new_keyframes) addHost(kf);
 
   int64_t active = 0;
   for (const auto& [id, h] : hosts_) active += static_cast<int64_t>(h.seeds.size());

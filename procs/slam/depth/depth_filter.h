@@ -123,6 +123,9 @@ class DepthFilter {
     bool young = false;       ///< a young map's keyframe (its seeds also converge provisionally)
   };
   void updateHost(Host& host, const DepthFrameInput& input, std::vector<SemiDensePoint>* converged);
+  /// A new keyframe becomes a host: its store entry (with its features while the map is young)
+  /// and its seeds.
+  void addHost(const DepthKeyframeInput& kf);
 
   DepthFilterOptions options_;
   EpipolarSearchParams search_;

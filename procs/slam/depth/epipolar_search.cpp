@@ -24,6 +24,32 @@ inline bool sample(const cv::Mat& img, float x, float y, float* value) {
   return true;
 }
 
+// The host's patch along its epipolar line, `scale` host pixels per frame pixel, less its mean;
+// false when it leaves the image or has too little gradient along the line to match.
+bool referencePatch(const cv::Mat& host, const Eigen::Vector2f& u, const Eigen::Vector2f& dir_host, float scale,
+                    float min_gradient, float ref[kSamples]) {
+  for (int k = 0; k < kSamples; ++k) {
+    const Eigen::Vector2f s = u + (float(k - kHalf) / scale) * dir_host;
+    if (!sample(host, s.x(), s.y(), &ref[k])) return false;
+  }
+  float grad2 = 0, ref_mean = 0;
+  for (int k = 0; k < kSamples; ++k) ref_mean += ref[k];
+  ref_mean /= kSamples;
+  for (int k = 0; k + 1 < kSamples; ++k) grad2 += (ref[k + 1] - ref[k]) * (ref[k + 1] - ref[k]);
+  if (grad2 < (kSamples - 1) * min_gradient * min_gradient) return false;
+  for (int k = 0; k < kSamples; ++k) ref[k] -= ref_mean;
+  return true;
+}
+
+// Sub-pixel position of the best cost: the vertex of the parabola through its neighbours.
+float subPixelOffset(const float* costs, int best, int steps) {
+  const float inf = std::numeric_limits<float>::max();
+  if (best <= 0 || best >= steps || !(costs[best - 1] < inf) || !(costs[best + 1] < inf)) return 0;
+  const float a = costs[best - 1], b = costs[best], cc = costs[best + 1];
+  const float denom = a - 2 * b + cc;
+  return denom > 1e-6f ? std::clamp(0.5f * (a - cc) / denom, -0.5f, 0.5f) : 0.f;
+}
+
 }  // namespace
 
 EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Eigen::Matrix3f& R,
@@ -72,16 +98,7 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   if (scale < 0.3f || scale > 3.f) return m;  // strong foreshortening: the patch would not match
 
   float ref[kSamples];
-  for (int k = 0; k < kSamples; ++k) {
-    const Eigen::Vector2f s = u + (float(k - kHalf) / scale) * dir_host;
-    if (!sample(host, s.x(), s.y(), &ref[k])) return m;
-  }
-  float grad2 = 0, ref_mean = 0;
-  for (int k = 0; k < kSamples; ++k) ref_mean += ref[k];
-  ref_mean /= kSamples;
-  for (int k = 0; k + 1 < kSamples; ++k) grad2 += (ref[k + 1] - ref[k]) * (ref[k + 1] - ref[k]);
-  if (grad2 < (kSamples - 1) * p.min_epipolar_gradient * p.min_epipolar_gradient) return m;
-  for (float& r : ref) r -= ref_mean;
+  if (!referencePatch(host, u, dir_host, scale, p.min_epipolar_gradient, ref)) return m;
 
   // Samples along the segment at one-pixel steps, from the far end (plus the margins).
   const int steps = static_cast<int>(std::ceil(length));
@@ -130,14 +147,7 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
     if (std::abs(c - best) > 1) second = std::min(second, costs[c]);
   if (second < inf && best_cost > p.uniqueness_ratio * second) return m;
 
-  // Sub-pixel position: the vertex of the parabola through the neighbouring costs.
-  float offset = 0;
-  if (best > 0 && best < steps && costs[best - 1] < inf && costs[best + 1] < inf) {
-    const float a = costs[best - 1], b = costs[best], cc = costs[best + 1];
-    const float denom = a - 2 * b + cc;
-    if (denom > 1e-6f) offset = std::clamp(0.5f * (a - cc) / denom, -0.5f, 0.5f);
-  }
-  const Eigen::Vector2f px = px_far + (float(best) + offset) * dir;
+  const Eigen::Vector2f px = px_far + (float(best) + subPixelOffset(costs.data(), best, steps)) * dir;
   // Triangulation along the host ray: z_h R f + t = z_c f_cur, least squares in (z_h, z_c).
   const Eigen::Vector3f f_cur =
       Eigen::Vector3f((px.x() - p.cx) / p.fx, (px.y() - p.cy) / p.fy, 1.f).normalized();
