@@ -4,7 +4,7 @@ JOBS    ?= $(shell nproc)
 SHARED  ?= ../shared/data
 CTEST_ARGS ?=
 
-.PHONY: all deps build test test-sanitize fuzz soak chaos demo teach eval eval-random bench record synth sample model configs spy clean
+.PHONY: all deps build test test-sanitize fuzz soak chaos demo teach eval eval-random bench record synth sample model configs format format-check spy clean
 
 all: build
 
@@ -98,6 +98,12 @@ model: deps build
 # tests fail when a file and the defaults differ.
 configs: build
 	for p in camera slam proposals recognizer objectmap; do $(BUILD)/bin/slamaware-$$p --print-config > config/$$p.yaml; done
+
+# The sources against .clang-format (CI runs the check after the tests); `make format` applies it.
+format-check: deps
+	scripts/format-check
+format: deps
+	scripts/format-check --fix
 
 spy: build
 	scripts/lcm-spy

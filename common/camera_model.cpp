@@ -51,7 +51,8 @@ Eigen::Vector2d CameraModel::project(const Eigen::Vector3d& p) const {
   return {fx_ * d.x() + cx_, fy_ * d.y() + cy_};
 }
 
-bool CameraModel::project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel, double min_depth) const {
+bool CameraModel::project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel,
+                          double min_depth) const {
   if (!(p.z() > min_depth)) return false;
   *pixel = project(p);
   return true;
@@ -83,8 +84,9 @@ cv::Mat CameraModel::undistortImage(const cv::Mat& image) const {
 
 CameraModel CameraModel::scaled(double s) const {
   // Pixel centres: u' + 0.5 = s (u + 0.5).
-  return CameraModel(static_cast<int>(std::lround(width_ * s)), static_cast<int>(std::lround(height_ * s)),
-                     fx_ * s, fy_ * s, (cx_ + 0.5) * s - 0.5, (cy_ + 0.5) * s - 0.5, dist_);
+  return CameraModel(static_cast<int>(std::lround(width_ * s)),
+                     static_cast<int>(std::lround(height_ * s)), fx_ * s, fy_ * s,
+                     (cx_ + 0.5) * s - 0.5, (cy_ + 0.5) * s - 0.5, dist_);
 }
 
 CameraModel CameraModel::pinhole() const {
@@ -92,8 +94,8 @@ CameraModel CameraModel::pinhole() const {
 }
 
 bool CameraModel::operator==(const CameraModel& o) const {
-  return width_ == o.width_ && height_ == o.height_ && fx_ == o.fx_ && fy_ == o.fy_ && cx_ == o.cx_ &&
-         cy_ == o.cy_ && dist_ == o.dist_;
+  return width_ == o.width_ && height_ == o.height_ && fx_ == o.fx_ && fy_ == o.fy_ &&
+         cx_ == o.cx_ && cy_ == o.cy_ && dist_ == o.dist_;
 }
 
 }  // namespace slamaware

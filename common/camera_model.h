@@ -28,7 +28,8 @@ class CameraModel {
   /// Pixel of a point in the camera frame (distortion applied). Requires p_camera.z() > 0.
   Eigen::Vector2d project(const Eigen::Vector3d& p_camera) const;
   /// Like project(), false when the point is behind the camera (z <= min_depth).
-  bool project(const Eigen::Vector3d& p_camera, Eigen::Vector2d* pixel, double min_depth = 1e-6) const;
+  bool project(const Eigen::Vector3d& p_camera, Eigen::Vector2d* pixel,
+               double min_depth = 1e-6) const;
   /// Ray through a pixel, as (x, y, 1) in the camera frame (distortion removed).
   Eigen::Vector3d unproject(const Eigen::Vector2d& pixel) const;
 

@@ -83,7 +83,8 @@ OptionList optionListOf(Options& options) {
 /// top-level keys that no component claims.
 class ConfigFile {
  public:
-  /// Parses `path`; throws ConfigError (naming the file and line) on a syntax error or a missing file.
+  /// Parses `path`; throws ConfigError (naming the file and line) on a syntax error or a missing
+  /// file.
   explicit ConfigFile(const std::string& path);
   ~ConfigFile();
   ConfigFile(ConfigFile&&) noexcept;
@@ -139,7 +140,8 @@ Options loadConfig(const std::string& path, const std::string& section, bool pri
     if (!section.empty()) file.checkSections({section});
     file.load(section, list);
   }
-  if (print) logOptions(section.empty() ? "options" : section, path.empty() ? "defaults" : path, list);
+  if (print)
+    logOptions(section.empty() ? "options" : section, path.empty() ? "defaults" : path, list);
   return options;
 }
 

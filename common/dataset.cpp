@@ -48,7 +48,8 @@ double toDouble(const std::string& s, const std::string& path, int line) {
   } catch (const std::exception&) {
     throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a number");
   }
-  if (!std::isfinite(v)) throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a finite number");
+  if (!std::isfinite(v))
+    throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a finite number");
   return v;
 }
 
@@ -56,7 +57,8 @@ double toDouble(const std::string& s, const std::string& path, int line) {
 int toInt(const std::string& s, const std::string& path, int line) {
   const double v = toDouble(s, path, line);
   if (v != std::floor(v) || std::fabs(v) > 1e9)
-    throw DatasetError(path + ":" + std::to_string(line) + ": '" + s + "' is not a whole number of at most 1e9");
+    throw DatasetError(path + ":" + std::to_string(line) + ": '" + s +
+                       "' is not a whole number of at most 1e9");
   return static_cast<int>(v);
 }
 
@@ -84,7 +86,8 @@ void readCsv(const std::string& path, const std::vector<std::string>& header, Fn
     const auto cells = splitCsv(line);
     if (cells.size() != header.size())
       throw DatasetError(path + ":" + std::to_string(line_no) + ": expected " +
-                         std::to_string(header.size()) + " columns, got " + std::to_string(cells.size()));
+                         std::to_string(header.size()) + " columns, got " +
+                         std::to_string(cells.size()));
     row(cells, line_no);
   }
 }
@@ -94,7 +97,8 @@ SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path) {
   info.name = required<std::string>(root, "name", path);
   info.source = root["source"] ? root["source"].as<std::string>() : "";
   info.fps = required<double>(root, "fps", path);
-  if (!(info.fps > 0) || !std::isfinite(info.fps)) throw DatasetError(path + ": fps must be a positive number");
+  if (!(info.fps > 0) || !std::isfinite(info.fps))
+    throw DatasetError(path + ": fps must be a positive number");
   info.frames = root["frames"] ? root["frames"].as<int>() : 0;
   const YAML::Node cam = root["camera"];
   if (!cam || !cam.IsMap()) throw DatasetError(path + ": missing map 'camera'");
@@ -102,12 +106,14 @@ SequenceInfo sequenceInfoOf(const YAML::Node& root, const std::string& path) {
   std::array<double, 5> dist{0, 0, 0, 0, 0};
   if (cam["distortion"]) {
     const auto d = cam["distortion"].as<std::vector<double>>();
-    if (d.size() != 5) throw DatasetError(path + ": camera.distortion must have 5 values (k1 k2 p1 p2 k3)");
+    if (d.size() != 5)
+      throw DatasetError(path + ": camera.distortion must have 5 values (k1 k2 p1 p2 k3)");
     std::copy(d.begin(), d.end(), dist.begin());
   }
-  info.camera = CameraModel(required<int>(cam, "width", cam_path), required<int>(cam, "height", cam_path),
-                            required<double>(cam, "fx", cam_path), required<double>(cam, "fy", cam_path),
-                            required<double>(cam, "cx", cam_path), required<double>(cam, "cy", cam_path), dist);
+  info.camera = CameraModel(
+      required<int>(cam, "width", cam_path), required<int>(cam, "height", cam_path),
+      required<double>(cam, "fx", cam_path), required<double>(cam, "fy", cam_path),
+      required<double>(cam, "cx", cam_path), required<double>(cam, "cy", cam_path), dist);
   if (!info.camera.valid()) throw DatasetError(path + ": camera intrinsics are not valid");
   if (root["classes"]) info.classes = root["classes"].as<std::vector<std::string>>();
   if (root["notes"]) info.notes = root["notes"].as<std::string>();
@@ -132,7 +138,6 @@ SequenceInfo readSequenceInfo(const std::string& path) {
   }
 }
 
-
 void writeSequenceInfo(const std::string& path, const SequenceInfo& info) {
   YAML::Emitter e;
   e << YAML::BeginMap;
@@ -142,7 +147,8 @@ void writeSequenceInfo(const std::string& path, const SequenceInfo& info) {
   e << YAML::Key << "frames" << YAML::Value << info.frames;
   e << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
   const CameraModel& c = info.camera;
-  e << YAML::Key << "width" << YAML::Value << c.width() << YAML::Key << "height" << YAML::Value << c.height();
+  e << YAML::Key << "width" << YAML::Value << c.width() << YAML::Key << "height" << YAML::Value
+    << c.height();
   e << YAML::Key << "fx" << YAML::Value << c.fx() << YAML::Key << "fy" << YAML::Value << c.fy();
   e << YAML::Key << "cx" << YAML::Value << c.cx() << YAML::Key << "cy" << YAML::Value << c.cy();
   e << YAML::Key << "distortion" << YAML::Value << YAML::Flow
@@ -168,7 +174,8 @@ SequenceFolder SequenceFolder::open(const std::string& dir) {
   std::sort(s.frames_.begin(), s.frames_.end());
   if (s.frames_.empty()) throw DatasetError(rgb.string() + ": no .png or .jpg frames");
   s.timestamps_.resize(s.frames_.size());
-  for (size_t i = 0; i < s.frames_.size(); ++i) s.timestamps_[i] = static_cast<double>(i) / s.info_.fps;
+  for (size_t i = 0; i < s.frames_.size(); ++i)
+    s.timestamps_[i] = static_cast<double>(i) / s.info_.fps;
   const fs::path ts = fs::path(dir) / "timestamps.txt";
   if (fs::exists(ts)) {
     std::ifstream in(ts);
@@ -182,7 +189,8 @@ SequenceFolder SequenceFolder::open(const std::string& dir) {
       long idx;
       double t;
       if (!(ls >> idx >> t))
-        throw DatasetError(ts.string() + ":" + std::to_string(line_no) + ": expected '<frame index> <seconds>'");
+        throw DatasetError(ts.string() + ":" + std::to_string(line_no) +
+                           ": expected '<frame index> <seconds>'");
       if (idx < 0 || idx >= static_cast<long>(s.frames_.size()))
         throw DatasetError(ts.string() + ":" + std::to_string(line_no) + ": frame index " +
                            std::to_string(idx) + " out of range");
@@ -190,12 +198,15 @@ SequenceFolder SequenceFolder::open(const std::string& dir) {
       seen[idx] = true;
     }
     for (size_t i = 0; i < seen.size(); ++i)
-      if (!seen[i]) throw DatasetError(ts.string() + ": no timestamp for frame " + std::to_string(i));
+      if (!seen[i])
+        throw DatasetError(ts.string() + ": no timestamp for frame " + std::to_string(i));
   }
   return s;
 }
 
-bool SequenceFolder::hasGroundTruth() const { return fs::exists(fs::path(dir_) / "groundtruth.txt"); }
+bool SequenceFolder::hasGroundTruth() const {
+  return fs::exists(fs::path(dir_) / "groundtruth.txt");
+}
 std::vector<TimedPose> SequenceFolder::groundTruth() const {
   try {
     return readTum((fs::path(dir_) / "groundtruth.txt").string());
@@ -284,11 +295,13 @@ ObjectSet ObjectSet::open(const std::string& dir) {
       if (!inst.is_directory()) continue;
       const std::string instance = inst.path().filename().string();
       if (instance.rfind(category + "_", 0) != 0)
-        throw DatasetError(inst.path().string() + ": instance folder must be named " + category + "_<n>");
+        throw DatasetError(inst.path().string() + ": instance folder must be named " + category +
+                           "_<n>");
       for (const auto& f : fs::directory_iterator(inst.path())) {
         const std::string name = f.path().filename().string();
         const std::string suffix = "_crop.png";
-        if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+        if (name.size() <= suffix.size() ||
+            name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
           continue;
         // <instance>_<video>_<frame>_crop.png
         const std::string stem = name.substr(0, name.size() - suffix.size());
@@ -328,13 +341,16 @@ ObjectSet ObjectSet::open(const std::string& dir) {
   }
   if (set.views_.empty()) throw DatasetError(dir + ": no *_crop.png views found");
   std::sort(set.views_.begin(), set.views_.end(), [](const ObjectView& a, const ObjectView& b) {
-    return std::tie(a.category, a.instance, a.video, a.frame) < std::tie(b.category, b.instance, b.video, b.frame);
+    return std::tie(a.category, a.instance, a.video, a.frame) <
+           std::tie(b.category, b.instance, b.video, b.frame);
   });
   set.categories_.assign(categories.begin(), categories.end());
-  // set.yaml is read line by line: the generator's own notes were not valid YAML before it quoted them.
+  // set.yaml is read line by line: the generator's own notes were not valid YAML before it quoted
+  // them.
   std::ifstream yaml(fs::path(dir) / "set.yaml");
   for (std::string line; std::getline(yaml, line);)
-    if (line.rfind("source: synth", 0) == 0 || line.find("rendered by slamaware-synth") != std::string::npos)
+    if (line.rfind("source: synth", 0) == 0 ||
+        line.find("rendered by slamaware-synth") != std::string::npos)
       set.rendered_ = true;
   return set;
 }

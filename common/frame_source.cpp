@@ -44,8 +44,8 @@ class SequenceSource : public FrameSource {
     } catch (const DatasetError& e) {
       throw SourceError(e.what());
     }
-    duration_us_ = static_cast<int64_t>(
-        std::llround((seq_.timestamp(seq_.size() - 1) - seq_.timestamp(0)) * 1e6 + 1e6 / seq_.info().fps));
+    duration_us_ = static_cast<int64_t>(std::llround(
+        (seq_.timestamp(seq_.size() - 1) - seq_.timestamp(0)) * 1e6 + 1e6 / seq_.info().fps));
   }
   const CameraModel& camera() const override { return seq_.info().camera; }
   double fps() const override { return seq_.info().fps; }
@@ -66,8 +66,9 @@ class SequenceSource : public FrameSource {
       std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
       f->bgr = decodeImage(bytes.data(), bytes.size(), path);
       if (f->bgr.cols != camera().width() || f->bgr.rows != camera().height())
-        throw ImageError(path + ": frame is " + std::to_string(f->bgr.cols) + "x" + std::to_string(f->bgr.rows) +
-                         ", sequence.yaml says " + std::to_string(camera().width()) + "x" +
+        throw ImageError(path + ": frame is " + std::to_string(f->bgr.cols) + "x" +
+                         std::to_string(f->bgr.rows) + ", sequence.yaml says " +
+                         std::to_string(camera().width()) + "x" +
                          std::to_string(camera().height()));
       if (hasJpegExtension(path)) f->jpeg = std::move(bytes);
     } catch (const ImageError& e) {
@@ -97,7 +98,8 @@ class VideoSource : public FrameSource {
       cap_.open(device_index, cv::CAP_V4L2);
     else
       cap_.open(spec, cv::CAP_FFMPEG);
-    if (!cap_.isOpened()) throw SourceError(spec + ": cannot open " + (device ? "video device" : "video file"));
+    if (!cap_.isOpened())
+      throw SourceError(spec + ": cannot open " + (device ? "video device" : "video file"));
     if (device) {
       cap_.set(cv::CAP_PROP_FRAME_WIDTH, options.width);
       cap_.set(cv::CAP_PROP_FRAME_HEIGHT, options.height);
@@ -187,7 +189,8 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOpt
     const std::string scheme = spec.substr(0, colon);
     std::lock_guard<std::mutex> lock(g_schemes_mutex);
     auto it = schemes().find(scheme);
-    if (it == schemes().end()) throw SourceError(spec + ": unknown source scheme '" + scheme + ":'");
+    if (it == schemes().end())
+      throw SourceError(spec + ": unknown source scheme '" + scheme + ":'");
     return it->second(spec.substr(colon + 1));
   }
   if (fs::is_directory(spec)) return std::make_unique<SequenceSource>(spec);
@@ -195,7 +198,8 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOpt
     // Logs are read by the bus layer: the camera registers the "log" scheme.
     std::lock_guard<std::mutex> lock(g_schemes_mutex);
     auto it = schemes().find("log");
-    if (it == schemes().end()) throw SourceError(spec + ": LCM logs are not a source in this program");
+    if (it == schemes().end())
+      throw SourceError(spec + ": LCM logs are not a source in this program");
     return it->second(spec);
   }
   if (fs::is_regular_file(spec)) return std::make_unique<VideoSource>(spec, options, false, -1);

@@ -14,11 +14,11 @@
 namespace slamaware {
 
 struct SourceFrame {
-  int64_t utime = 0;  ///< µs, capture time (sequence time; wall time for live devices)
-  int32_t seq = 0;    ///< frame index in the source (+ loops * length when looping)
-  cv::Mat bgr;        ///< 8-bit BGR; empty when the frame could not be read
+  int64_t utime = 0;          ///< µs, capture time (sequence time; wall time for live devices)
+  int32_t seq = 0;            ///< frame index in the source (+ loops * length when looping)
+  cv::Mat bgr;                ///< 8-bit BGR; empty when the frame could not be read
   std::vector<uint8_t> jpeg;  ///< the original JPEG bytes when the source file was a JPEG
-  std::string error;  ///< why the frame could not be read ("" if it could)
+  std::string error;          ///< why the frame could not be read ("" if it could)
 };
 
 class SourceError : public std::runtime_error {

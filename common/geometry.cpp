@@ -126,13 +126,15 @@ Sim3 alignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eig
   return out;
 }
 
-double rectIntersection(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh) {
+double rectIntersection(double ax, double ay, double aw, double ah, double bx, double by, double bw,
+                        double bh) {
   const double x0 = std::max(ax, bx), y0 = std::max(ay, by);
   const double x1 = std::min(ax + aw, bx + bw), y1 = std::min(ay + ah, by + bh);
   return std::max(0.0, x1 - x0) * std::max(0.0, y1 - y0);
 }
 
-double rectIou(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh) {
+double rectIou(double ax, double ay, double aw, double ah, double bx, double by, double bw,
+               double bh) {
   const double inter = rectIntersection(ax, ay, aw, ah, bx, by, bw, bh);
   const double uni = aw * ah + bw * bh - inter;
   return uni > 0 ? inter / uni : 0.0;

@@ -1,7 +1,7 @@
 #pragma once
 // Rigid (SE(3)) and similarity (Sim(3)) transforms on Eigen. Names carry frames:
-// T_world_camera maps camera coordinates into the world frame (p_world = T_world_camera * p_camera).
-// And the overlap of two image boxes.
+// T_world_camera maps camera coordinates into the world frame (p_world = T_world_camera *
+// p_camera). And the overlap of two image boxes.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <vector>
@@ -42,17 +42,19 @@ struct Sim3 {
   Eigen::Matrix4d matrix() const;
 };
 
-/// Least-squares transform (Umeyama 1991) mapping src[i] onto dst[i]; with_scale = false gives SE(3).
-/// Needs at least 3 non-collinear pairs; returns identity otherwise.
+/// Least-squares transform (Umeyama 1991) mapping src[i] onto dst[i]; with_scale = false gives
+/// SE(3). Needs at least 3 non-collinear pairs; returns identity otherwise.
 Sim3 alignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
                   bool with_scale);
 
 /// The area two axis-aligned boxes, given by their top-left corner and size, have in common (0 when
 /// they do not overlap).
-double rectIntersection(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh);
+double rectIntersection(double ax, double ay, double aw, double ah, double bx, double by, double bw,
+                        double bh);
 
 /// Intersection over union of two axis-aligned boxes given by their top-left corner and size
 /// (px); 0 when neither has an area.
-double rectIou(double ax, double ay, double aw, double ah, double bx, double by, double bw, double bh);
+double rectIou(double ax, double ay, double aw, double ah, double bx, double by, double bw,
+               double bh);
 
 }  // namespace slamaware

@@ -23,14 +23,15 @@ uint32_t bigEndian(const uint8_t* p, int n) {
 
 /// Refuses an image whose header is missing, asks for more than kMaxImagePixels or for another size
 /// than a non-empty `expected`, before any decoder allocates for it.
-void checkImageHeader(const uint8_t* data, size_t size, const std::string& what, cv::Size expected = cv::Size()) {
+void checkImageHeader(const uint8_t* data, size_t size, const std::string& what,
+                      cv::Size expected = cv::Size()) {
   int w = 0, h = 0;
   if (!peekImageSize(data, size, &w, &h))
     throw ImageError(what + ": no image header (JPEG frame header or PNG IHDR) found");
   if (!expected.empty() && (w != expected.width || h != expected.height))
-    throw ImageError(what + ": the image header says " + std::to_string(w) + "x" + std::to_string(h) +
-                     " but the message says " + std::to_string(expected.width) + "x" +
-                     std::to_string(expected.height));
+    throw ImageError(what + ": the image header says " + std::to_string(w) + "x" +
+                     std::to_string(h) + " but the message says " + std::to_string(expected.width) +
+                     "x" + std::to_string(expected.height));
   if (w <= 0 || h <= 0 || static_cast<int64_t>(w) * h > kMaxImagePixels)
     throw ImageError(what + ": the header says " + std::to_string(w) + "x" + std::to_string(h) +
                      " pixels (at most " + std::to_string(kMaxImagePixels / 1000000) +
@@ -90,12 +91,14 @@ std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality) {
 std::vector<uint8_t> encodePng(const cv::Mat& image, int compression) {
   if (image.empty()) throw ImageError("encodePng: empty image");
   std::vector<uint8_t> out;
-  if (!cv::imencode(".png", image, out, {cv::IMWRITE_PNG_COMPRESSION, std::clamp(compression, 0, 9)}))
+  if (!cv::imencode(".png", image, out,
+                    {cv::IMWRITE_PNG_COMPRESSION, std::clamp(compression, 0, 9)}))
     throw ImageError("encodePng: OpenCV could not encode the image");
   return out;
 }
 
-cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, bool grey, cv::Size expected) {
+cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, bool grey,
+                    cv::Size expected) {
   if (size == 0) throw ImageError(what + ": empty image data");
   if (!isJpeg(data, size) && !isPng(data, size))
     throw ImageError(what + ": not a JPEG or PNG image (" + std::to_string(size) + " bytes)");

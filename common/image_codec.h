@@ -27,11 +27,12 @@ std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality);
 /// PNG bytes of an 8- or 16-bit image (BGR, BGRA or grey); compression 0-9.
 std::vector<uint8_t> encodePng(const cv::Mat& image, int compression = 3);
 /// Decodes JPEG or PNG bytes into 8-bit BGR (or grey if `grey`). Throws ImageError for bytes that
-/// are not a complete image, or (before decoding) whose header asks for more than kMaxImagePixels or
-/// for another size than a non-empty `expected`; `what` names the source in the message.
+/// are not a complete image, or (before decoding) whose header asks for more than kMaxImagePixels
+/// or for another size than a non-empty `expected`; `what` names the source in the message.
 cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, bool grey = false,
                     cv::Size expected = cv::Size());
-/// Reads an image file as 8-bit BGR; throws ImageError naming the file when it is missing or corrupt.
+/// Reads an image file as 8-bit BGR; throws ImageError naming the file when it is missing or
+/// corrupt.
 cv::Mat readImage(const std::string& path, bool grey = false);
 /// Reads an image file without conversion (e.g. 16-bit depth PNG).
 cv::Mat readImageUnchanged(const std::string& path);

@@ -7,7 +7,9 @@
 namespace slamaware {
 
 ProgressBar::ProgressBar(std::string label, int64_t total)
-    : label_(std::move(label)), total_(total > 0 ? total : 1), tty_(isatty(STDERR_FILENO) != 0),
+    : label_(std::move(label)),
+      total_(total > 0 ? total : 1),
+      tty_(isatty(STDERR_FILENO) != 0),
       start_(std::chrono::steady_clock::now()) {}
 
 ProgressBar::~ProgressBar() {
@@ -28,7 +30,8 @@ void ProgressBar::finish() {
 }
 
 void ProgressBar::draw(bool final) {
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double frac = std::min(1.0, static_cast<double>(done_) / total_);
   const double rate = elapsed > 0 ? done_ / elapsed : 0;
   const double eta = rate > 0 ? (total_ - done_) / rate : 0;
@@ -38,11 +41,11 @@ void ProgressBar::draw(bool final) {
     if (!final && pct == last_pct_logged_) return;
     last_pct_logged_ = pct;
     if (final)
-      std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s, done in %.1f s\n", label_.c_str(), (long long)done_,
-                   (long long)total_, frac * 100, rate, elapsed);
+      std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s, done in %.1f s\n", label_.c_str(),
+                   (long long)done_, (long long)total_, frac * 100, rate, elapsed);
     else
-      std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s %.1f s, eta %.0f s\n", label_.c_str(), (long long)done_,
-                   (long long)total_, frac * 100, rate, elapsed, eta);
+      std::fprintf(stderr, "%s: %lld/%lld (%.0f%%) %.1f/s %.1f s, eta %.0f s\n", label_.c_str(),
+                   (long long)done_, (long long)total_, frac * 100, rate, elapsed, eta);
     return;
   }
   const int width = 30;
@@ -50,7 +53,8 @@ void ProgressBar::draw(bool final) {
   std::string bar(fill, '#');
   bar += std::string(width - fill, '.');
   std::fprintf(stderr, "\r%-18s [%s] %lld/%lld %7.1f/s %s %.0f s   ", label_.c_str(), bar.c_str(),
-               (long long)done_, (long long)total_, rate, final ? "done in" : "eta", final ? elapsed : eta);
+               (long long)done_, (long long)total_, rate, final ? "done in" : "eta",
+               final ? elapsed : eta);
   if (final) std::fprintf(stderr, "\n");
   std::fflush(stderr);
 }

@@ -14,8 +14,10 @@ namespace slamaware {
 
 /// fork + exec of argv (PATH searched), stdout and stderr appended to nothing but `output`
 /// (truncated). With `die_with_parent` the child gets SIGTERM when the caller dies (and saves, as
-/// at any stop). Returns the child's pid (-1 if fork failed); a failed exec exits the child with 127.
-inline pid_t spawnWithOutput(const std::vector<std::string>& argv, const std::string& output, bool die_with_parent) {
+/// at any stop). Returns the child's pid (-1 if fork failed); a failed exec exits the child with
+/// 127.
+inline pid_t spawnWithOutput(const std::vector<std::string>& argv, const std::string& output,
+                             bool die_with_parent) {
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid != 0) return pid;

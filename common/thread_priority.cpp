@@ -1,7 +1,7 @@
 #include "common/thread_priority.h"
 
-#include <spdlog/spdlog.h>
 #include <pthread.h>
+#include <spdlog/spdlog.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -25,13 +25,16 @@ bool lowerThreadPriority(int increment, const std::string& what) {
   const int current = getpriority(PRIO_PROCESS, tid);
   if (errno == 0 && setpriority(PRIO_PROCESS, tid, current + increment) == 0) return true;
   if (!g_warned.exchange(true))
-    spdlog::warn("{} keeps its priority: setpriority(+{}): {}", what, increment, std::strerror(errno));
+    spdlog::warn("{} keeps its priority: setpriority(+{}): {}", what, increment,
+                 std::strerror(errno));
   return false;
 }
 
 void setBackgroundNice(int increment) { g_background_nice = increment < 0 ? 0 : increment; }
 
-bool enterBackground(const std::string& what) { return lowerThreadPriority(g_background_nice, what); }
+bool enterBackground(const std::string& what) {
+  return lowerThreadPriority(g_background_nice, what);
+}
 
 void nameThisThread(const std::string& name) {
   pthread_setname_np(pthread_self(), name.substr(0, 15).c_str());

@@ -42,8 +42,8 @@ void writeTum(const std::string& path, const std::vector<TimedPose>& poses) {
     q.normalize();
     if (q.w() < 0) q.coeffs() *= -1;
     const Eigen::Vector3d t = p.T_world_camera.translation();
-    std::snprintf(buf, sizeof(buf), "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.t, t.x(), t.y(), t.z(),
-                  q.x(), q.y(), q.z(), q.w());
+    std::snprintf(buf, sizeof(buf), "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.t, t.x(), t.y(),
+                  t.z(), q.x(), q.y(), q.z(), q.w());
     out << buf;
   }
   if (!out) throw TumError(path + ": write failed");

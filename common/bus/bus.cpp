@@ -23,26 +23,29 @@ struct Bus::Subscription {
 
 Bus::Bus(const std::string& url) : url_(url), lcm_(std::make_unique<lcm::LCM>(url)) {
   if (!lcm_->good())
-    throw std::runtime_error("cannot open the LCM bus '" + url +
-                             "' (bad URL, or no multicast route: 'ip route add 224.0.0.0/4 dev lo')");
+    throw std::runtime_error(
+        "cannot open the LCM bus '" + url +
+        "' (bad URL, or no multicast route: 'ip route add 224.0.0.0/4 dev lo')");
 }
 
 Bus::~Bus() = default;
 
 void Bus::subscribeRaw(const std::string& channel, RawHandler handler, size_t max_bytes) {
-  subs_.push_back(std::make_unique<Subscription>(Subscription{this, channel, std::move(handler), max_bytes}));
+  subs_.push_back(
+      std::make_unique<Subscription>(Subscription{this, channel, std::move(handler), max_bytes}));
   lcm_->subscribeFunction(channel, &Bus::dispatch, subs_.back().get());
 }
 
 void Bus::dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Subscription* sub) {
   Bus* bus = sub->bus;
   if (rbuf->data_size > sub->max_bytes) {
-    bus->reject(channel, "message of " + std::to_string(rbuf->data_size) + " bytes exceeds the cap of " +
-                             std::to_string(sub->max_bytes));
+    bus->reject(channel, "message of " + std::to_string(rbuf->data_size) +
+                             " bytes exceeds the cap of " + std::to_string(sub->max_bytes));
     return;
   }
   try {
-    sub->handler(RawMessage{channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size, rbuf->recv_utime});
+    sub->handler(RawMessage{channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size,
+                            rbuf->recv_utime});
   } catch (const std::exception& e) {
     bus->handlerError(channel, e.what());
   } catch (...) {

@@ -44,7 +44,8 @@ bool decodeMessage(const uint8_t* data, size_t size, Msg* msg, std::string* why)
     return false;
   }
   if (static_cast<size_t>(used) != size) {
-    *why = std::string(Msg::getTypeName()) + " followed by " + std::to_string(size - used) + " trailing bytes";
+    *why = std::string(Msg::getTypeName()) + " followed by " + std::to_string(size - used) +
+           " trailing bytes";
     return false;
   }
   return true;
@@ -91,7 +92,8 @@ class Bus {
   }
   /// Calls handler with the bytes of every message of `channel` (an LCM regular expression,
   /// anchored) up to max_bytes (larger ones are rejected and counted).
-  void subscribeRaw(const std::string& channel, RawHandler handler, size_t max_bytes = kDefaultMaxBytes);
+  void subscribeRaw(const std::string& channel, RawHandler handler,
+                    size_t max_bytes = kDefaultMaxBytes);
 
   /// Encodes and publishes; returns false (and logs) on failure. Thread-safe.
   template <class Msg>
@@ -123,7 +125,8 @@ class Bus {
 
  private:
   struct Subscription;
-  static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Subscription* sub);
+  static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                       Subscription* sub);
   bool publishFailed(const std::string& channel, const std::string& why);
   void handlerError(const std::string& channel, const std::string& why);
   void note(const std::string& channel, const std::string& what, const std::string& why);

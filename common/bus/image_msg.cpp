@@ -7,7 +7,8 @@
 
 namespace slamaware {
 
-image_t makeImageMessage(const cv::Mat& bgr, int64_t utime, int32_t seq, int8_t pixel_format, int jpeg_quality) {
+image_t makeImageMessage(const cv::Mat& bgr, int64_t utime, int32_t seq, int8_t pixel_format,
+                         int jpeg_quality) {
   image_t msg{};
   msg.utime = utime;
   msg.seq = seq;
@@ -34,17 +35,20 @@ image_t makeImageMessage(const cv::Mat& bgr, int64_t utime, int32_t seq, int8_t 
 
 cv::Mat decodeImageMessage(const image_t& msg, const std::string& what, bool grey) {
   if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384)
-    throw ImageError(what + ": bad image size " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
+    throw ImageError(what + ": bad image size " + std::to_string(msg.width) + "x" +
+                     std::to_string(msg.height));
   cv::Mat out;
   switch (msg.pixel_format) {
     case image_t::PIXEL_FORMAT_JPEG: {
       // The header must agree with the message before anything is decoded (a small message must
       // not make the decoder allocate for another size); the decoder gives the header's size.
-      return decodeImage(msg.data.data(), msg.data.size(), what, grey, cv::Size(msg.width, msg.height));
+      return decodeImage(msg.data.data(), msg.data.size(), what, grey,
+                         cv::Size(msg.width, msg.height));
     }
     case image_t::PIXEL_FORMAT_RGB8: {
       if (msg.data.size() != static_cast<size_t>(msg.width) * msg.height * 3)
-        throw ImageError(what + ": RGB8 data has " + std::to_string(msg.data.size()) + " bytes, expected " +
+        throw ImageError(what + ": RGB8 data has " + std::to_string(msg.data.size()) +
+                         " bytes, expected " +
                          std::to_string(static_cast<size_t>(msg.width) * msg.height * 3));
       cv::Mat rgb(msg.height, msg.width, CV_8UC3, const_cast<uint8_t*>(msg.data.data()));
       cv::cvtColor(rgb, out, grey ? cv::COLOR_RGB2GRAY : cv::COLOR_RGB2BGR);
@@ -52,7 +56,8 @@ cv::Mat decodeImageMessage(const image_t& msg, const std::string& what, bool gre
     }
     case image_t::PIXEL_FORMAT_GRAY8: {
       if (msg.data.size() != static_cast<size_t>(msg.width) * msg.height)
-        throw ImageError(what + ": GRAY8 data has " + std::to_string(msg.data.size()) + " bytes, expected " +
+        throw ImageError(what + ": GRAY8 data has " + std::to_string(msg.data.size()) +
+                         " bytes, expected " +
                          std::to_string(static_cast<size_t>(msg.width) * msg.height));
       cv::Mat g(msg.height, msg.width, CV_8UC1, const_cast<uint8_t*>(msg.data.data()));
       if (grey) return g.clone();

@@ -16,8 +16,8 @@
 namespace slamaware {
 
 template <class Msg, class Handle, class AfterPass>
-int runInputLoop(Bus& bus, StatusReporter& status, std::deque<Msg>& pending, bool lockstep, Handle&& handle,
-                 AfterPass&& after_pass) {
+int runInputLoop(Bus& bus, StatusReporter& status, std::deque<Msg>& pending, bool lockstep,
+                 Handle&& handle, AfterPass&& after_pass) {
   while (!shutdownRequested()) {
     if (bus.handle(pending.empty() ? 20 : 0) < 0 && !shutdownRequested()) {
       spdlog::error("LCM failed; stopping");

@@ -32,10 +32,11 @@ bool LockstepGate::waitFor(int32_t seq, double timeout_s, const std::function<vo
   return true;
 }
 
-std::vector<std::string> waitForChannels(Bus& bus, const std::vector<std::string>& channels, double timeout_s,
-                                         const std::function<void()>& idle) {
+std::vector<std::string> waitForChannels(Bus& bus, const std::vector<std::string>& channels,
+                                         double timeout_s, const std::function<void()>& idle) {
   auto waiting = std::make_shared<std::set<std::string>>(channels.begin(), channels.end());
-  for (const auto& c : channels) bus.subscribeRaw(c, [waiting, c](const Bus::RawMessage&) { waiting->erase(c); });
+  for (const auto& c : channels)
+    bus.subscribeRaw(c, [waiting, c](const Bus::RawMessage&) { waiting->erase(c); });
   const auto start = Clock::now();
   while (!waiting->empty() && !shutdownRequested() &&
          Clock::now() - start < std::chrono::duration<double>(timeout_s)) {

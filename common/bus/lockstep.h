@@ -26,8 +26,8 @@ class LockstepGate {
 
 /// Handles the bus until a message arrived on each of `channels` (e.g. the stages' *_STATUS) or
 /// timeout_s passed. Returns the channels not heard from.
-std::vector<std::string> waitForChannels(Bus& bus, const std::vector<std::string>& channels, double timeout_s,
-                                         const std::function<void()>& idle);
+std::vector<std::string> waitForChannels(Bus& bus, const std::vector<std::string>& channels,
+                                         double timeout_s, const std::function<void()>& idle);
 
 /// "a,b,,c" -> {"a", "b", "c"}
 std::vector<std::string> splitList(const std::string& comma_separated);

@@ -8,7 +8,8 @@
 namespace slamaware {
 
 namespace {
-constexpr int64_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;  // sync, eventnum, timestamp, channel len, data len
+constexpr int64_t kHeaderBytes =
+    4 + 8 + 8 + 4 + 4;  // sync, eventnum, timestamp, channel len, data len
 }
 
 LogReader::LogReader(const std::string& path) : path_(path) {
@@ -35,8 +36,9 @@ std::optional<LogRecord> LogReader::next() {
     // log data"): read that event ourselves and report the damage where it really is.
     std::optional<LogRecord> intact = readEventAt(expected_offset_);
     const int64_t bad = intact ? intact->offset + recordSize(*intact) : expected_offset_;
-    LogError error(path_ + ": corrupt log: " + std::to_string(file_size_ - bad) + " bytes at byte offset " +
-                       std::to_string(bad) + " do not form a complete event (truncated or damaged)",
+    LogError error(path_ + ": corrupt log: " + std::to_string(file_size_ - bad) +
+                       " bytes at byte offset " + std::to_string(bad) +
+                       " do not form a complete event (truncated or damaged)",
                    bad);
     if (!intact) throw error;
     done_ = false;
@@ -50,7 +52,8 @@ std::optional<LogRecord> LogReader::next() {
   if (start != expected_offset_) {
     done_ = true;
     throw LogError(path_ + ": corrupt log: damaged event header at byte offset " +
-                       std::to_string(expected_offset_) + " (" + std::to_string(start - expected_offset_) +
+                       std::to_string(expected_offset_) + " (" +
+                       std::to_string(start - expected_offset_) +
                        " bytes skipped before the next valid event)",
                    expected_offset_);
   }
@@ -66,7 +69,8 @@ std::optional<LogRecord> LogReader::next() {
 }
 
 int64_t LogReader::recordSize(const LogRecord& r) {
-  return kHeaderBytes + static_cast<int64_t>(r.channel.size()) + static_cast<int64_t>(r.data.size());
+  return kHeaderBytes + static_cast<int64_t>(r.channel.size()) +
+         static_cast<int64_t>(r.data.size());
 }
 
 std::optional<LogRecord> LogReader::readEventAt(int64_t offset) const {

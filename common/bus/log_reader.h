@@ -38,7 +38,8 @@ struct LogRecord {
 template <class Msg>
 bool decodeRecord(const LogRecord& r, Msg* m) {
   try {
-    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) == static_cast<int>(r.data.size());
+    return m->decode(r.data.data(), 0, static_cast<int>(r.data.size())) ==
+           static_cast<int>(r.data.size());
   } catch (const std::exception&) {
     return false;
   }

@@ -11,17 +11,21 @@
 namespace slamaware {
 
 void addNodeOptions(CLI::App& app, NodeArgs& args, bool with_lockstep_flag) {
-  app.add_option("--config", args.config, "YAML file with this process's options (default: built-in defaults)")
+  app.add_option("--config", args.config,
+                 "YAML file with this process's options (default: built-in defaults)")
       ->check(CLI::ExistingFile);
-  app.add_option("--system", args.system, "system.yaml with bus and channel settings (default: built-in)")
+  app.add_option("--system", args.system,
+                 "system.yaml with bus and channel settings (default: built-in)")
       ->check(CLI::ExistingFile);
   app.add_option("--lcm-url", args.lcm_url, "LCM URL, overrides bus.url");
   if (with_lockstep_flag)
-    app.add_flag("--lockstep", args.lockstep, "deterministic mode: handle every frame, one output per input");
+    app.add_flag("--lockstep", args.lockstep,
+                 "deterministic mode: handle every frame, one output per input");
   app.add_option("--log-level", args.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
-  app.add_option("--name", args.name,
-                 "process name when several of one kind run (status on <NAME>_STATUS; default: the kind)");
+  app.add_option(
+      "--name", args.name,
+      "process name when several of one kind run (status on <NAME>_STATUS; default: the kind)");
 }
 
 void addPrintConfigOption(CLI::App& app, std::function<std::string()> text) {

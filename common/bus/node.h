@@ -18,7 +18,7 @@ struct NodeArgs {
   std::string lcm_url;    ///< overrides bus.url
   bool lockstep = false;  ///< overrides bus.lockstep when set
   std::string log_level = "info";
-  std::string name;       ///< process name ("" = its kind): status on <NAME>_STATUS, log prefix
+  std::string name;  ///< process name ("" = its kind): status on <NAME>_STATUS, log prefix
 
   /// The process's name: --name when given, else its kind ("camera", "slam", ...).
   std::string nameOr(const std::string& kind) const { return name.empty() ? kind : name; }

@@ -19,8 +19,8 @@ inline bool isLabelledObject(const object_detections_t& d, size_t i) {
 
 /// "#<object id> <label> <posterior of the label>" for box i.
 inline std::string objectLabelText(const object_detections_t& d, size_t i) {
-  const size_t c = static_cast<size_t>(std::find(d.class_names.begin(), d.class_names.end(), d.labels[i]) -
-                                       d.class_names.begin());
+  const size_t c = static_cast<size_t>(
+      std::find(d.class_names.begin(), d.class_names.end(), d.labels[i]) - d.class_names.begin());
   const double p = c < d.log_posterior[i].size() ? std::exp(d.log_posterior[i][c]) : 0.0;
   char text[96];
   std::snprintf(text, sizeof(text), "#%d %s %.2f", d.object_ids[i], d.labels[i].c_str(), p);

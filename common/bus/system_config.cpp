@@ -14,15 +14,16 @@ std::string Channels::statusOf(const std::string& process) const {
 
 Channels Channels::resolved() const {
   Channels c = *this;
-  for (std::string* s : {&c.camera, &c.camera_info, &c.slam_pose, &c.slam_keyframe, &c.slam_map, &c.proposals,
-                         &c.detections, &c.object_detections, &c.object_map, &c.object_query, &c.object_query_reply, &c.proc_status,
-                         &c.proc_command})
+  for (std::string* s : {&c.camera, &c.camera_info, &c.slam_pose, &c.slam_keyframe, &c.slam_map,
+                         &c.proposals, &c.detections, &c.object_detections, &c.object_map,
+                         &c.object_query, &c.object_query_reply, &c.proc_status, &c.proc_command})
     *s = prefix + *s;
   return c;
 }
 
 const std::vector<std::string>& systemSections() {
-  static const std::vector<std::string> sections = {"bus", "scheduling", "channels", "supervisor", "processes"};
+  static const std::vector<std::string> sections = {"bus", "scheduling", "channels", "supervisor",
+                                                    "processes"};
   return sections;
 }
 
@@ -41,13 +42,14 @@ SystemConfig loadSystemConfig(const std::string& path, bool print) {
     logOptions("bus", path.empty() ? "defaults" : path, bus);
     logOptions("scheduling", path.empty() ? "defaults" : path, scheduling);
   }
-  for (const auto& [key, value] : {std::pair<const char*, int>{"recognizer_nice", sys.scheduling.recognizer_nice},
-                                   {"background_nice", sys.scheduling.background_nice},
-                                   {"slam_mapping_nice", sys.scheduling.slam_mapping_nice},
-                                   {"slam_depth_nice", sys.scheduling.slam_depth_nice}}) {
+  for (const auto& [key, value] :
+       {std::pair<const char*, int>{"recognizer_nice", sys.scheduling.recognizer_nice},
+        {"background_nice", sys.scheduling.background_nice},
+        {"slam_mapping_nice", sys.scheduling.slam_mapping_nice},
+        {"slam_depth_nice", sys.scheduling.slam_depth_nice}}) {
     if (value < 0 || value > 19)
-      throw ConfigError((path.empty() ? std::string("defaults") : path) + ": key 'scheduling." + key +
-                        "': a nice increment is 0..19, got " + std::to_string(value));
+      throw ConfigError((path.empty() ? std::string("defaults") : path) + ": key 'scheduling." +
+                        key + "': a nice increment is 0..19, got " + std::to_string(value));
   }
   sys.channels = sys.channels.resolved();
   return sys;

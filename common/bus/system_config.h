@@ -10,20 +10,23 @@ namespace slamaware {
 struct BusOptions {
   /// ttl=0: nothing leaves the host; without the large receive buffer VGA frames are lost.
   std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
-  bool lockstep = false;            ///< one output per input frame, every frame, no dropping
-  double lockstep_timeout_s = 20.0; ///< how long a lockstep source waits for the last stage
-  int max_image_bytes = 16 << 20;   ///< cap on CAMERA messages
-  int max_map_bytes = 64 << 20;     ///< cap on SLAM_MAP messages
-  int max_message_bytes = 4 << 20;  ///< cap on every other channel
+  bool lockstep = false;             ///< one output per input frame, every frame, no dropping
+  double lockstep_timeout_s = 20.0;  ///< how long a lockstep source waits for the last stage
+  int max_image_bytes = 16 << 20;    ///< cap on CAMERA messages
+  int max_map_bytes = 64 << 20;      ///< cap on SLAM_MAP messages
+  int max_message_bytes = 4 << 20;   ///< cap on every other channel
 
   template <class V>
   void visit(V& v) {
     v("url", url, "LCM URL (udpm multicast; ttl=0 keeps traffic on this host)");
-    v("lockstep", lockstep, "deterministic mode: every stage handles every frame, one output per input");
-    v("lockstep_timeout_s", lockstep_timeout_s, "s a lockstep source waits for the last stage before going on");
+    v("lockstep", lockstep,
+      "deterministic mode: every stage handles every frame, one output per input");
+    v("lockstep_timeout_s", lockstep_timeout_s,
+      "s a lockstep source waits for the last stage before going on");
     v("max_image_bytes", max_image_bytes, "bytes, larger CAMERA messages are rejected");
     v("max_map_bytes", max_map_bytes, "bytes, larger SLAM_MAP messages are rejected");
-    v("max_message_bytes", max_message_bytes, "bytes, larger messages on other channels are rejected");
+    v("max_message_bytes", max_message_bytes,
+      "bytes, larger messages on other channels are rejected");
   }
 };
 
@@ -41,7 +44,8 @@ struct SchedulingOptions {
     v("background_nice", background_nice,
       "nice increment of the proposals' clustering and the object map (they catch up); 0: none");
     v("slam_mapping_nice", slam_mapping_nice,
-      "nice increment of SLAM's local-mapping thread (tracking stays at the normal priority); 0: none");
+      "nice increment of SLAM's local-mapping thread (tracking stays at the normal priority); 0: "
+      "none");
     v("slam_depth_nice", slam_depth_nice, "nice increment of SLAM's depth-filter thread; 0: none");
   }
 };
@@ -78,7 +82,8 @@ struct Channels {
     v("slam_map", slam_map, "point_cloud_t semi-dense map");
     v("proposals", proposals, "proposals_t per tracked frame");
     v("detections", detections, "detections_t per frame");
-    v("object_detections", object_detections, "object_detections_t per DETECTIONS: boxes with fused labels");
+    v("object_detections", object_detections,
+      "object_detections_t per DETECTIONS: boxes with fused labels");
     v("object_map", object_map, "object_map_t");
     v("object_query", object_query, "object_query_t");
     v("object_query_reply", object_query_reply, "object_query_reply_t");

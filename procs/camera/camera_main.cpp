@@ -8,8 +8,8 @@
 #include <thread>
 
 #include "common/bus/bus.h"
-#include "common/bus/lockstep.h"
 #include "common/bus/image_msg.h"
+#include "common/bus/lockstep.h"
 #include "common/bus/node.h"
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
@@ -45,7 +45,8 @@ int8_t pixelFormatOf(const CameraOptions& opts, const std::string& config) {
   if (opts.pixel_format == "jpeg") return image_t::PIXEL_FORMAT_JPEG;
   if (opts.pixel_format == "rgb8") return image_t::PIXEL_FORMAT_RGB8;
   throw ConfigError((config.empty() ? std::string("defaults") : config) +
-                    ": key 'camera.pixel_format': expected jpeg or rgb8, got '" + opts.pixel_format + "'");
+                    ": key 'camera.pixel_format': expected jpeg or rgb8, got '" +
+                    opts.pixel_format + "'");
 }
 
 // A frame as a CAMERA message: a JPEG file's own bytes when they may pass through, else encoded.
@@ -78,9 +79,11 @@ class Pacer {
       return;
     }
     if (speed_ <= 0) return;
-    const auto due = t0_ + std::chrono::microseconds(static_cast<int64_t>((utime - first_utime_) / speed_));
+    const auto due =
+        t0_ + std::chrono::microseconds(static_cast<int64_t>((utime - first_utime_) / speed_));
     while (Clock::now() < due && !stop()) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(due - Clock::now()).count();
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(due - Clock::now()).count();
       wait(static_cast<int>(std::clamp<int64_t>(left, 0, 20)));
     }
   }
@@ -95,21 +98,25 @@ class Pacer {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-camera: publishes CAMERA_INFO and CAMERA frames from a sequence folder, a video "
-               "file, a V4L device (v4l:N) or the synthetic generator (synth:CONFIG)"};
+  CLI::App app{
+      "slamaware-camera: publishes CAMERA_INFO and CAMERA frames from a sequence folder, a video "
+      "file, a V4L device (v4l:N) or the synthetic generator (synth:CONFIG)"};
   NodeArgs node;
   std::string source, lockstep_channel, wait_for;
   double speed = 1.0;
   bool loop = false;
   int64_t max_frames = -1;
   addNodeOptions(app, node, false);
-  app.add_option("--source", source, "sequence folder, video file, LCM log (.lcm), v4l:N or synth:CONFIG")->required();
+  app.add_option("--source", source,
+                 "sequence folder, video file, LCM log (.lcm), v4l:N or synth:CONFIG")
+      ->required();
   app.add_option("--speed", speed, "1 = real time, 2 = twice as fast, 0 = as fast as possible")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--lockstep", lockstep_channel,
                  "publish frame n+1 only after a message with seq n appeared on this channel");
-  app.add_option("--wait-for", wait_for,
-                 "comma-separated *_STATUS channels to hear from before the first frame (lockstep start)");
+  app.add_option(
+      "--wait-for", wait_for,
+      "comma-separated *_STATUS channels to hear from before the first frame (lockstep start)");
   app.add_flag("--loop", loop, "start again at the end of the source");
   app.add_option("--max-frames", max_frames, "stop after this many frames (-1: all)");
   addPrintConfigOption(app, [] { return defaultConfigFileText<CameraOptions>("camera"); });
@@ -122,7 +129,8 @@ int main(int argc, char** argv) {
     const int8_t format = pixelFormatOf(opts, node.config);
     std::unique_ptr<FrameSource> src = openSource(source, opts.source);
     const bool lockstep = !lockstep_channel.empty();
-    if (lockstep && speed == 1.0 && !app.count("--speed")) speed = 0;  // lockstep alone: as fast as acks come
+    if (lockstep && speed == 1.0 && !app.count("--speed"))
+      speed = 0;  // lockstep alone: as fast as acks come
 
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("camera"), sys.channels.statusOf(node.nameOr("camera")));
@@ -144,14 +152,16 @@ int main(int argc, char** argv) {
       if (Clock::now() - last_info > info_period) publishInfo();
     };
 
-    spdlog::info("source {} ({}x{}, {:.2f} fps, {} frames), speed {}, {}", src->describe(), src->camera().width(),
-                 src->camera().height(), src->fps(), src->length(), speed,
+    spdlog::info("source {} ({}x{}, {:.2f} fps, {} frames), speed {}, {}", src->describe(),
+                 src->camera().width(), src->camera().height(), src->fps(), src->length(), speed,
                  lockstep ? "lockstep on " + lockstep_channel : std::string("free running"));
 
     // Start: wait until the listed stages are up (their first heartbeat).
-    const auto missing = waitForChannels(bus, splitList(wait_for), sys.bus.lockstep_timeout_s, idle);
+    const auto missing =
+        waitForChannels(bus, splitList(wait_for), sys.bus.lockstep_timeout_s, idle);
     for (const auto& c : missing)
-      spdlog::warn("no message on {} after {:.0f} s; starting anyway", c, sys.bus.lockstep_timeout_s);
+      spdlog::warn("no message on {} after {:.0f} s; starting anyway", c,
+                   sys.bus.lockstep_timeout_s);
     status.setState(StatusReporter::State::kRunning);
     publishInfo();
     bus.handle(20);  // let CAMERA_INFO go out before the first frame
@@ -164,14 +174,15 @@ int main(int argc, char** argv) {
     while (!shutdownRequested()) {
       if (max_frames >= 0 && published >= max_frames) break;
       // Lockstep: wait for the last stage's answer to the previous frame.
-      if (gate && last_published_seq >= 0 && !gate->waitFor(last_published_seq, sys.bus.lockstep_timeout_s, idle)) {
+      if (gate && last_published_seq >= 0 &&
+          !gate->waitFor(last_published_seq, sys.bus.lockstep_timeout_s, idle)) {
         if (shutdownRequested()) break;
         ++timeouts;
         status.count("lockstep_timeouts");
         status.setMessage("lockstep: no answer on " + lockstep_channel + " for seq " +
                           std::to_string(last_published_seq));
-        spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on", last_published_seq,
-                     lockstep_channel, sys.bus.lockstep_timeout_s);
+        spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on",
+                     last_published_seq, lockstep_channel, sys.bus.lockstep_timeout_s);
       }
       if (!src->next(&frame)) {
         if (loop && src->rewind()) continue;
@@ -210,7 +221,8 @@ int main(int argc, char** argv) {
     status.setState(StatusReporter::State::kStopping);
     status.setCounter("frames_published", published);
     status.publish();
-    spdlog::info("published {} frames, skipped {} unreadable, {} lockstep timeouts", published, corrupt, timeouts);
+    spdlog::info("published {} frames, skipped {} unreadable, {} lockstep timeouts", published,
+                 corrupt, timeouts);
     return exit_code;
   });
 }

@@ -20,7 +20,8 @@ struct CameraOptions {
     v("passthrough_jpeg", passthrough_jpeg, "publish .jpg frames of a sequence folder as they are");
     v("info_rate_hz", info_rate_hz, "Hz, CAMERA_INFO rate");
     v("frame_id", frame_id, "name of the camera frame in CAMERA_INFO");
-    v.section("source", source, "intrinsics for video files and V4L devices (sequence folders carry their own)");
+    v.section("source", source,
+              "intrinsics for video files and V4L devices (sequence folders carry their own)");
   }
 };
 

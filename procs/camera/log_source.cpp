@@ -38,10 +38,12 @@ class LogSource : public FrameSource {
       if (frames_ == 0) throw SourceError(e.what());
       // The frames before the damage are played; next() reports the damage when it gets there.
     }
-    if (frames_ == 0) throw SourceError(path + ": no " + std::string(kFrameChannel) + " messages in the log");
+    if (frames_ == 0)
+      throw SourceError(path + ": no " + std::string(kFrameChannel) + " messages in the log");
     if (!have_info)
       throw SourceError(path + ": no valid " + std::string(kInfoChannel) + " message in the log");
-    fps_ = frames_ > 1 && last > first ? (frames_ - 1) * 1e6 / static_cast<double>(last - first) : 30.0;
+    fps_ = frames_ > 1 && last > first ? (frames_ - 1) * 1e6 / static_cast<double>(last - first)
+                                       : 30.0;
     duration_us_ = last - first + static_cast<int64_t>(1e6 / fps_);
     reader_ = std::make_unique<LogReader>(path_);
   }
@@ -61,7 +63,8 @@ class LogSource : public FrameSource {
         image_t msg{};
         const int n = static_cast<int>(ev->data.size());
         if (msg.decode(ev->data.data(), 0, n) != n) {
-          f->error = path_ + ": undecodable " + std::string(kFrameChannel) + " message at " + std::to_string(index_);
+          f->error = path_ + ": undecodable " + std::string(kFrameChannel) + " message at " +
+                     std::to_string(index_);
         } else {
           f->seq = static_cast<int32_t>(msg.seq + loops_ * frames_);
           f->utime = msg.utime + loops_ * duration_us_;
@@ -102,7 +105,8 @@ class LogSource : public FrameSource {
 }  // namespace
 
 void registerLogSource() {
-  registerSourceScheme("log", [](const std::string& path) { return std::make_unique<LogSource>(path); });
+  registerSourceScheme("log",
+                       [](const std::string& path) { return std::make_unique<LogSource>(path); });
 }
 
 }  // namespace slamaware::camera

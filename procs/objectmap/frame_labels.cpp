@@ -12,14 +12,16 @@ namespace slamaware::objectmap {
 namespace {
 
 double logMean(const std::vector<double>& p) {
-  return std::log(std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / static_cast<double>(p.size())));
+  return std::log(
+      std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / static_cast<double>(p.size())));
 }
 
 double logMedian(std::vector<double> p) {
   const size_t n = p.size(), m = n / 2;
   std::nth_element(p.begin(), p.begin() + static_cast<long>(m), p.end());
   const double upper = p[m];
-  const double median = n % 2 ? upper : (*std::max_element(p.begin(), p.begin() + static_cast<long>(m)) + upper) / 2;
+  const double median =
+      n % 2 ? upper : (*std::max_element(p.begin(), p.begin() + static_cast<long>(m)) + upper) / 2;
   return std::log(std::max(1e-300, median));
 }
 
@@ -31,8 +33,8 @@ void addObjectness(const Candidate& c, std::vector<double>* out) {
 
 }  // namespace
 
-std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_evidence, double weight,
-                                                double views_exponent) {
+std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_evidence,
+                                                double weight, double views_exponent) {
   std::vector<double> e = scaledLogEvidence(log_evidence, weight, views_exponent);
   if (e.empty()) return e;
   const double m = *std::max_element(e.begin(), e.end());
@@ -59,8 +61,9 @@ void scaleObjectClasses(std::vector<double>* log_p, const std::vector<double>& l
   (*log_p)[bg] = std::log(std::max(1e-300, 1.0 - std::min(1.0, object_sum)));
 }
 
-std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, const ObjectTable& table,
-                                           size_t num_classes, const FusionOptions& fusion) {
+std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
+                                           const ObjectTable& table, size_t num_classes,
+                                           const FusionOptions& fusion) {
   std::vector<FrameBoxLabel> out(boxes.size());
   if (num_classes == 0) return out;
   const size_t bg = num_classes - 1;
@@ -71,12 +74,14 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
     if (o && o->log_evidence.size() == num_classes && !object_median.count(o->id)) {
       std::vector<double> p;
       for (int32_t c : o->candidates)
-        if (auto it = table.candidates().find(c); it != table.candidates().end()) addObjectness(it->second, &p);
+        if (auto it = table.candidates().find(c); it != table.candidates().end())
+          addObjectness(it->second, &p);
       if (!p.empty()) object_median[o->id] = logMedian(p);
     }
     if (candidate_mean.count(b.candidate)) continue;
     std::vector<double> p;
-    if (auto it = table.candidates().find(b.candidate); it != table.candidates().end()) addObjectness(it->second, &p);
+    if (auto it = table.candidates().find(b.candidate); it != table.candidates().end())
+      addObjectness(it->second, &p);
     if (p.empty()) continue;
     candidate_mean[b.candidate] = logMean(p);
     candidate_median[b.candidate] = logMedian(p);
@@ -90,13 +95,16 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
     if (in_object) {
       l.object = o->id;
       l.role = BoxRole::kPrimary;
-      log_posterior = logPosteriorFromLogEvidence(o->log_evidence, o->evidence_weight, fusion.views_exponent);
-    } else if (auto it = table.candidates().find(b.candidate); it != table.candidates().end() && !it->second.views.empty()) {
+      log_posterior =
+          logPosteriorFromLogEvidence(o->log_evidence, o->evidence_weight, fusion.views_exponent);
+    } else if (auto it = table.candidates().find(b.candidate);
+               it != table.candidates().end() && !it->second.views.empty()) {
       // Its own views, fused as the map fuses an object's.
       std::vector<const std::vector<float>*> views;
       for (const auto& [key, v] : it->second.views) views.push_back(&v.log_prob);
       double weight = 0;
-      const std::vector<double> evidence = sumLogProbabilities(views, num_classes, fusion.objectness_weights, &weight);
+      const std::vector<double> evidence =
+          sumLogProbabilities(views, num_classes, fusion.objectness_weights, &weight);
       log_posterior = logPosteriorFromLogEvidence(evidence, weight, fusion.views_exponent);
     } else {
       log_posterior.assign(num_classes, kMinLogProb);
@@ -105,13 +113,15 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
     l.log_posterior = log_posterior;
     l.log_score = log_posterior;
     l.label = argmaxClass(log_posterior);
-    const double typical = candidate_mean.count(b.candidate)
-                               ? candidate_mean.at(b.candidate) +
-                                     (in_object ? object_median.at(o->id) : candidate_median.at(b.candidate))
-                               : 2 * (b.log_p.size() == num_classes ? logObjectness(b.log_p[bg]) : 0.0);
+    const double typical =
+        candidate_mean.count(b.candidate)
+            ? candidate_mean.at(b.candidate) +
+                  (in_object ? object_median.at(o->id) : candidate_median.at(b.candidate))
+            : 2 * (b.log_p.size() == num_classes ? logObjectness(b.log_p[bg]) : 0.0);
     l.log_weight.assign(num_classes, 0.0);
     for (size_t c = 0; c < bg; ++c) {
-      const double own = c < b.log_p.size() ? std::min(0.0, static_cast<double>(b.log_p[c])) : kMinLogProb;
+      const double own =
+          c < b.log_p.size() ? std::min(0.0, static_cast<double>(b.log_p[c])) : kMinLogProb;
       l.log_weight[c] = (own + typical) / 3;
     }
   }
@@ -121,7 +131,8 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
     if (out[i].object < 0) continue;
     const auto [it, added] = primary.emplace(out[i].object, i);
     // By log p(background | box) itself: 1 - p(background) rounds to 1 for sure views.
-    if (!added && boxes[i].log_p.size() == num_classes && boxes[it->second].log_p.size() == num_classes &&
+    if (!added && boxes[i].log_p.size() == num_classes &&
+        boxes[it->second].log_p.size() == num_classes &&
         boxes[i].log_p[bg] < boxes[it->second].log_p[bg])
       it->second = i;
   }
@@ -131,7 +142,8 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, c
     const FrameBox& a = boxes[i];
     const FrameBox& p = boxes[primary.at(l.object)];
     const double area = a.w * a.h;
-    const double inside = area > 0 ? rectIntersection(a.x, a.y, a.w, a.h, p.x, p.y, p.w, p.h) / area : 0.0;
+    const double inside =
+        area > 0 ? rectIntersection(a.x, a.y, a.w, a.h, p.x, p.y, p.w, p.h) / area : 0.0;
     if (!(inside > 0)) {
       l.role = BoxRole::kPart;
       continue;

@@ -48,19 +48,20 @@ struct FrameBoxLabel {
   BoxRole role = BoxRole::kNoObject;
   int label = -1;                     ///< argmax of the posterior
   std::vector<double> log_posterior;  ///< log p(class | the object's views so far)
-  std::vector<double> log_weight;  ///< log w_c (0 for the background)
-  std::vector<double> log_score;   ///< log p(c, box); the background the rest
+  std::vector<double> log_weight;     ///< log w_c (0 for the background)
+  std::vector<double> log_score;      ///< log p(c, box); the background the rest
 };
 
 /// Labels the boxes of one frame (in order) from `table` (its candidates' views must already hold
 /// this frame's). `fusion`: as the map fuses (for a candidate without an object).
-std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes, const ObjectTable& table,
-                                          size_t num_classes, const FusionOptions& fusion);
+std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
+                                           const ObjectTable& table, size_t num_classes,
+                                           const FusionOptions& fusion);
 
-/// The posterior of summed log evidence (fusion.h) in logs: log of posteriorFromLogEvidence(), exact
-/// also where a sure class's posterior rounds to 1 (the ranking of sure objects stays).
-std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_evidence, double total_weight,
-                                                double views_exponent);
+/// The posterior of summed log evidence (fusion.h) in logs: log of posteriorFromLogEvidence(),
+/// exact also where a sure class's posterior rounds to 1 (the ranking of sure objects stays).
+std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_evidence,
+                                                double total_weight, double views_exponent);
 
 /// log(1 - p(background)) from natural-log probabilities with the background last (0 for none),
 /// exact also for p(background) near 0 or 1.

@@ -44,8 +44,8 @@ std::vector<double> posteriorFromLogEvidence(const std::vector<double>& log_evid
   return p;
 }
 
-bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a, const std::vector<float>& log_p_b,
-                        double area_b) {
+bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a,
+                        const std::vector<float>& log_p_b, double area_b) {
   const float background_a = log_p_a.empty() ? 0.f : log_p_a.back();
   const float background_b = log_p_b.empty() ? 0.f : log_p_b.back();
   return background_a != background_b ? background_a < background_b : area_a > area_b;

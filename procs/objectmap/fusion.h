@@ -53,8 +53,8 @@ std::vector<double> scaledLogEvidence(const std::vector<double>& log_evidence, d
 /// view that finds its box most object-like (the lower p(background | box)), the larger box on a
 /// tie. A box on the object and its neighbour is larger than the box on the object alone, but its
 /// view is less sure that it sees one object. An empty view has p(background) 1.
-bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a, const std::vector<float>& log_p_b,
-                        double area_b);
+bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a,
+                        const std::vector<float>& log_p_b, double area_b);
 
 /// The class with the highest value; ties go to the lower index; -1 for an empty vector.
 int argmaxClass(const std::vector<double>& values);

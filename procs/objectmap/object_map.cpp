@@ -265,7 +265,8 @@ std::vector<int> ObjectMapEngine::mapClasses(const std::vector<std::string>& nam
       old_to_new[i] =
           static_cast<int>(std::find(list.begin(), list.end(), classes_[i]) - list.begin());
     const auto old_bg = std::find(classes_.begin(), classes_.end(), std::string(kBackgroundClass));
-    const int old_background = old_bg == classes_.end() ? -1 : static_cast<int>(old_bg - classes_.begin());
+    const int old_background =
+        old_bg == classes_.end() ? -1 : static_cast<int>(old_bg - classes_.begin());
     for (auto& [id, seg] : segments_) {
       seg->table.remapClasses(old_to_new, list.size(), old_background);
       seg->dirty = true;
@@ -313,8 +314,10 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
     return true;
   }
   const std::vector<int> to_map = mapClasses(d.class_names);
-  const auto msg_bg = std::find(d.class_names.begin(), d.class_names.end(), std::string(kBackgroundClass));
-  const int msg_background = msg_bg == d.class_names.end() ? -1 : static_cast<int>(msg_bg - d.class_names.begin());
+  const auto msg_bg =
+      std::find(d.class_names.begin(), d.class_names.end(), std::string(kBackgroundClass));
+  const int msg_background =
+      msg_bg == d.class_names.end() ? -1 : static_cast<int>(msg_bg - d.class_names.begin());
   Segment& seg = segmentFor(d.map_id);
   r.segment = seg.id;
   current_segment_ = seg.id;
@@ -367,8 +370,9 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
     const auto& row = d.log_prob[i];
     // A class of the map that the message's model lacks was part of that model's background: it
     // gets the box's background log-probability (no evidence for or against it beside background).
-    const float missing = std::max(kMinLogProb, msg_background >= 0 ? row[static_cast<size_t>(msg_background)]
-                                                                    : *std::min_element(row.begin(), row.end()));
+    const float missing =
+        std::max(kMinLogProb, msg_background >= 0 ? row[static_cast<size_t>(msg_background)]
+                                                  : *std::min_element(row.begin(), row.end()));
     v.log_prob.assign(classes_.size(), missing);
     for (size_t k = 0; k < nc; ++k)
       v.log_prob[static_cast<size_t>(to_map[k])] = std::max(kMinLogProb, row[k]);
@@ -459,7 +463,8 @@ object_t objectMessage(const Object& o, int32_t segment, const std::vector<std::
   m.posterior.resize(classes.size(), 0.f);
   m.log_evidence.resize(classes.size(), 0.f);
   m.log_posterior.resize(classes.size(), 0.f);
-  const std::vector<double> log_posterior = logPosteriorFromLogEvidence(o.log_evidence, o.evidence_weight, views_exponent);
+  const std::vector<double> log_posterior =
+      logPosteriorFromLogEvidence(o.log_evidence, o.evidence_weight, views_exponent);
   for (size_t c = 0; c < classes.size() && c < o.posterior.size(); ++c) {
     m.posterior[c] = static_cast<float>(o.posterior[c]);
     m.log_evidence[c] = static_cast<float>(o.log_evidence[c]);
@@ -521,13 +526,16 @@ object_detections_t ObjectMapEngine::frameDetections(const detections_t& d) cons
     f.log_p.assign(nc, kMinLogProb);
     for (size_t k = 0; k < d.log_prob[i].size() && k < to_map.size(); ++k) {
       const float v = d.log_prob[i][k];
-      if (to_map[k] >= 0 && !std::isnan(v)) f.log_p[static_cast<size_t>(to_map[k])] = std::clamp(v, kMinLogProb, 0.f);
+      if (to_map[k] >= 0 && !std::isnan(v))
+        f.log_p[static_cast<size_t>(to_map[k])] = std::clamp(v, kMinLogProb, 0.f);
     }
   }
   const ObjectTable* table = nullptr;
-  if (auto it = session_maps_.find(d.map_id); it != session_maps_.end()) table = &segments_.at(it->second)->table;
+  if (auto it = session_maps_.find(d.map_id); it != session_maps_.end())
+    table = &segments_.at(it->second)->table;
   const ObjectTable empty(1.0);
-  const std::vector<FrameBoxLabel> labels = labelFrameBoxes(boxes, table ? *table : empty, nc, options_.fusion());
+  const std::vector<FrameBoxLabel> labels =
+      labelFrameBoxes(boxes, table ? *table : empty, nc, options_.fusion());
   m.num_boxes = static_cast<int32_t>(nb);
   for (size_t i = 0; i < nb; ++i) {
     const FrameBoxLabel& l = labels[i];
@@ -536,7 +544,9 @@ object_detections_t ObjectMapEngine::frameDetections(const detections_t& d) cons
     m.object_ids.push_back(l.object);
     m.roles.push_back(static_cast<int8_t>(l.role));
     m.labels.push_back(l.label >= 0 ? classes_[static_cast<size_t>(l.label)] : "");
-    auto floats = [](const std::vector<double>& v) { return std::vector<float>(v.begin(), v.end()); };
+    auto floats = [](const std::vector<double>& v) {
+      return std::vector<float>(v.begin(), v.end());
+    };
     m.log_posterior.push_back(floats(l.log_posterior));
     m.log_weight.push_back(floats(l.log_weight));
     m.log_score.push_back(floats(l.log_score));
@@ -631,13 +641,13 @@ object_query_reply_t ObjectMapEngine::label(const object_query_t& q) {
   for (auto& [sid, seg] : segments_) {
     if (!seg->table.setUserLabel(q.object_id, unlabel ? std::string() : q.label)) continue;
     ++changes_;
-    reply.objects.push_back(
-        objectMessage(seg->table.objects().at(q.object_id), sid, classes_, options_.fusion().views_exponent));
+    reply.objects.push_back(objectMessage(seg->table.objects().at(q.object_id), sid, classes_,
+                                          options_.fusion().views_exponent));
     reply.num_objects = 1;
     return reply;
   }
-  reply.error = "no object " + std::to_string(q.object_id) + " in the map (" + std::to_string(numObjects()) +
-                " objects; slamaware-ctl query lists them)";
+  reply.error = "no object " + std::to_string(q.object_id) + " in the map (" +
+                std::to_string(numObjects()) + " objects; slamaware-ctl query lists them)";
   return reply;
 }
 

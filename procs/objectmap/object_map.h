@@ -109,8 +109,8 @@ class ObjectMapEngine {
 
   /// The OBJECT_MAP message (saved_map_path and saved_utime are the node's business).
   object_map_t objectMap() const;
-  /// OBJECT_DETECTIONS of a DETECTIONS message just given to onDetections(): every box of it with its
-  /// object as the map holds it now (regrouped after the frame unless deferred), the object's
+  /// OBJECT_DETECTIONS of a DETECTIONS message just given to onDetections(): every box of it with
+  /// its object as the map holds it now (regrouped after the frame unless deferred), the object's
   /// posterior and the box's score (frame_labels.h). The boxes of a message the map refused are
   /// labelled by what it holds (nothing of the frame fused); a candidate it holds nothing of keeps
   /// the box's own evidence (NO_OBJECT).

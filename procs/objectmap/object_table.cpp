@@ -32,9 +32,10 @@ using VoxelTest = std::function<bool(const std::vector<VoxelKey>&, const std::ve
 /// unions pass `joins(a, b)` (tested on unions, so a chain of small overlaps cannot grow a group
 /// that swallows what lies in it). `voxels[i]`: item i's sorted voxels. Returns the union of each
 /// joined root (a root not in it has its item's own voxels).
-std::map<size_t, std::vector<VoxelKey>> joinInOrder(const std::vector<std::tuple<double, size_t, size_t>>& pairs,
-                                                    const std::vector<const std::vector<VoxelKey>*>& voxels,
-                                                    UnionFind& uf, const VoxelTest& joins) {
+std::map<size_t, std::vector<VoxelKey>> joinInOrder(
+    const std::vector<std::tuple<double, size_t, size_t>>& pairs,
+    const std::vector<const std::vector<VoxelKey>*>& voxels, UnionFind& uf,
+    const VoxelTest& joins) {
   std::map<size_t, std::vector<VoxelKey>> unions;  // by root, sorted
   auto voxelsOf = [&](size_t root) -> std::vector<VoxelKey>& {
     auto it = unions.find(root);
@@ -58,19 +59,20 @@ std::map<size_t, std::vector<VoxelKey>> joinInOrder(const std::vector<std::tuple
 }
 
 /// Joins items whose voxels overlap (the grouping of candidates, and the merging of same-label
-/// groups): every pair of items that shares voxels and that `listed(i, j, shared)` admits is tried in
-/// ascending `rank(shared, na, nb)` (then i, j), and the groups of the two are joined when their voxel
-/// unions pass `joins(shared, a, b)` (joinInOrder).
+/// groups): every pair of items that shares voxels and that `listed(i, j, shared)` admits is tried
+/// in ascending `rank(shared, na, nb)` (then i, j), and the groups of the two are joined when their
+/// voxel unions pass `joins(shared, a, b)` (joinInOrder).
 std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     const std::vector<const std::vector<VoxelKey>*>& voxels, UnionFind& uf,
     const std::function<bool(size_t, size_t, size_t)>& listed,
     const std::function<double(size_t, size_t, size_t)>& rank,
-    const std::function<bool(size_t, const std::vector<VoxelKey>&, const std::vector<VoxelKey>&)>& joins) {
+    const std::function<bool(size_t, const std::vector<VoxelKey>&, const std::vector<VoxelKey>&)>&
+        joins) {
   // The voxels each pair of items shares, from one sorted list of (voxel, item): a run of one voxel
   // lists its owners in ascending order (each item's voxels are sorted and unique). Then, item by
-  // item, a dense counter over the later items it shares voxels with. This runs for every DETECTIONS
-  // message over every candidate's voxels; hash and tree maps allocating a node per voxel and per
-  // pair took a quarter of the object map's time in a real-time replay.
+  // item, a dense counter over the later items it shares voxels with. This runs for every
+  // DETECTIONS message over every candidate's voxels; hash and tree maps allocating a node per
+  // voxel and per pair took a quarter of the object map's time in a real-time replay.
   const size_t items = voxels.size();
   std::vector<std::pair<VoxelKey, uint32_t>> owned;
   size_t total = 0;
@@ -79,13 +81,14 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
   for (size_t i = 0; i < items; ++i)
     for (VoxelKey k : *voxels[i]) owned.emplace_back(k, static_cast<uint32_t>(i));
   std::sort(owned.begin(), owned.end());
-  std::vector<std::pair<size_t, size_t>> runs;       // [begin, end) in owned: two or more owners
+  std::vector<std::pair<size_t, size_t>> runs;        // [begin, end) in owned: two or more owners
   std::vector<std::vector<uint32_t>> runs_of(items);  // item -> its voxels' runs
   for (size_t p = 0; p < owned.size();) {
     size_t end = p + 1;
     while (end < owned.size() && owned[end].first == owned[p].first) ++end;
     if (end - p > 1) {
-      for (size_t q = p; q < end; ++q) runs_of[owned[q].second].push_back(static_cast<uint32_t>(runs.size()));
+      for (size_t q = p; q < end; ++q)
+        runs_of[owned[q].second].push_back(static_cast<uint32_t>(runs.size()));
       runs.emplace_back(p, end);
     }
     p = end;
@@ -107,24 +110,26 @@ std::map<size_t, std::vector<VoxelKey>> joinOverlapping(
     touched.clear();
   }
   std::sort(pairs.begin(), pairs.end());
-  return joinInOrder(pairs, voxels, uf, [&](const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
-    size_t both = 0;  // |a ∩ b| of the two sorted sets, without building it
-    for (auto i = a.begin(), j = b.begin(); i != a.end() && j != b.end();) {
-      if (*i < *j) {
-        ++i;
-      } else if (*j < *i) {
-        ++j;
-      } else {
-        ++both, ++i, ++j;
-      }
-    }
-    return joins(both, a, b);
-  });
+  return joinInOrder(pairs, voxels, uf,
+                     [&](const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+                       size_t both = 0;  // |a ∩ b| of the two sorted sets, without building it
+                       for (auto i = a.begin(), j = b.begin(); i != a.end() && j != b.end();) {
+                         if (*i < *j) {
+                           ++i;
+                         } else if (*j < *i) {
+                           ++j;
+                         } else {
+                           ++both, ++i, ++j;
+                         }
+                       }
+                       return joins(both, a, b);
+                     });
 }
 
 /// The groups of `uf`'s roots, each the concatenation of its members' groups (root = lowest index:
 /// groups stay in order).
-std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vector<int32_t>>& groups, UnionFind& uf) {
+std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vector<int32_t>>& groups,
+                                                    UnionFind& uf) {
   std::map<size_t, std::vector<int32_t>> by_root;
   for (size_t g = 0; g < groups.size(); ++g) {
     auto& m = by_root[uf.find(g)];
@@ -210,13 +215,15 @@ std::string ObjectTable::userLabelOf(const std::vector<int32_t>& members) const 
   return best;
 }
 
-void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size, int old_background) {
+void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size,
+                               int old_background) {
   for (auto& [id, c] : candidates_)
     for (auto& [key, v] : c.views) {
-      const float floor = old_background >= 0 && static_cast<size_t>(old_background) < v.log_prob.size()
-                              ? v.log_prob[static_cast<size_t>(old_background)]
-                          : v.log_prob.empty() ? 0.f
-                                               : *std::min_element(v.log_prob.begin(), v.log_prob.end());
+      const float floor =
+          old_background >= 0 && static_cast<size_t>(old_background) < v.log_prob.size()
+              ? v.log_prob[static_cast<size_t>(old_background)]
+          : v.log_prob.empty() ? 0.f
+                               : *std::min_element(v.log_prob.begin(), v.log_prob.end());
       std::vector<float> out(new_size, floor);
       for (size_t i = 0; i < v.log_prob.size() && i < old_to_new.size(); ++i)
         if (old_to_new[i] >= 0 && static_cast<size_t>(old_to_new[i]) < new_size)
@@ -272,7 +279,8 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
     int background) const {
   static const std::vector<VoxelKey> kNone;
   std::vector<int> label(groups.size());
-  std::vector<const std::vector<VoxelKey>*> sets(groups.size(), &kNone);  // none for background groups
+  std::vector<const std::vector<VoxelKey>*> sets(groups.size(),
+                                                 &kNone);  // none for background groups
   for (size_t g = 0; g < groups.size(); ++g) {
     label[g] = argmaxClass(facts.fusion(groups[g]).evidence);
     if (label[g] >= 0 && label[g] != background) sets[g] = &facts.voxels(groups[g]);
@@ -282,9 +290,12 @@ std::vector<std::vector<int32_t>> ObjectTable::mergeSameLabel(
   // evidence that two groups both call c is called c).
   const auto unions = joinOverlapping(
       sets, uf, [&](size_t i, size_t j, size_t) { return label[i] == label[j]; },
-      [](size_t n, size_t na, size_t nb) { return -static_cast<double>(n) / static_cast<double>(std::min(na, nb)); },
+      [](size_t n, size_t na, size_t nb) {
+        return -static_cast<double>(n) / static_cast<double>(std::min(na, nb));
+      },
       [&](size_t n, const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
-        return static_cast<double>(n) >= grouping.same_label_overlap * static_cast<double>(std::min(a.size(), b.size()));
+        return static_cast<double>(n) >=
+               grouping.same_label_overlap * static_cast<double>(std::min(a.size(), b.size()));
       });
   // A group without voxels yet (seen, but not from enough localised views) whose boxes put it
   // inside the bounds of a group of its class joins that group (the first, in order). Bounds are

@@ -1,8 +1,8 @@
 // slamaware-objectmap: the object map server. Reads SLAM_MAP (occupancy), CAMERA_INFO, SLAM_POSE,
 // PROPOSALS and DETECTIONS (joined on seq: per-object evidence fusion) and OBJECT_QUERY; publishes
-// OBJECT_DETECTIONS (each DETECTIONS message's boxes with their objects' fused labels, always one per
-// DETECTIONS), OBJECT_MAP and OBJECT_QUERY_REPLY; saves the map (OctoMap .ot + JSON object table) every
-// save_period_s and at shutdown, and loads it at start (procs/objectmap/README.md).
+// OBJECT_DETECTIONS (each DETECTIONS message's boxes with their objects' fused labels, always one
+// per DETECTIONS), OBJECT_MAP and OBJECT_QUERY_REPLY; saves the map (OctoMap .ot + JSON object
+// table) every save_period_s and at shutdown, and loads it at start (procs/objectmap/README.md).
 //
 // Lockstep: exactly one OBJECT_MAP per DETECTIONS message, whose content depends only on the
 // inputs (no wall-clock or save information). Real time: the objects are regrouped at most every
@@ -13,9 +13,9 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -187,9 +187,11 @@ class ObjectMapNode {
     if (r.full) status_.count("clouds_full");
     status_.count("cloud_points", static_cast<int64_t>(r.insert.points));
     status_.setCounter("map_insert_ms", static_cast<int64_t>(r.ms));
-    spdlog::debug("{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped, {} inserted before) in {:.0f} ms",
-                  r.full ? "full" : "incremental", m.seq, m.map_id, r.segment, r.insert.points,
-                  r.insert.dropped, r.repeated, r.ms);
+    spdlog::debug(
+        "{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped, {} inserted before) in "
+        "{:.0f} ms",
+        r.full ? "full" : "incremental", m.seq, m.map_id, r.segment, r.insert.points,
+        r.insert.dropped, r.repeated, r.ms);
   }
 
   void onDetections(const detections_t& m) {
@@ -216,17 +218,21 @@ class ObjectMapNode {
 
   void onQuery(const object_query_t& q) {
     regroup();  // the answer holds everything fused so far
-    const bool labelling = q.kind == object_query_t::KIND_LABEL || q.kind == object_query_t::KIND_UNLABEL;
+    const bool labelling =
+        q.kind == object_query_t::KIND_LABEL || q.kind == object_query_t::KIND_UNLABEL;
     object_query_reply_t reply = labelling ? engine_.label(q) : engine_.answer(q);
     if (labelling && reply.error.empty()) {
       // A user's label is saved before the reply: once answered, it survives a SIGKILL.
       save("label");
       if (!can_save_ || save_failed_)
-        reply.error = std::string("object ") + std::to_string(q.object_id) + " labelled in memory but not saved: " +
-                      (can_save_ ? "the save failed (see the status message)" : "this object map has no map folder");
+        reply.error = std::string("object ") + std::to_string(q.object_id) +
+                      " labelled in memory but not saved: " +
+                      (can_save_ ? "the save failed (see the status message)"
+                                 : "this object map has no map folder");
       else
-        spdlog::info("object {} {}", q.object_id,
-                     q.kind == object_query_t::KIND_LABEL ? "labelled '" + q.label + "'" : "unlabelled");
+        spdlog::info(
+            "object {} {}", q.object_id,
+            q.kind == object_query_t::KIND_LABEL ? "labelled '" + q.label + "'" : "unlabelled");
     }
     reply.utime = wallUtime();
     status_.count("queries");
@@ -353,9 +359,14 @@ int exportMap(const ObjectMapOptions& options, const std::string& dir, const std
   for (const auto& o : map.objects) {
     if (o.label != "background") ++labelled[o.map_id];
     nlohmann::json posterior;
-    for (size_t c = 0; c < map.class_names.size(); ++c) posterior[map.class_names[c]] = o.posterior[c];
-    nlohmann::json jo = {{"id", o.id},          {"segment", o.map_id},       {"label", o.label},
-                         {"posterior", posterior}, {"num_views", o.num_views}, {"num_voxels", o.num_voxels}};
+    for (size_t c = 0; c < map.class_names.size(); ++c)
+      posterior[map.class_names[c]] = o.posterior[c];
+    nlohmann::json jo = {{"id", o.id},
+                         {"segment", o.map_id},
+                         {"label", o.label},
+                         {"posterior", posterior},
+                         {"num_views", o.num_views},
+                         {"num_voxels", o.num_voxels}};
     if (!o.user_label.empty()) jo["user_label"] = o.user_label;
     if (std::isfinite(o.centroid[0])) {
       jo["centroid"] = {o.centroid[0], o.centroid[1], o.centroid[2]};
@@ -367,8 +378,9 @@ int exportMap(const ObjectMapOptions& options, const std::string& dir, const std
     spdlog::error("{}: the map has no segment to export", report.json_path);
     return 1;
   }
-  const auto best = std::max_element(labelled.begin(), labelled.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto best =
+      std::max_element(labelled.begin(), labelled.end(),
+                       [](const auto& a, const auto& b) { return a.second < b.second; });
   const std::string& ot = segment_files.at(best->first);
   std::filesystem::create_directories(out);
   writeFileAtomic(out + "/map.ot", ot.data(), ot.size());
@@ -378,8 +390,9 @@ int exportMap(const ObjectMapOptions& options, const std::string& dir, const std
                                 {"objects", objects}};
   const std::string text = table.dump(2) + "\n";
   writeFileAtomic(out + "/objects.json", text.data(), text.size());
-  spdlog::info("exported {}: {}/map.ot (segment {}, {} labelled objects), {}/objects.json ({} objects)",
-               report.json_path, out, best->first, best->second, out, objects.size());
+  spdlog::info(
+      "exported {}: {}/map.ot (segment {}, {} labelled objects), {}/objects.json ({} objects)",
+      report.json_path, out, best->first, best->second, out, objects.size());
   return 0;
 }
 
@@ -400,8 +413,9 @@ int main(int argc, char** argv) {
   app.add_flag(
       "--fresh", fresh,
       "start from an empty map, whatever the folder holds (its map is replaced at the first save)");
-  app.add_option("--export", export_dir,
-                 "write the newest good saved map as DIR/map.ot and DIR/objects.json, then exit (no bus)");
+  app.add_option(
+      "--export", export_dir,
+      "write the newest good saved map as DIR/map.ot and DIR/objects.json, then exit (no bus)");
   addPrintConfigOption(app, [] { return defaultConfigFileText<ObjectMapOptions>("objectmap"); });
   CLI11_PARSE(app, argc, argv);
 

@@ -79,7 +79,8 @@ struct VotingOptions {
 struct GroupingOptions {
   double merge_overlap = 0.8;     ///< share of the smaller group's voxels the two share
   double merge_size_ratio = 0.8;  ///< smaller group / larger group, in voxels
-  double same_label_overlap = 0.5;  ///< same class: share of the smaller's voxels (<= 0: no such merge)
+  double same_label_overlap =
+      0.5;  ///< same class: share of the smaller's voxels (<= 0: no such merge)
 
   template <class V>
   void visit(V& v) {
@@ -87,7 +88,8 @@ struct GroupingOptions {
     v("merge_size_ratio", merge_size_ratio,
       "the smaller group has at least this share of the larger's voxels");
     v("same_label_overlap", same_label_overlap,
-      "groups of the same object class merge when they share this share of the smaller's voxels (<= 0: never)");
+      "groups of the same object class merge when they share this share of the smaller's voxels "
+      "(<= 0: never)");
   }
 };
 
@@ -129,18 +131,22 @@ struct ObjectMapOptions {
   template <class V>
   void visit(V& v) {
     v.note(
-        "Lengths are in SLAM map units: the map's unit is about the median scene depth of the first "
+        "Lengths are in SLAM map units: the map's unit is about the median scene depth of the "
+        "first "
         "keyframe, so for a camera about 1 m from a table, 0.01 is about 1 cm.");
     v.section("occupancy", occupancy);
     v.section("voting", voting);
     v.section("grouping", grouping, "when two groups of candidates are one object");
     v("publish_period_s", publish_period_s, "s between periodic OBJECT_MAP messages (real time)");
     v("regroup_period_s", regroup_period_s,
-      "real time: s between regroupings of the objects (lockstep and <= 0: after every DETECTIONS)");
+      "real time: s between regroupings of the objects (lockstep and <= 0: after every "
+      "DETECTIONS)");
     v("objectness_weights", objectness_weights,
-      "each view's log p weighted by 1 - p(background | view) in the fused sum (false: the paper's plain sum)");
+      "each view's log p weighted by 1 - p(background | view) in the fused sum (false: the paper's "
+      "plain sum)");
     v("posterior_views_exponent", posterior_views_exponent,
-      "posterior = softmax(fused sum / W^e), W the views' total weight (0: views independent, 1: the average view)");
+      "posterior = softmax(fused sum / W^e), W the views' total weight (0: views independent, 1: "
+      "the average view)");
     v("seq_buffer", seq_buffer,
       "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
     v.section("persistence", persistence);

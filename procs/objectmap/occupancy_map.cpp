@@ -86,7 +86,8 @@ struct OccupancyMap::Impl {
       if (gone != now_not.end() && *gone == v.key) continue;  // freed
       merged.push_back(v);
     }
-    for (; add != now_occupied.end(); ++add) merged.push_back({*add, voxelCentre(*add, res).cast<float>()});
+    for (; add != now_occupied.end(); ++add)
+      merged.push_back({*add, voxelCentre(*add, res).cast<float>()});
     occupied = std::move(merged);
   }
 
@@ -215,7 +216,9 @@ namespace {
 /// its keys. The file: text header lines (comments, "id", "size", "res") up to "data", then each
 /// node depth first as its log-odds (float), colour (3 bytes) and a byte of child flags.
 void checkOctreeFile(const std::string& bytes, const std::string& what) {
-  auto fail = [&](const std::string& why) { throw std::runtime_error(what + ": not a valid OctoMap file: " + why); };
+  auto fail = [&](const std::string& why) {
+    throw std::runtime_error(what + ": not a valid OctoMap file: " + why);
+  };
   if (bytes.rfind("# Octomap OcTree file", 0) != 0) fail("no OctoMap header");
   size_t at = 0;
   std::string id;
@@ -231,10 +234,14 @@ void checkOctreeFile(const std::string& bytes, const std::string& what) {
     std::istringstream ls(line);
     std::string key;
     ls >> key;
-    if (key == "id") ls >> id;
-    else if (key == "size") ls >> declared;
-    else if (key == "res") ls >> resolution;
-    else fail("unexpected header line '" + line.substr(0, 40) + "'");
+    if (key == "id")
+      ls >> id;
+    else if (key == "size")
+      ls >> declared;
+    else if (key == "res")
+      ls >> resolution;
+    else
+      fail("unexpected header line '" + line.substr(0, 40) + "'");
     if (ls.fail()) fail("unreadable header line '" + line.substr(0, 40) + "'");
   }
   if (id != "ColorOcTree") fail("tree type '" + id + "', expected ColorOcTree");
@@ -251,7 +258,8 @@ void checkOctreeFile(const std::string& bytes, const std::string& what) {
       if (bytes.size() - at < kNodeBytes) fail("the data end inside node " + std::to_string(nodes));
       float log_odds;
       std::memcpy(&log_odds, bytes.data() + at, sizeof(float));
-      if (!std::isfinite(log_odds)) fail("node " + std::to_string(nodes) + " has no finite occupancy");
+      if (!std::isfinite(log_odds))
+        fail("node " + std::to_string(nodes) + " has no finite occupancy");
       const auto children = static_cast<uint8_t>(bytes[at + 7]);
       at += kNodeBytes;
       ++nodes;
@@ -262,7 +270,8 @@ void checkOctreeFile(const std::string& bytes, const std::string& what) {
   }
   if (at != bytes.size()) fail(std::to_string(bytes.size() - at) + " bytes after the last node");
   if (nodes != declared)
-    fail("the header says " + std::to_string(declared) + " nodes, the data hold " + std::to_string(nodes));
+    fail("the header says " + std::to_string(declared) + " nodes, the data hold " +
+         std::to_string(nodes));
 }
 
 }  // namespace

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <unordered_map>
 #include <cmath>
+#include <unordered_map>
 
 #include "procs/proposals/density_clustering.h"
 #include "procs/proposals/free_space.h"
@@ -22,14 +22,17 @@ Eigen::Vector3i voxelOf(const Eigen::Vector3f& p, double voxel) {
   return (p / static_cast<float>(voxel)).array().floor().cast<int>();
 }
 int64_t voxelKeyAt(const Eigen::Vector3i& v, double voxel) {
-  return voxelKey(Eigen::Vector3f((v.cast<float>() + Eigen::Vector3f::Constant(0.5f)) * static_cast<float>(voxel)), voxel);
+  return voxelKey(Eigen::Vector3f((v.cast<float>() + Eigen::Vector3f::Constant(0.5f)) *
+                                  static_cast<float>(voxel)),
+                  voxel);
 }
 
 // One point per occupied voxel: the centroid and mean colour of its points, in voxel-key order.
 std::vector<MapPoint> downsample(const std::vector<MapPoint>& in, double voxel) {
   if (!(voxel > 0) || in.empty()) return in;
   std::vector<std::pair<int64_t, uint32_t>> keyed(in.size());
-  for (size_t i = 0; i < in.size(); ++i) keyed[i] = {voxelKey(in[i].p, voxel), static_cast<uint32_t>(i)};
+  for (size_t i = 0; i < in.size(); ++i)
+    keyed[i] = {voxelKey(in[i].p, voxel), static_cast<uint32_t>(i)};
   std::sort(keyed.begin(), keyed.end());
   std::vector<MapPoint> out;
   for (size_t i = 0; i < keyed.size();) {
@@ -44,7 +47,8 @@ std::vector<MapPoint> downsample(const std::vector<MapPoint>& in, double voxel) 
     const double k = static_cast<double>(j - i);
     const Eigen::Vector3d mc = c / k;
     out.push_back({(p / k).cast<float>(), static_cast<uint8_t>(std::lround(mc.x())),
-                   static_cast<uint8_t>(std::lround(mc.y())), static_cast<uint8_t>(std::lround(mc.z()))});
+                   static_cast<uint8_t>(std::lround(mc.y())),
+                   static_cast<uint8_t>(std::lround(mc.z()))});
     i = j;
   }
   return out;
@@ -90,14 +94,16 @@ void setBounds(Candidate* c) {
 
 // Drops stray points: outside the per-axis [p, 100 - p] percentiles widened by margin x the
 // largest of the three ranges (a flat map, all table, must not lose what stands on it).
-std::vector<MapPoint> cropRobust(const std::vector<MapPoint>& in, double percentile, double margin) {
+std::vector<MapPoint> cropRobust(const std::vector<MapPoint>& in, double percentile,
+                                 double margin) {
   if (in.size() < 10 || percentile <= 0) return in;
   Eigen::Vector3f lo, hi;
   std::vector<float> v(in.size());
   for (int a = 0; a < 3; ++a) {
     for (size_t i = 0; i < in.size(); ++i) v[i] = in[i].p[a];
     const auto at = [&](double pct) {
-      const size_t k = std::min(v.size() - 1, static_cast<size_t>(pct / 100.0 * static_cast<double>(v.size())));
+      const size_t k =
+          std::min(v.size() - 1, static_cast<size_t>(pct / 100.0 * static_cast<double>(v.size())));
       std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
       return v[k];
     };
@@ -119,8 +125,8 @@ std::vector<MapPoint> cropRobust(const std::vector<MapPoint>& in, double percent
 // one keyframe's mistake. Keeps the points whose voxel and its 26 neighbours hold points of at
 // least `min_keyframes` different keyframes (counted in a 128-bit mask of keyframe id hashes:
 // exact for the small counts the threshold looks at).
-std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint>>& by_keyframe, double voxel,
-                                    int min_keyframes) {
+std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint>>& by_keyframe,
+                                    double voxel, int min_keyframes) {
   std::vector<MapPoint> out;
   if (min_keyframes <= 1 || !(voxel > 0)) {
     for (const auto& [kf, pts] : by_keyframe) out.insert(out.end(), pts.begin(), pts.end());
@@ -151,7 +157,9 @@ std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint
               all.bits[0] |= n->second.bits[0];
               all.bits[1] |= n->second.bits[1];
             }
-        it = keep.emplace(key, __builtin_popcountll(all.bits[0]) + __builtin_popcountll(all.bits[1]) >= min_keyframes)
+        it = keep.emplace(key,
+                          __builtin_popcountll(all.bits[0]) + __builtin_popcountll(all.bits[1]) >=
+                              min_keyframes)
                  .first;
       }
       if (it->second) out.push_back(m);
@@ -162,7 +170,8 @@ std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint
 // With a support: clusters lower than min_height over it are its texture; the others stand on
 // it, so their footprint (their points dropped onto the plane) belongs to them: it covers the
 // bottom that structure removal took away.
-void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, const ProposalOptions& o) {
+void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane,
+                    const ProposalOptions& o) {
   std::vector<Candidate> kept;
   const Eigen::Vector3f n = plane.normal();
   for (auto& c : *candidates) {
@@ -176,7 +185,8 @@ void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, cons
     c.on_support = true;
     if (o.add_footprint) {
       const size_t count = c.points.size();
-      for (size_t i = 0; i < count; ++i) c.points.push_back(c.points[i] - plane.distance(c.points[i]) * n);
+      for (size_t i = 0; i < count; ++i)
+        c.points.push_back(c.points[i] - plane.distance(c.points[i]) * n);
       setBounds(&c);
     }
     kept.push_back(std::move(c));
@@ -184,7 +194,8 @@ void standOnSupport(std::vector<Candidate>* candidates, const Plane& plane, cons
   *candidates = std::move(kept);
 }
 
-// Band points outside a candidate's surroundings below which its colour reference is the whole band.
+// Band points outside a candidate's surroundings below which its colour reference is the whole
+// band.
 constexpr double kMinReferencePoints = 100;
 
 // What of an object lies as low as the support's depth noise (a cap's brim, a bowl's foot) was
@@ -195,7 +206,8 @@ constexpr double kMinReferencePoints = 100;
 // candidate's. `coloured`: the clustered points, on a grid of `voxel` (candidates' points are
 // positions of these). Returns the points taken (summed over candidates).
 int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<MapPoint>& band,
-                       const std::vector<MapPoint>& coloured, double voxel, const Plane& plane, const ProposalOptions& o) {
+                       const std::vector<MapPoint>& coloured, double voxel, const Plane& plane,
+                       const ProposalOptions& o) {
   if (!(o.band_grow > 0) || band.empty() || candidates->empty()) return 0;
   const int bin = std::max(1, o.band_colour_bin);
   const int levels = 255 / bin + 1;
@@ -204,8 +216,10 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
     return static_cast<size_t>((r / bin * levels + g / bin) * levels + b / bin);
   };
   std::vector<double> support(bins, 0);
-  for (const auto& m : band) support[colourBin(m.r, m.g, m.b)] += 1.0 / static_cast<double>(band.size());
-  std::unordered_map<int64_t, size_t> colour_of;  // voxel key of a clustered point -> its colour bin
+  for (const auto& m : band)
+    support[colourBin(m.r, m.g, m.b)] += 1.0 / static_cast<double>(band.size());
+  std::unordered_map<int64_t, size_t>
+      colour_of;  // voxel key of a clustered point -> its colour bin
   colour_of.reserve(coloured.size());
   for (const auto& m : coloured) colour_of.emplace(voxelKey(m.p, voxel), colourBin(m.r, m.g, m.b));
   std::vector<size_t> band_bin(band.size());
@@ -213,7 +227,8 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
 
   const double step = 2 * o.radius;
   std::unordered_map<int64_t, std::vector<int>> grid;
-  for (size_t i = 0; i < band.size(); ++i) grid[voxelKeyAt(voxelOf(band[i].p, step), step)].push_back(static_cast<int>(i));
+  for (size_t i = 0; i < band.size(); ++i)
+    grid[voxelKeyAt(voxelOf(band[i].p, step), step)].push_back(static_cast<int>(i));
   std::vector<int> taken_by(band.size(), -1);
   int64_t taken = 0;
   const float base = static_cast<float>(2 * o.support_distance);
@@ -247,7 +262,8 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
       reference = support;
     else
       for (double& r : reference) r /= elsewhere;
-    for (size_t b = 0; b < bins; ++b) own_colour[b] = own[b] / n > o.band_colour_ratio * reference[b];
+    for (size_t b = 0; b < bins; ++b)
+      own_colour[b] = own[b] / n > o.band_colour_ratio * reference[b];
     std::vector<Eigen::Vector3f> front;
     for (const auto& p : c.points)
       if (plane.distance(p) <= base) front.push_back(p);
@@ -263,7 +279,8 @@ int64_t takeBandPoints(std::vector<Candidate>* candidates, const std::vector<Map
               const size_t u = static_cast<size_t>(i);
               const Eigen::Vector3f& p = band[u].p;
               if (taken_by[u] == static_cast<int>(k) || !own_colour[band_bin[u]] ||
-                  (p - front[q]).squaredNorm() > static_cast<float>(step * step) || (p.array() < lo.array()).any() || (p.array() > hi.array()).any())
+                  (p - front[q]).squaredNorm() > static_cast<float>(step * step) ||
+                  (p.array() < lo.array()).any() || (p.array() > hi.array()).any())
                 continue;
               taken_by[u] = static_cast<int>(k);
               front.push_back(p);
@@ -294,13 +311,16 @@ int countParts(const std::vector<int>& members, const std::vector<int>& finer_la
 
 ProposalOptions scaledLengths(const ProposalOptions& options, double scale) {
   ProposalOptions o = options;
-  for (double* v : {&o.voxel, &o.multiview_voxel, &o.max_depth_std, &o.plane_distance, &o.structure_cell, &o.structure_extent, &o.support_radius, &o.support_below, &o.support_distance, &o.support_margin,
-                    &o.min_height, &o.max_height, &o.band_grow, &o.radius, &o.max_extent, &o.min_extent})
+  for (double* v : {&o.voxel, &o.multiview_voxel, &o.max_depth_std, &o.plane_distance,
+                    &o.structure_cell, &o.structure_extent, &o.support_radius, &o.support_below,
+                    &o.support_distance, &o.support_margin, &o.min_height, &o.max_height,
+                    &o.band_grow, &o.radius, &o.max_extent, &o.min_extent})
     *v *= scale;
   return o;
 }
 
-std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const ProposalOptions& o) {
+std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points,
+                                     const ProposalOptions& o) {
   std::vector<Candidate> out;
   std::vector<std::vector<int64_t>> keys;  // per kept cluster, at the finest clustering voxel
   const double key_voxel = 2 * o.radius;
@@ -331,7 +351,8 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
     } else {
       std::unordered_map<int64_t, int> cell;  // downsample() keeps one point per cell
       cell.reserve(cloud.size());
-      for (size_t i = 0; i < cloud.size(); ++i) cell.emplace(voxelKey(cloud[i].p, r / 2), static_cast<int>(i));
+      for (size_t i = 0; i < cloud.size(); ++i)
+        cell.emplace(voxelKey(cloud[i].p, r / 2), static_cast<int>(i));
       for (size_t i = 0; i < points.size(); ++i) {
         const auto it = cell.find(voxelKey(points[i].p, r / 2));
         g.cell_of[i] = it == cell.end() ? -1 : it->second;
@@ -344,7 +365,8 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
   // threshold separates are split by the second pass, while an object of many colours (a printed
   // box) stays whole in the first.
   const int passes = o.colour_distance > 0 ? 2 : 1;
-  std::vector<std::vector<int>> point_label(grids.size());  // per scale, each map point's position-pass cluster
+  std::vector<std::vector<int>> point_label(
+      grids.size());  // per scale, each map point's position-pass cluster
   for (int pass = 0; pass < passes; ++pass) {
     const int first_scale = pass == 0 ? 0 : 1;
     for (int s = first_scale; s < static_cast<int>(grids.size()); ++s) {
@@ -389,8 +411,10 @@ std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const 
           }
         if (duplicate) continue;
         // Its parts: the clusters of the next finer scale (position pass) that hold split_share
-        // of its points each. Two are two objects that the coarser threshold joins where they touch.
-        if (s > 0) c.parts = countParts(members[l], point_label[static_cast<size_t>(s - 1)], o.split_share);
+        // of its points each. Two are two objects that the coarser threshold joins where they
+        // touch.
+        if (s > 0)
+          c.parts = countParts(members[l], point_label[static_cast<size_t>(s - 1)], o.split_share);
         keys.push_back(std::move(k));
         out.push_back(std::move(c));
       }
@@ -432,13 +456,15 @@ void CandidateMap::resetMap(int32_t map_id) {
   support_ = Support{};
 }
 
-void CandidateMap::update(int32_t map_id, bool full, int32_t keyframe_id, const std::vector<int32_t>& keyframe_ids,
+void CandidateMap::update(int32_t map_id, bool full, int32_t keyframe_id,
+                          const std::vector<int32_t>& keyframe_ids,
                           const std::vector<MapPoint>& points) {
   if (map_id != map_id_) resetMap(map_id);
   if (full) {
     by_keyframe_.clear();
     for (size_t i = 0; i < points.size(); ++i)
-      if (points[i].p.allFinite()) by_keyframe_[i < keyframe_ids.size() ? keyframe_ids[i] : -1].push_back(points[i]);
+      if (points[i].p.allFinite())
+        by_keyframe_[i < keyframe_ids.size() ? keyframe_ids[i] : -1].push_back(points[i]);
   } else {
     auto& kf = by_keyframe_[keyframe_id];
     kf.clear();
@@ -448,7 +474,8 @@ void CandidateMap::update(int32_t map_id, bool full, int32_t keyframe_id, const 
   dirty_ = true;
 }
 
-void CandidateMap::setKeyframeCentre(int32_t map_id, int32_t keyframe_id, const Eigen::Vector3f& centre) {
+void CandidateMap::setKeyframeCentre(int32_t map_id, int32_t keyframe_id,
+                                     const Eigen::Vector3f& centre) {
   if (map_id != map_id_ || !centre.allFinite()) return;
   keyframe_centres_[keyframe_id] = centre;
 }
@@ -497,7 +524,8 @@ static double sceneScale(const ClusterInputRef& in, const std::vector<MapPoint>&
 }
 
 Clustering clusterMap(const ClusterInput& in) {
-  return clusterMap(ClusterInputRef{in.map_id, in.options, in.by_keyframe, in.keyframe_centres, in.views});
+  return clusterMap(
+      ClusterInputRef{in.map_id, in.options, in.by_keyframe, in.keyframe_centres, in.views});
 }
 
 Clustering clusterMap(const ClusterInputRef& in) {
@@ -528,7 +556,8 @@ Clustering clusterMap(const ClusterInputRef& in) {
     all = keepMultiView(in.by_keyframe, o.multiview_voxel, min_keyframes);
     out.stats.single_view = static_cast<int64_t>(before - all.size());
     all = cropRobust(all, o.crop_percentile, o.crop_margin);
-    out.stats.cropped = static_cast<int64_t>(before) - out.stats.single_view - static_cast<int64_t>(all.size());
+    out.stats.cropped =
+        static_cast<int64_t>(before) - out.stats.single_view - static_cast<int64_t>(all.size());
     // Bounded cost: downsample until the map fits max_points.
     double voxel = o.voxel;
     std::vector<MapPoint> small = downsample(all, voxel);
@@ -556,12 +585,15 @@ Clustering clusterMap(const ClusterInputRef& in) {
       on.reserve(rest.size());
       for (const auto& m : rest) {
         const float h = out.support.plane.distance(m.p);
-        if (h > 0 && h <= o.max_height && out.support.over(m.p, static_cast<float>(o.support_margin))) on.push_back(m);
+        if (h > 0 && h <= o.max_height &&
+            out.support.over(m.p, static_cast<float>(o.support_margin)))
+          on.push_back(m);
       }
       rest.swap(on);
     }
     int64_t seen_through = 0;
-    rest = removeSeenThrough(rest, in.by_keyframe, in.keyframe_centres, in.views, o.free_space, &seen_through);
+    rest = removeSeenThrough(rest, in.by_keyframe, in.keyframe_centres, in.views, o.free_space,
+                             &seen_through);
     out.stats.seen_through = seen_through;
     out.stats.clustered_points = static_cast<int64_t>(rest.size());
     out.found = clusterPoints(rest, o);
@@ -570,11 +602,13 @@ Clustering clusterMap(const ClusterInputRef& in) {
       out.stats.band_points = static_cast<int64_t>(band.size());
       out.stats.band_taken = takeBandPoints(&out.found, band, rest, voxel, out.support.plane, o);
     }
-    out.stats.cluster_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
+    out.stats.cluster_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t2).count();
   }
   if (!has_support) out.support = Support{};
   out.key_voxel = 2 * o.radius;
-  out.stats.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  out.stats.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }
 
@@ -587,7 +621,9 @@ std::optional<ClusterInput> CandidateMap::takeClusterInput() {
 bool CandidateMap::recluster(int64_t utime) {
   if (!dirty_) return false;
   dirty_ = false;
-  return adopt(clusterMap(ClusterInputRef{map_id_, options_, by_keyframe_, keyframe_centres_, views_}), utime);
+  return adopt(
+      clusterMap(ClusterInputRef{map_id_, options_, by_keyframe_, keyframe_centres_, views_}),
+      utime);
 }
 
 bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
@@ -612,7 +648,8 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
       const double j = jaccard(new_keys[n], old_keys[o]);
       if (j >= options_.id_overlap) pairs.push_back({j, n, o});
     }
-  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.overlap > b.overlap; });
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const Pair& a, const Pair& b) { return a.overlap > b.overlap; });
   std::vector<bool> new_done(found.size()), old_done(candidates_.size());
   for (const auto& p : pairs) {
     if (new_done[p.n] || old_done[p.o]) continue;
@@ -636,7 +673,8 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
       if (static_cast<double>(utime - since) > 1e6 * options_.keep_lost_s) continue;
       size_t in = 0;
       for (int64_t k : old_keys[o]) in += std::binary_search(held.begin(), held.end(), k) ? 1 : 0;
-      if (static_cast<double>(in) >= options_.lost_held * static_cast<double>(old_keys[o].size())) continue;
+      if (static_cast<double>(in) >= options_.lost_held * static_cast<double>(old_keys[o].size()))
+        continue;
       c.lost_since = since;
       found.push_back(std::move(c));
     }

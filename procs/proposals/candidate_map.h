@@ -19,15 +19,17 @@ namespace slamaware::proposals {
 
 struct Candidate {
   int32_t id = -1;
-  int scale = 0;                       ///< 0 = finest radius
-  int stability = 1;                   ///< scales at which the same cluster was found
-  bool by_colour = false;              ///< found only by the clustering on position and colour
-  int parts = 1;                       ///< clusters of the next finer scale holding split_share of its points each (1 at the finest)
-  std::vector<Eigen::Vector3f> points; ///< world frame, map units
-  Eigen::Vector3f min, max;            ///< axis-aligned bounds
+  int scale = 0;           ///< 0 = finest radius
+  int stability = 1;       ///< scales at which the same cluster was found
+  bool by_colour = false;  ///< found only by the clustering on position and colour
+  int parts = 1;  ///< clusters of the next finer scale holding split_share of its points each (1 at
+                  ///< the finest)
+  std::vector<Eigen::Vector3f> points;  ///< world frame, map units
+  Eigen::Vector3f min, max;             ///< axis-aligned bounds
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-  bool on_support = false;             ///< stands on the map's support (its box is trimmed by box_trim_pct)
-  int64_t lost_since = -1;             ///< frame time of the clustering that lost it (-1: found by the last one)
+  bool on_support = false;  ///< stands on the map's support (its box is trimmed by box_trim_pct)
+  int64_t lost_since =
+      -1;  ///< frame time of the clustering that lost it (-1: found by the last one)
 };
 
 struct ClusterStats {
@@ -38,14 +40,15 @@ struct ClusterStats {
   int64_t band_taken = 0;    ///< of them, taken back by candidates (summed over candidates)
   int planes = 0;
   bool support = false;  ///< a support plane was found and the map restricted to what stands on it
-  bool young = false;    ///< the map had fewer than young_map_points points: young_min_points applied
+  bool young = false;  ///< the map had fewer than young_map_points points: young_min_points applied
   int clusters = 0;
-  int views = 0;         ///< camera poses the priors came from
-  bool look_at = false;  ///< the views' optical axes meet
-  double voxel = 0;   ///< voxel used for downsampling
+  int views = 0;           ///< camera poses the priors came from
+  bool look_at = false;    ///< the views' optical axes meet
+  double voxel = 0;        ///< voxel used for downsampling
   double scene_scale = 1;  ///< map units per length unit of the options (median viewing distance)
-  double ms = 0;      ///< time of the last recluster()
-  double filter_ms = 0, structure_ms = 0, cluster_ms = 0;  ///< its parts: agreement + crop + grid, planes, clustering
+  double ms = 0;           ///< time of the last recluster()
+  double filter_ms = 0, structure_ms = 0,
+         cluster_ms = 0;  ///< its parts: agreement + crop + grid, planes, clustering
 };
 
 /// What clustering a map needs of it (a copy: a worker thread can cluster it while the map goes on
@@ -92,8 +95,8 @@ class CandidateMap {
   /// Replaces the points of `keyframe_id` (incremental update) or, with full = true, the whole
   /// map. A new map id drops the old map, its views and its candidates. Non-finite points are
   /// ignored.
-  void update(int32_t map_id, bool full, int32_t keyframe_id, const std::vector<int32_t>& keyframe_ids,
-              const std::vector<MapPoint>& points);
+  void update(int32_t map_id, bool full, int32_t keyframe_id,
+              const std::vector<int32_t>& keyframe_ids, const std::vector<MapPoint>& points);
   /// The camera centre of a keyframe (lengths are relative to the distance points were seen from).
   void setKeyframeCentre(int32_t map_id, int32_t keyframe_id, const Eigen::Vector3f& centre);
   /// A camera pose localised in map `map_id` (the up direction and what the camera looks at come
@@ -125,7 +128,7 @@ class CandidateMap {
   std::map<int32_t, std::vector<MapPoint>> by_keyframe_;
   std::map<int32_t, Eigen::Vector3f> keyframe_centres_;
   std::vector<View> views_;
-  int view_stride_ = 1;   ///< every view_stride_-th pose is kept (bounded memory)
+  int view_stride_ = 1;  ///< every view_stride_-th pose is kept (bounded memory)
   int64_t views_seen_ = 0;
   bool dirty_ = false;
   std::vector<Candidate> candidates_;
@@ -140,6 +143,7 @@ ProposalOptions scaledLengths(const ProposalOptions& options, double scale);
 
 /// Clusters `points` (already filtered) at every scale of `options`; ids are not assigned.
 /// Exposed for tests and the benchmark.
-std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points, const ProposalOptions& options);
+std::vector<Candidate> clusterPoints(const std::vector<MapPoint>& points,
+                                     const ProposalOptions& options);
 
 }  // namespace slamaware::proposals

@@ -57,7 +57,8 @@ class CellTable {
  private:
   static constexpr int64_t kEmpty = -1;  // cellKey() uses 63 bits: never -1
   size_t slot(int64_t key) const {
-    return static_cast<size_t>((static_cast<uint64_t>(key) * 0x9E3779B97F4A7C15ull) >> (64 - bits_));
+    return static_cast<size_t>((static_cast<uint64_t>(key) * 0x9E3779B97F4A7C15ull) >>
+                               (64 - bits_));
   }
   int bits_ = 4;
   std::vector<int64_t> keys_;
@@ -67,8 +68,8 @@ class CellTable {
 }  // namespace
 
 std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
-                                 const std::vector<Eigen::Vector3f>& colours, const DensityClusterOptions& o,
-                                 int* count) {
+                                 const std::vector<Eigen::Vector3f>& colours,
+                                 const DensityClusterOptions& o, int* count) {
   const size_t n = points.size();
   std::vector<int> label(n, -1);
   *count = 0;
@@ -85,10 +86,10 @@ std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
     order[i] = {cellKey(c.x(), c.y(), c.z()), static_cast<int>(i)};
   }
   std::sort(order.begin(), order.end());
-  std::vector<int> cell_of(n);                      // point -> its cell
-  std::vector<int> cell_begin;                      // cell -> first position in order (+ end)
-  std::vector<Eigen::Vector3f> sorted(n);           // points in cell order
-  CellTable cell_index(n);                          // key -> cell
+  std::vector<int> cell_of(n);             // point -> its cell
+  std::vector<int> cell_begin;             // cell -> first position in order (+ end)
+  std::vector<Eigen::Vector3f> sorted(n);  // points in cell order
+  CellTable cell_index(n);                 // key -> cell
   for (size_t i = 0; i < n; ++i) {
     if (i == 0 || order[i].first != order[i - 1].first) {
       cell_index.insert(order[i].first, static_cast<int>(cell_begin.size()));
@@ -168,7 +169,8 @@ std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
   for (size_t i = 0; i < n; ++i) {
     if (!core[i]) continue;
     const int root = find(parent, static_cast<int>(i));
-    if (root_label[static_cast<size_t>(root)] < 0) root_label[static_cast<size_t>(root)] = (*count)++;
+    if (root_label[static_cast<size_t>(root)] < 0)
+      root_label[static_cast<size_t>(root)] = (*count)++;
     label[i] = root_label[static_cast<size_t>(root)];
   }
   for (size_t k = 0; k < n; ++k) {

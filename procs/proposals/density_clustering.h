@@ -10,8 +10,9 @@
 namespace slamaware::proposals {
 
 struct DensityClusterOptions {
-  float radius = 0.01f;    ///< neighbourhood radius
-  int min_neighbours = 4;  ///< points within radius (the point itself included) that make a core point
+  float radius = 0.01f;  ///< neighbourhood radius
+  int min_neighbours =
+      4;  ///< points within radius (the point itself included) that make a core point
   /// RGB distance (0..441) under which two core points may join; <= 0: position only.
   float colour_distance = 0;
 };
@@ -21,7 +22,7 @@ struct DensityClusterOptions {
 /// `radius`, else it is noise (-1). `colours` (RGB per point) may be empty when colour is off.
 /// Cluster indices are 0..count-1 in the order of their lowest point index (deterministic).
 std::vector<int> densityClusters(const std::vector<Eigen::Vector3f>& points,
-                                 const std::vector<Eigen::Vector3f>& colours, const DensityClusterOptions& options,
-                                 int* count);
+                                 const std::vector<Eigen::Vector3f>& colours,
+                                 const DensityClusterOptions& options, int* count);
 
 }  // namespace slamaware::proposals

@@ -11,7 +11,8 @@ namespace {
 
 // Shifted as unsigned: a left shift of a negative bin was undefined behaviour (UBSan).
 int64_t binKey(int64_t u, int64_t v) {
-  return static_cast<int64_t>((static_cast<uint64_t>(u) << 32) ^ (static_cast<uint64_t>(v) & 0xFFFFFFFFu));
+  return static_cast<int64_t>((static_cast<uint64_t>(u) << 32) ^
+                              (static_cast<uint64_t>(v) & 0xFFFFFFFFu));
 }
 
 // A keyframe's rays: per angular bin, the nearest point it seeded in that direction.
@@ -46,7 +47,8 @@ std::vector<MapPoint> removeSeenThrough(const std::vector<MapPoint>& test,
     if (c == centres.end() || pts.empty()) continue;
     const View* nearest = &views.front();
     for (const View& w : views)
-      if ((w.centre - c->second).squaredNorm() < (nearest->centre - c->second).squaredNorm()) nearest = &w;
+      if ((w.centre - c->second).squaredNorm() < (nearest->centre - c->second).squaredNorm())
+        nearest = &w;
     Rays r;
     r.centre = c->second;
     r.R_camera_world.row(0) = nearest->right.transpose();

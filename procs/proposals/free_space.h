@@ -1,9 +1,9 @@
 #pragma once
 // Free-space carving of a semi-dense map: a keyframe that seeded a point Y saw empty space along
 // the ray from its centre to Y. A point X of the map that lies on such a ray, in front of Y, cannot
-// be a surface (the keyframe would have seen X instead of Y): it is a wrong depth, typically smeared
-// at an object's occluding edge. Such points merge neighbouring objects into one cluster and widen
-// their boxes.
+// be a surface (the keyframe would have seen X instead of Y): it is a wrong depth, typically
+// smeared at an object's occluding edge. Such points merge neighbouring objects into one cluster
+// and widen their boxes.
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>
@@ -19,7 +19,8 @@ namespace slamaware::proposals {
 std::vector<MapPoint> removeSeenThrough(const std::vector<MapPoint>& test,
                                         const std::map<int32_t, std::vector<MapPoint>>& by_keyframe,
                                         const std::map<int32_t, Eigen::Vector3f>& centres,
-                                        const std::vector<View>& views, const FreeSpaceOptions& options,
+                                        const std::vector<View>& views,
+                                        const FreeSpaceOptions& options,
                                         int64_t* removed = nullptr);
 
 }  // namespace slamaware::proposals

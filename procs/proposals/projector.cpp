@@ -8,7 +8,9 @@
 
 namespace slamaware::proposals {
 
-double boxIou(const ProposalBox& a, const ProposalBox& b) { return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h); }
+double boxIou(const ProposalBox& a, const ProposalBox& b) {
+  return rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h);
+}
 
 namespace {
 
@@ -26,8 +28,10 @@ using Cell = NearestDepths;
 // this needs v sorted, the plain trim only its two order statistics: every frame, every box).
 void trimmedRange(std::vector<float>& v, double trim_pct, double gap, float* lo, float* hi) {
   const size_t n = v.size();
-  size_t i0 = std::min(n - 1, static_cast<size_t>(std::lround(trim_pct / 100.0 * static_cast<double>(n - 1))));
-  size_t i1 = std::min(n - 1, static_cast<size_t>(std::lround((100.0 - trim_pct) / 100.0 * static_cast<double>(n - 1))));
+  size_t i0 = std::min(
+      n - 1, static_cast<size_t>(std::lround(trim_pct / 100.0 * static_cast<double>(n - 1))));
+  size_t i1 = std::min(n - 1, static_cast<size_t>(std::lround((100.0 - trim_pct) / 100.0 *
+                                                              static_cast<double>(n - 1))));
   if (gap <= 0) {
     std::nth_element(v.begin(), v.begin() + static_cast<long>(i0), v.end());
     *lo = v[i0];
@@ -47,9 +51,9 @@ void trimmedRange(std::vector<float>& v, double trim_pct, double gap, float* lo,
 
 }  // namespace
 
-std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates, const CameraModel& camera,
-                                           const SE3& T_world_camera, const ProposalOptions& o,
-                                           ProjectionStats* stats) {
+std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates,
+                                           const CameraModel& camera, const SE3& T_world_camera,
+                                           const ProposalOptions& o, ProjectionStats* stats) {
   ProjectionStats st;
   const SE3 T_cw = T_world_camera.inverse();
   const int W = camera.width(), H = camera.height();
@@ -57,8 +61,9 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
   for (size_t ci = 0; ci < candidates.size(); ++ci) {
     const Candidate& c = candidates[ci];
     if (c.points.empty()) continue;
-    const size_t step = std::max<size_t>(1, (c.points.size() + o.max_points_per_candidate - 1) /
-                                                static_cast<size_t>(std::max(1, o.max_points_per_candidate)));
+    const size_t step =
+        std::max<size_t>(1, (c.points.size() + o.max_points_per_candidate - 1) /
+                                static_cast<size_t>(std::max(1, o.max_points_per_candidate)));
     Projected p{ci, {}, {}};
     size_t sampled = 0;
     for (size_t i = 0; i < c.points.size(); i += step) {
@@ -70,7 +75,8 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
       p.pixels.push_back(px.cast<float>());
       p.depths.push_back(static_cast<float>(pc.z()));
     }
-    if (p.pixels.empty() || p.pixels.size() < o.min_visible_fraction * static_cast<double>(sampled)) continue;
+    if (p.pixels.empty() || p.pixels.size() < o.min_visible_fraction * static_cast<double>(sampled))
+      continue;
     projected.push_back(std::move(p));
   }
   st.in_view = static_cast<int>(projected.size());
@@ -91,7 +97,8 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     const Candidate& c = candidates[p.index];
     size_t hidden = 0;
     for (size_t i = 0; i < p.pixels.size(); ++i)
-      if (zbuf[cellOf(p.pixels[i])].nearestOther(c.id) < p.depths[i] * (1 - o.occlusion_margin)) ++hidden;
+      if (zbuf[cellOf(p.pixels[i])].nearestOther(c.id) < p.depths[i] * (1 - o.occlusion_margin))
+        ++hidden;
     if (hidden > o.occluded_fraction * static_cast<double>(p.pixels.size())) {
       ++st.occluded;
       continue;
@@ -105,7 +112,8 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
       us[i] = p.pixels[i].x();
       vs[i] = p.pixels[i].y();
     }
-    const double trim = std::clamp(c.on_support ? o.box_trim_pct : o.box_trim_pct_unsupported, 0.0, 49.0);
+    const double trim =
+        std::clamp(c.on_support ? o.box_trim_pct : o.box_trim_pct_unsupported, 0.0, 49.0);
     float x0, x1, y0, y1;
     trimmedRange(us, trim, o.box_trim_gap, &x0, &x1);
     trimmedRange(vs, trim, o.box_trim_gap, &y0, &y1);
@@ -123,7 +131,8 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
     b.median_depth = d[d.size() / 2];
     const Eigen::Vector3d to_camera = T_world_camera.translation() - c.centroid.cast<double>();
-    if (to_camera.allFinite() && to_camera.norm() > 0) b.view_direction = to_camera.normalized().cast<float>();
+    if (to_camera.allFinite() && to_camera.norm() > 0)
+      b.view_direction = to_camera.normalized().cast<float>();
     b.scale = c.scale;
     b.stability = c.stability;
     b.by_colour = c.by_colour;

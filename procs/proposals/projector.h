@@ -20,10 +20,10 @@ struct ProposalBox {
   Eigen::Vector3f view_direction = Eigen::Vector3f::Zero();
   int scale = 0;
   int stability = 1;
-  bool by_colour = false;            ///< the candidate was found only on position and colour
-  int parts = 1;                     ///< the candidate's parts: 2 or more are touching objects
-  int points = 0;                    ///< projected points inside the image
-  bool lost = false;                 ///< the candidate is kept after a re-clustering lost it (keep_lost_s)
+  bool by_colour = false;  ///< the candidate was found only on position and colour
+  int parts = 1;           ///< the candidate's parts: 2 or more are touching objects
+  int points = 0;          ///< projected points inside the image
+  bool lost = false;       ///< the candidate is kept after a re-clustering lost it (keep_lost_s)
 };
 
 struct ProjectionStats {
@@ -33,8 +33,9 @@ struct ProjectionStats {
 /// IoU of two boxes.
 double boxIou(const ProposalBox& a, const ProposalBox& b);
 
-std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates, const CameraModel& camera,
-                                           const SE3& T_world_camera, const ProposalOptions& options,
+std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates,
+                                           const CameraModel& camera, const SE3& T_world_camera,
+                                           const ProposalOptions& options,
                                            ProjectionStats* stats = nullptr);
 
 }  // namespace slamaware::proposals

@@ -12,7 +12,8 @@ namespace slamaware::proposals {
 
 CandidateMap& ProposalEngine::mapOf(int32_t map_id) {
   auto it = maps_.find(map_id);
-  if (it == maps_.end()) it = maps_.emplace(map_id, CandidateMap(options_, &next_candidate_id_)).first;
+  if (it == maps_.end())
+    it = maps_.emplace(map_id, CandidateMap(options_, &next_candidate_id_)).first;
   recent_.erase(std::remove(recent_.begin(), recent_.end(), map_id), recent_.end());
   recent_.push_back(map_id);
   while (static_cast<int>(recent_.size()) > std::max(1, options_.max_maps)) {
@@ -56,7 +57,9 @@ bool ProposalEngine::onMap(const point_cloud_t& c, std::string* why) {
   map.update(c.map_id, c.full, c.keyframe_id, keyframes, points);
   const size_t k = static_cast<size_t>(std::max(0, c.num_keyframes));
   if (c.kf_ids.size() == k && c.kf_x.size() == k && c.kf_y.size() == k && c.kf_z.size() == k)
-    for (size_t i = 0; i < k; ++i) map.setKeyframeCentre(c.map_id, c.kf_ids[i], Eigen::Vector3f(c.kf_x[i], c.kf_y[i], c.kf_z[i]));
+    for (size_t i = 0; i < k; ++i)
+      map.setKeyframeCentre(c.map_id, c.kf_ids[i],
+                            Eigen::Vector3f(c.kf_x[i], c.kf_y[i], c.kf_z[i]));
   return true;
 }
 
@@ -74,10 +77,12 @@ bool ProposalEngine::recluster(CandidateMap& map, const pose_t& pose) {
   // due at once.
   const auto last = reclustered_.find(pose.map_id);
   const size_t points = map.points();
-  const bool due = last == reclustered_.end() || pose.utime < last->second.utime ||
-                   static_cast<double>(pose.utime - last->second.utime) >= 1e6 * options_.recluster_interval_s ||
-                   (options_.recluster_growth > 1 &&
-                    static_cast<double>(points) >= options_.recluster_growth * static_cast<double>(last->second.points));
+  const bool due =
+      last == reclustered_.end() || pose.utime < last->second.utime ||
+      static_cast<double>(pose.utime - last->second.utime) >= 1e6 * options_.recluster_interval_s ||
+      (options_.recluster_growth > 1 &&
+       static_cast<double>(points) >=
+           options_.recluster_growth * static_cast<double>(last->second.points));
   if (!background_) {
     if (!due || !map.recluster(pose.utime)) return false;
     reclustered_[pose.map_id] = {pose.utime, points};
@@ -126,7 +131,8 @@ void ProposalEngine::onKeyframe(const keyframe_t& k) {
     return;
   }
   const auto it = unproposed_.find(k.seq);
-  if (options_.late_keyframe_delay_s < 0 || it == unproposed_.end() || it->second != k.utime) return;
+  if (options_.late_keyframe_delay_s < 0 || it == unproposed_.end() || it->second != k.utime)
+    return;
   const SE3 T_world_camera = se3FromArrays(k.position, k.orientation);
   if (!T_world_camera.matrix().allFinite()) return;
   late_[k.seq] = LateKeyframe{k.utime, k.map_id, T_world_camera};
@@ -145,10 +151,12 @@ void ProposalEngine::projectLateKeyframes(const CandidateMap& map, int32_t map_i
     if (it->second.map_id == map_id && age_us >= delay_us) {
       late_out_.push_back(
           project(map, it->second.utime, it->first, map_id, it->second.T_world_camera, nullptr));
-      unproposed_.erase(it->first);  // it has its proposals now: later messages of the keyframe are moves
+      unproposed_.erase(
+          it->first);  // it has its proposals now: later messages of the keyframe are moves
       it = late_.erase(it);
     } else if (age_us > delay_us + 1e6 * kLateGiveUpS) {
-      it = late_.erase(it);  // its map did not come back in time: its frame is gone from the recognizer
+      it = late_.erase(
+          it);  // its map did not come back in time: its frame is gone from the recognizer
     } else {
       ++it;
     }
@@ -175,7 +183,8 @@ proposals_t ProposalEngine::onPose(const pose_t& pose, std::string* why, bool* r
     while (unproposed_.size() > kUnproposedKept) unproposed_.erase(unproposed_.begin());
     return m;
   };
-  const bool located = pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
+  const bool located =
+      pose.state == pose_t::STATE_TRACKING || pose.state == pose_t::STATE_RELOCALIZED;
   const SE3 T_world_camera = se3FromArrays(pose.position, pose.orientation);
   if (!T_world_camera.matrix().allFinite()) {
     *why = "SLAM_POSE seq " + std::to_string(pose.seq) + ": pose is not finite";

@@ -73,8 +73,8 @@ class ProposalEngine {
   std::map<int32_t, CandidateMap> maps_;
   std::vector<int32_t> recent_;  ///< map ids, most recently used last
   struct LastClustering {
-    int64_t utime = 0;   ///< frame time
-    size_t points = 0;   ///< the map's points then
+    int64_t utime = 0;  ///< frame time
+    size_t points = 0;  ///< the map's points then
   };
   std::map<int32_t, LastClustering> reclustered_;  ///< map id -> its last re-clustering
   int32_t next_candidate_id_ = 1;  ///< shared by the maps: ids are unique across maps
@@ -84,11 +84,13 @@ class ProposalEngine {
   ProjectionStats last_;
   bool background_ = false;
   std::future<Clustering> job_;  ///< the clustering running on the worker thread (background)
-  static constexpr size_t kUnproposedKept = 64;  ///< frames without proposals remembered (the newest)
-  static constexpr double kLateGiveUpS = 2;      ///< s past the delay after which a keyframe whose map
-                                                 ///< did not come back is forgotten (its frame is long
-                                                 ///< gone from the recognizer's buffer)
-  std::map<int32_t, int64_t> unproposed_;  ///< seq -> utime of the latest frames that got no proposals
+  static constexpr size_t kUnproposedKept =
+      64;                                    ///< frames without proposals remembered (the newest)
+  static constexpr double kLateGiveUpS = 2;  ///< s past the delay after which a keyframe whose map
+                                             ///< did not come back is forgotten (its frame is long
+                                             ///< gone from the recognizer's buffer)
+  std::map<int32_t, int64_t>
+      unproposed_;  ///< seq -> utime of the latest frames that got no proposals
   int64_t last_pose_utime_ = 0;
   struct LateKeyframe {
     int64_t utime = 0;

@@ -19,7 +19,9 @@ using namespace slamaware;
 using namespace slamaware::proposals;
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE, SLAM_KEYFRAME -> PROPOSALS)"};
+  CLI::App app{
+      "slamaware-proposals: object candidates from the SLAM map (CAMERA_INFO, SLAM_MAP, SLAM_POSE, "
+      "SLAM_KEYFRAME -> PROPOSALS)"};
   NodeArgs node;
   addNodeOptions(app, node);
   addPrintConfigOption(app, [] { return defaultConfigFileText<ProposalOptions>("proposals"); });
@@ -49,10 +51,12 @@ int main(int argc, char** argv) {
           if (!engine.onMap(c, &why)) bus.reject(ch.slam_map, why);
         },
         sys.bus.max_map_bytes);
-    bus.subscribe<keyframe_t>(ch.slam_keyframe, [&](const keyframe_t& k) { engine.onKeyframe(k); },
-                              sys.bus.max_message_bytes);
+    bus.subscribe<keyframe_t>(
+        ch.slam_keyframe, [&](const keyframe_t& k) { engine.onKeyframe(k); },
+        sys.bus.max_message_bytes);
     std::deque<pose_t> pending;
-    bus.subscribe<pose_t>(ch.slam_pose, [&](const pose_t& p) { pending.push_back(p); }, sys.bus.max_message_bytes);
+    bus.subscribe<pose_t>(
+        ch.slam_pose, [&](const pose_t& p) { pending.push_back(p); }, sys.bus.max_message_bytes);
 
     auto handlePose = [&](const pose_t& pose) {
       status.noteInput(pose.utime, pose.seq);
@@ -67,9 +71,11 @@ int main(int argc, char** argv) {
         status.setCounter("support", s.support ? 1 : 0);
         status.setCounter("recluster_ms", static_cast<int64_t>(s.ms));
         status.count("reclusters");
-        spdlog::debug("map {}: {} points, {} single-view, {} seen through, planes {}, {} clustered -> {} candidates in {:.0f} ms",
-                      engine.map().mapId(), s.input_points, s.single_view, s.seen_through, s.plane_points, s.clustered_points,
-                      s.clusters, s.ms);
+        spdlog::debug(
+            "map {}: {} points, {} single-view, {} seen through, planes {}, {} clustered -> {} "
+            "candidates in {:.0f} ms",
+            engine.map().mapId(), s.input_points, s.single_view, s.seen_through, s.plane_points,
+            s.clustered_points, s.clusters, s.ms);
       }
       // A keyframe's late proposals first: in lockstep the frame's answer then comes after theirs.
       for (const proposals_t& late : engine.takeLateProposals()) {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <map>
 #include <opencv2/imgproc.hpp>
-#include <set>
 #include <random>
+#include <set>
 
 namespace slamaware::proposals {
 
@@ -15,7 +15,8 @@ namespace {
 // The plane through the most of `sample` (within `distance`) by RANSAC: `iterations` random
 // triples, each scored on at most 4000 evenly spread points of the sample. Seeded: the same
 // points give the same plane. False if every triple was degenerate.
-bool ransacPlane(const std::vector<Eigen::Vector3f>& sample, double distance, int iterations, Eigen::Vector4f* plane) {
+bool ransacPlane(const std::vector<Eigen::Vector3f>& sample, double distance, int iterations,
+                 Eigen::Vector4f* plane) {
   if (sample.size() < 3) return false;
   const size_t stride = std::max<size_t>(1, sample.size() / 4000);
   std::mt19937 rng(12345);
@@ -31,7 +32,8 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& sample, double distance, in
     n /= len;
     const float d = -n.dot(a);
     size_t count = 0;
-    for (size_t i = 0; i < sample.size(); i += stride) count += std::abs(n.dot(sample[i]) + d) <= dist;
+    for (size_t i = 0; i < sample.size(); i += stride)
+      count += std::abs(n.dot(sample[i]) + d) <= dist;
     if (count > best) {
       best = count;
       *plane = Eigen::Vector4f(n.x(), n.y(), n.z(), d);
@@ -42,7 +44,8 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& sample, double distance, in
 
 // Any two unit vectors spanning the plane with normal n.
 void planeAxes(const Eigen::Vector3f& n, Eigen::Vector3f* u, Eigen::Vector3f* v) {
-  const Eigen::Vector3f a = std::abs(n.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
+  const Eigen::Vector3f a =
+      std::abs(n.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
   *u = n.cross(a).normalized();
   *v = n.cross(*u);
 }
@@ -94,8 +97,8 @@ struct Patch {
 
 struct FoundPlane {
   Plane plane;
-  Eigen::Vector3f origin, u, v;  // plane coordinates
-  std::vector<Patch> patches;    // the structure of this plane
+  Eigen::Vector3f origin, u, v;               // plane coordinates
+  std::vector<Patch> patches;                 // the structure of this plane
   std::map<CellKey, std::vector<int>> dense;  // every dense cell of its inliers, with its points
 
   Eigen::Vector2f toPlane(const Eigen::Vector3f& p) const {
@@ -115,7 +118,8 @@ struct FoundPlane {
     const CellKey c = cellOf(toPlane(p), cell);
     int n = 0;
     for (int dx = -2; dx <= 2; ++dx)
-      for (int dy = -2; dy <= 2; ++dy) n += patches[static_cast<size_t>(patch)].cells.count({c.first + dx, c.second + dy}) > 0;
+      for (int dy = -2; dy <= 2; ++dy)
+        n += patches[static_cast<size_t>(patch)].cells.count({c.first + dx, c.second + dy}) > 0;
     return n >= fill * 25;
   }
   // The dense cells within `radius` of the foot of `centre`.
@@ -123,7 +127,8 @@ struct FoundPlane {
     const Eigen::Vector2f c = toPlane(centre);
     std::vector<CellKey> out;
     for (const auto& [key, pts] : dense)
-      if ((Eigen::Vector2f((key.first + 0.5f) * cell, (key.second + 0.5f) * cell) - c).norm() <= radius)
+      if ((Eigen::Vector2f((key.first + 0.5f) * cell, (key.second + 0.5f) * cell) - c).norm() <=
+          radius)
         out.push_back(key);
     return out;
   }
@@ -142,7 +147,8 @@ struct FoundPlane {
     std::vector<Eigen::Vector2f> corners;
     for (const auto& c : cells)
       for (int dx = 0; dx <= 1; ++dx)
-        for (int dy = 0; dy <= 1; ++dy) corners.emplace_back((c.first + dx) * cell, (c.second + dy) * cell);
+        for (int dy = 0; dy <= 1; ++dy)
+          corners.emplace_back((c.first + dx) * cell, (c.second + dy) * cell);
     s.hull = convexHull(corners);
     return s;
   }
@@ -152,9 +158,11 @@ struct FoundPlane {
 // (at least min_points points each) whose extent is over `extent`. Points in sparse cells or in
 // smaller patches (an object's face, a few stray points on the infinite plane) are not structure.
 std::vector<Patch> structurePatches(FoundPlane* f, const std::vector<MapPoint>& points,
-                                    const std::vector<int>& inliers, float cell, int min_points, float extent) {
+                                    const std::vector<int>& inliers, float cell, int min_points,
+                                    float extent) {
   std::map<CellKey, std::vector<int>> cells;  // ordered: deterministic
-  for (int i : inliers) cells[cellOf(f->toPlane(points[static_cast<size_t>(i)].p), cell)].push_back(i);
+  for (int i : inliers)
+    cells[cellOf(f->toPlane(points[static_cast<size_t>(i)].p), cell)].push_back(i);
   std::map<CellKey, int> patch_of;
   for (const auto& [key, pts] : cells)
     if (static_cast<int>(pts.size()) >= min_points) {
@@ -193,7 +201,8 @@ std::vector<Patch> structurePatches(FoundPlane* f, const std::vector<MapPoint>& 
       const auto& pts = cells[c];
       p.points.insert(p.points.end(), pts.begin(), pts.end());
       for (int dx = 0; dx <= 1; ++dx)
-        for (int dy = 0; dy <= 1; ++dy) corners.emplace_back((c.first + dx) * cell, (c.second + dy) * cell);
+        for (int dy = 0; dy <= 1; ++dy)
+          corners.emplace_back((c.first + dx) * cell, (c.second + dy) * cell);
     }
     p.hull = convexHull(corners);
     out.push_back(std::move(p));
@@ -211,7 +220,8 @@ bool Support::over(const Eigen::Vector3f& p, float margin) const {
 ViewPriors viewPriors(const std::vector<View>& views) {
   ViewPriors v;
   if (views.empty()) return v;
-  Eigen::Vector3d up = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d up = Eigen::Vector3d::Zero(), centre = Eigen::Vector3d::Zero(),
+                  b = Eigen::Vector3d::Zero();
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero(), X = Eigen::Matrix3d::Zero();
   for (const auto& w : views) {
     up += w.up.cast<double>();
@@ -264,13 +274,15 @@ std::vector<FoundPlane> findPlanes(const std::vector<MapPoint>& points, const Vi
   for (int k = 0; k < o.max_planes && rest.size() >= 3; ++k) {
     // RANSAC on an even subsample (a plane holding >= plane_min_fraction of the points is as
     // well found from 20k of them), then the inliers among all points and a least-squares refit.
-    const size_t stride = std::max<size_t>(1, rest.size() / static_cast<size_t>(std::max(1000, o.ransac_points)));
+    const size_t stride =
+        std::max<size_t>(1, rest.size() / static_cast<size_t>(std::max(1000, o.ransac_points)));
     std::vector<Eigen::Vector3f> sample;
     sample.reserve(rest.size() / stride + 1);
-    for (size_t j = 0; j < rest.size(); j += stride) sample.push_back(points[static_cast<size_t>(rest[j])].p);
+    for (size_t j = 0; j < rest.size(); j += stride)
+      sample.push_back(points[static_cast<size_t>(rest[j])].p);
     Eigen::Vector4f coef;
     if (!ransacPlane(sample, o.plane_distance, o.plane_iterations, &coef)) break;
-    std::vector<int> in, out;  // points of rest on and off the plane
+    std::vector<int> in, out;               // points of rest on and off the plane
     for (int pass = 0; pass < 2; ++pass) {  // inliers, refit, inliers again
       in.clear();
       out.clear();
@@ -289,7 +301,8 @@ std::vector<FoundPlane> findPlanes(const std::vector<MapPoint>& points, const Vi
       }
       if (pass == 1 || in.size() < 3) break;
       const Eigen::Vector3d mean = sum / static_cast<double>(in.size());
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(sq / static_cast<double>(in.size()) - mean * mean.transpose());
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(sq / static_cast<double>(in.size()) -
+                                                        mean * mean.transpose());
       const Eigen::Vector3f n = es.eigenvectors().col(0).cast<float>().normalized();
       coef = Eigen::Vector4f(n.x(), n.y(), n.z(), -n.dot(mean.cast<float>()));
     }
@@ -301,7 +314,8 @@ std::vector<FoundPlane> findPlanes(const std::vector<MapPoint>& points, const Vi
     f.plane.d = coef[3];
     f.origin = -f.plane.d * f.plane.n;
     planeAxes(f.plane.n, &f.u, &f.v);
-    f.patches = structurePatches(&f, points, in, cell, o.structure_min_points, static_cast<float>(o.structure_extent));
+    f.patches = structurePatches(&f, points, in, cell, o.structure_min_points,
+                                 static_cast<float>(o.structure_extent));
     // The next plane is searched among the points that are not on this one; the points of this
     // plane that are not structure are kept (they go back to the output). A plane without
     // structure is kept too: it may be the support (a small table top), never removed.
@@ -341,7 +355,7 @@ SupportChoice underLookAt(const std::vector<FoundPlane>& found, const ViewPriors
                           const ProposalOptions& o, const Level& level) {
   const float cell = static_cast<float>(o.structure_cell);
   struct Candidate {
-    float h;                     // |height| of the look-at point over the plane
+    float h;  // |height| of the look-at point over the plane
     size_t plane;
     std::vector<CellKey> cells;  // its dense cells near the look-at point
   };

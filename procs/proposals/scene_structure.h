@@ -16,20 +16,21 @@ struct MapPoint {
   uint8_t r = 0, g = 0, b = 0;
 };
 
-/// One camera pose of the map: centre, optical axis, image right (x) and image up (-y), world frame.
+/// One camera pose of the map: centre, optical axis, image right (x) and image up (-y), world
+/// frame.
 struct View {
   Eigen::Vector3f centre, forward, right, up;
 };
 
 /// What the views of a map tell about the scene.
 struct ViewPriors {
-  bool valid = false;           ///< at least one view
+  bool valid = false;  ///< at least one view
   /// The views turned about the up axis enough for their x axes to span the horizontal: up is
   /// the direction perpendicular to all of them (on the side of the images' up).
   bool up_known = false;
   Eigen::Vector3f up{0, 0, 0};  ///< unit (valid when up_known)
   Eigen::Vector3f mean_centre{0, 0, 0};
-  bool has_look_at = false;     ///< the optical axes meet (they are not all parallel)
+  bool has_look_at = false;          ///< the optical axes meet (they are not all parallel)
   Eigen::Vector3f look_at{0, 0, 0};  ///< the point closest to every optical axis (least squares)
 };
 
@@ -49,7 +50,7 @@ struct Plane {
 struct Support {
   Plane plane;
   Eigen::Vector3f origin{0, 0, 0}, axis_u{0, 0, 0}, axis_v{0, 0, 0};  ///< plane coordinates
-  std::vector<Eigen::Vector2f> hull;                                    ///< convex, counter-clockwise
+  std::vector<Eigen::Vector2f> hull;                                  ///< convex, counter-clockwise
   /// True if the foot of `p` on the plane lies inside the hull grown by `margin`.
   bool over(const Eigen::Vector3f& p, float margin) const;
 };

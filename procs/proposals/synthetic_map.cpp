@@ -5,17 +5,20 @@
 namespace slamaware::synthmap {
 
 // Points on the side and top of an upright cylinder standing on z = 0 at (cx, cy), spaced ~step.
-std::vector<MapPoint> cylinder(float cx, float cy, float radius, float height, float step, uint8_t grey) {
+std::vector<MapPoint> cylinder(float cx, float cy, float radius, float height, float step,
+                               uint8_t grey) {
   std::vector<MapPoint> out;
   const int around = std::max(8, static_cast<int>(2 * M_PI * radius / step));
   for (float z = 0.005f; z <= height; z += step)
     for (int i = 0; i < around; ++i) {
       const float a = static_cast<float>(2 * M_PI * i / around);
-      out.push_back({Eigen::Vector3f(cx + radius * std::cos(a), cy + radius * std::sin(a), z), grey, grey, grey});
+      out.push_back({Eigen::Vector3f(cx + radius * std::cos(a), cy + radius * std::sin(a), z), grey,
+                     grey, grey});
     }
   for (float x = -radius; x <= radius; x += step)
     for (float y = -radius; y <= radius; y += step)
-      if (x * x + y * y < radius * radius) out.push_back({Eigen::Vector3f(cx + x, cy + y, height), grey, grey, grey});
+      if (x * x + y * y < radius * radius)
+        out.push_back({Eigen::Vector3f(cx + x, cy + y, height), grey, grey, grey});
   return out;
 }
 
@@ -23,7 +26,8 @@ std::vector<MapPoint> cylinder(float cx, float cy, float radius, float height, f
 std::vector<MapPoint> table(float size, float step) {
   std::vector<MapPoint> out;
   for (float x = -size / 2; x <= size / 2; x += step)
-    for (float y = -size / 2; y <= size / 2; y += step) out.push_back({Eigen::Vector3f(x, y, 0), 200, 200, 200});
+    for (float y = -size / 2; y <= size / 2; y += step)
+      out.push_back({Eigen::Vector3f(x, y, 0), 200, 200, 200});
   return out;
 }
 
@@ -68,7 +72,8 @@ camera_info_t vgaInfo() {
   return info;
 }
 
-point_cloud_t cloudMessage(int map_id, const std::vector<MapPoint>& points, bool full, int keyframe) {
+point_cloud_t cloudMessage(int map_id, const std::vector<MapPoint>& points, bool full,
+                           int keyframe) {
   point_cloud_t c{};
   c.map_id = map_id;
   c.full = full;

@@ -71,7 +71,8 @@ LinearClassifier trainOneVsAll(const ExampleSet& examples, const std::vector<std
     const int l = examples.label(i);
     if (l < 0 || l >= C) throw std::invalid_argument("trainOneVsAll: label out of range");
     const double w = examples.weight(i);
-    if (!(w >= 0) || !std::isfinite(w)) throw std::invalid_argument("trainOneVsAll: example weight not finite or negative");
+    if (!(w >= 0) || !std::isfinite(w))
+      throw std::invalid_argument("trainOneVsAll: example weight not finite or negative");
     positives[static_cast<size_t>(l)] += w;
     total += w;
   }

@@ -8,7 +8,8 @@
 // and the floor `mix` are fitted on held-out data (instances and scene frames the classifiers did
 // not see) by minimising the negative log-likelihood. Summing log p over views (naive Bayes with
 // a uniform prior, docs/architecture.md §3) then behaves: a fitted T undoes the over-confidence
-// of scores on training-like data, and the floor keeps one bad view from vetoing a class (log p >= log(mix/C)).
+// of scores on training-like data, and the floor keeps one bad view from vetoing a class (log p >=
+// log(mix/C)).
 #include <cstdint>
 #include <functional>
 #include <string>

@@ -36,16 +36,19 @@ void FeatureParams::validate() const {
   };
   // The upper bounds are far beyond any useful value; they keep sizes derived from these (margins,
   // cells, kernels) inside int.
-  if (step_px <= 0 || step_px % 2 != 0 || step_px > 256) fail("step_px must be an even number in 2..256");
+  if (step_px <= 0 || step_px % 2 != 0 || step_px > 256)
+    fail("step_px must be an even number in 2..256");
   if (pool_cell_px <= 0 || pool_cell_px % step_px != 0 || pool_cell_px > 1024)
     fail("pool_cell_px must be a multiple of step_px, at most 1024");
   if (bin_sizes_px.empty()) fail("bin_sizes_px is empty");
   for (int b : bin_sizes_px)
     if (b < 2 || b % 2 != 0 || b > 256) fail("every bin size must be an even number in 2..256");
-  if (!(smoothing_magnif > 0) || !std::isfinite(smoothing_magnif)) fail("smoothing_magnif must be positive");
+  if (!(smoothing_magnif > 0) || !std::isfinite(smoothing_magnif))
+    fail("smoothing_magnif must be positive");
   if (!(contrast_threshold >= 0) || !std::isfinite(contrast_threshold))
     fail("contrast_threshold must be a finite number >= 0");
-  if (!(rgb_weight >= 0) || !std::isfinite(rgb_weight)) fail("rgb_weight must be a finite number >= 0");
+  if (!(rgb_weight >= 0) || !std::isfinite(rgb_weight))
+    fail("rgb_weight must be a finite number >= 0");
 }
 
 int FeatureParams::marginPx() const {
@@ -199,7 +202,8 @@ void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
         if (norms[static_cast<size_t>(j) * nx + i] < threshold)
-          std::memset(grid.features.row(grid.rowOf(gx + i, gy + j, t)), 0, sizeof(float) * kSiftDims);
+          std::memset(grid.features.row(grid.rowOf(gx + i, gy + j, t)), 0,
+                      sizeof(float) * kSiftDims);
   }
 
   // Mean RGB over each descriptor's support: the 4 x 4 bins around its centre.

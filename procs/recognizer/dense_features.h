@@ -62,7 +62,8 @@ class DenseFeatureExtractor {
   /// Features of every grid point in `region` (clipped to imageCells()) into *grid (its memory is
   /// reused). With `only`, just those of the cells of blocks(*only, region); the other rows of the
   /// grid are left undefined.
-  void extract(const CellRect& region, FeatureGrid* grid, const std::vector<CellRect>* only = nullptr);
+  void extract(const CellRect& region, FeatureGrid* grid,
+               const std::vector<CellRect>* only = nullptr);
   /// The rectangles clipped to `within`, overlapping ones and those whose bounding rectangle costs
   /// no more than the two apart (each block is computed with a margin of filter support around
   /// it) joined: disjoint blocks that hold every cell of the rectangles, top to bottom.

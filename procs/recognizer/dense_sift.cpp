@@ -245,7 +245,8 @@ void triangleFilter(const float* in, int64_t in_step, int64_t in_stride, int b, 
 void denseSiftFlat(const float* image, int width, int height, const DsiftGeometry& g,
                    float* descriptors, size_t stride, float* norms, size_t row_pitch) {
   const int b = g.bin;
-  if (b < 1 || g.step < 1 || g.nx < 1 || g.ny < 1 || (row_pitch != 0 && row_pitch < static_cast<size_t>(g.nx)))
+  if (b < 1 || g.step < 1 || g.nx < 1 || g.ny < 1 ||
+      (row_pitch != 0 && row_pitch < static_cast<size_t>(g.nx)))
     throw std::invalid_argument("denseSiftFlat: bad geometry");
   const size_t pitch_out = row_pitch ? row_pitch : static_cast<size_t>(g.nx);
   const int span_x = g.step * (g.nx - 1) + 3 * b, span_y = g.step * (g.ny - 1) + 3 * b;

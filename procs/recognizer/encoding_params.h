@@ -1,7 +1,7 @@
 #pragma once
 // Parameters of the image encoding (docs/architecture.md §3): dense SIFT + mean RGB, PCA,
-// vocabulary, VLAD with a 1x1 + 2x2 + 4x4 spatial pyramid. They are fixed when a model is trained and stored in
-// the model file; the recognizer always encodes with the parameters of its model.
+// vocabulary, VLAD with a 1x1 + 2x2 + 4x4 spatial pyramid. They are fixed when a model is trained
+// and stored in the model file; the recognizer always encodes with the parameters of its model.
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>

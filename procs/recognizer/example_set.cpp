@@ -18,13 +18,16 @@ size_t rowLength(int64_t blocks, int64_t block_dims) {
 
 }  // namespace
 
-ExampleSet::ExampleSet(int64_t dims, int64_t block_dims) : dims_(dims), block_dims_(block_dims > 0 ? block_dims : dims) {
+ExampleSet::ExampleSet(int64_t dims, int64_t block_dims)
+    : dims_(dims), block_dims_(block_dims > 0 ? block_dims : dims) {
   if (dims < 0 || (dims > 0 && (block_dims_ <= 0 || dims % block_dims_ != 0)))
     throw std::invalid_argument("ExampleSet: block size must divide the row size");
   chunk_capacity_ = std::max(kChunkBytes, maxRowBytes());
 }
 
-size_t ExampleSet::maxRowBytes() const { return rowLength(block_dims_ ? dims_ / block_dims_ : 0, block_dims_); }
+size_t ExampleSet::maxRowBytes() const {
+  return rowLength(block_dims_ ? dims_ / block_dims_ : 0, block_dims_);
+}
 
 const uint8_t* ExampleSet::data(const Row& r) const {
   return chunks_[static_cast<size_t>(r.at / chunk_capacity_)].data() + r.at % chunk_capacity_;
@@ -107,7 +110,8 @@ int ExampleSet::blocks(int64_t i, std::vector<int32_t>* index, std::vector<float
   values->resize(static_cast<size_t>(n) * static_cast<size_t>(block_dims_));
   float* out = values->data();
   for (uint32_t k = 0; k < n; ++k)
-    for (int64_t d = 0; d < block_dims_; ++d) *out++ = scale[k] * static_cast<float>(q[k * block_dims_ + d]);
+    for (int64_t d = 0; d < block_dims_; ++d)
+      *out++ = scale[k] * static_cast<float>(q[k * block_dims_ + d]);
   return static_cast<int>(n);
 }
 

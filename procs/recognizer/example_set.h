@@ -6,9 +6,9 @@
 // A row is cut into blocks of `block_dims` values. For a VLAD vector a block is one codeword of one
 // pyramid cell, and a box's cells hold few of the 64 codewords: about half of a row's blocks are
 // exactly zero. Only the non-zero blocks are kept, each as one float scale and block_dims signed
-// bytes (value = scale * q, |q| <= 127, scale = the block's largest magnitude / 127): the error of a
-// value is at most half a step, 1/254 of its block's largest magnitude. A 107,520-D row takes about
-// a quarter of its half-precision size (a trainer's tens of thousands of rows are most of its
+// bytes (value = scale * q, |q| <= 127, scale = the block's largest magnitude / 127): the error of
+// a value is at most half a step, 1/254 of its block's largest magnitude. A 107,520-D row takes
+// about a quarter of its half-precision size (a trainer's tens of thousands of rows are most of its
 // memory). Rows live in chunks of kChunkBytes, each allocated once at its full size: a growing set
 // never copies itself into a buffer twice its size.
 #include <cstdint>

@@ -144,7 +144,8 @@ void writeField(Writer& w, const RecognizerModel& m) {
     w.pod<int32_t>(e.domain(i));
     w.pod<float>(e.weight(i));
     w.pod<int32_t>(nb);
-    for (int k = 0; k < nb; ++k) w.pod<uint16_t>(static_cast<uint16_t>(index[static_cast<size_t>(k)]));
+    for (int k = 0; k < nb; ++k)
+      w.pod<uint16_t>(static_cast<uint16_t>(index[static_cast<size_t>(k)]));
     for (int k = 0; k < nb; ++k) {
       const float* v = values.data() + k * bd;
       float top = 0;
@@ -166,7 +167,8 @@ void readExemplars(Reader& r, const std::string& what, RecognizerModel* m) {
   const int64_t dims = m->params.vladDims(), bd = m->params.pca_dims, blocks = dims / bd;
   m->exemplars = ExampleSet(dims, bd);
   const uint64_t n = r.pod<uint64_t>("exemplar_count");
-  if (n > 1000000) throw ModelError(what + ": implausible number of exemplars " + std::to_string(n));
+  if (n > 1000000)
+    throw ModelError(what + ": implausible number of exemplars " + std::to_string(n));
   std::vector<float> row(static_cast<size_t>(dims));
   for (uint64_t i = 0; i < n; ++i) {
     const int32_t label = r.pod<int32_t>("exemplar_label");
@@ -277,10 +279,12 @@ void RecognizerModel::check(const std::string& what) const {
       classifier.dims() != params.vladDims())
     fail("classifier weights are not " + std::to_string(C) + " x " +
          std::to_string(params.vladDims()));
-  if (exemplars.size() > 0 && (exemplars.dims() != params.vladDims() || exemplars.blockDims() != params.pca_dims))
+  if (exemplars.size() > 0 &&
+      (exemplars.dims() != params.vladDims() || exemplars.blockDims() != params.pca_dims))
     fail("exemplars are not encoded vectors of this model");
   for (int64_t i = 0; i < exemplars.size(); ++i)
-    if (exemplars.label(i) < 0 || exemplars.label(i) >= C) fail("an exemplar's class is out of range");
+    if (exemplars.label(i) < 0 || exemplars.label(i) >= C)
+      fail("an exemplar's class is out of range");
   if (!(classifier.temperature > 0) || !(classifier.uniform_mix >= 0) ||
       !(classifier.uniform_mix < 1))
     fail("calibration out of range");

@@ -104,38 +104,45 @@ void checkOptions(const RecognizerOptions& options, const std::string& source) {
     throw ConfigError(source + ": key 'recognizer.encoder': " + e.what());
   }
   if (!(options.nms_iou > 0))
-    throw ConfigError(source + ": key 'recognizer.nms_iou': must be above 0 (1 or more: no suppression), got " +
-                      std::to_string(options.nms_iou));
+    throw ConfigError(
+        source + ": key 'recognizer.nms_iou': must be above 0 (1 or more: no suppression), got " +
+        std::to_string(options.nms_iou));
   const ViewSelectionOptions& v = options.view_selection;
   if (!(v.angle_deg >= 0 && v.angle_deg <= 180))
-    throw ConfigError(source + ": key 'recognizer.view_selection.angle_deg': degrees from 0 to 180, got " +
+    throw ConfigError(source +
+                      ": key 'recognizer.view_selection.angle_deg': degrees from 0 to 180, got " +
                       std::to_string(v.angle_deg));
   if (!(v.scale >= 0 && std::isfinite(v.scale)))
-    throw ConfigError(source + ": key 'recognizer.view_selection.scale': a factor of 0 or more, got " +
+    throw ConfigError(source +
+                      ": key 'recognizer.view_selection.scale': a factor of 0 or more, got " +
                       std::to_string(v.scale));
   const auto size_ok = [](int px) { return px >= 0 && px <= kMaxWarmUpPx; };
   if (!size_ok(options.warm_up_width) || !size_ok(options.warm_up_height) ||
       (options.warm_up_width == 0) != (options.warm_up_height == 0))
-    throw ConfigError(source + ": keys 'recognizer.warm_up_width' / 'warm_up_height': a frame size of 1 to " +
-                      std::to_string(kMaxWarmUpPx) + " px each, or both 0 (none), got " +
-                      std::to_string(options.warm_up_width) + " x " + std::to_string(options.warm_up_height));
+    throw ConfigError(
+        source + ": keys 'recognizer.warm_up_width' / 'warm_up_height': a frame size of 1 to " +
+        std::to_string(kMaxWarmUpPx) + " px each, or both 0 (none), got " +
+        std::to_string(options.warm_up_width) + " x " + std::to_string(options.warm_up_height));
 }
 
 int suppressOverlaps(FrameDetections* d, double max_iou, bool per_class) {
   const size_t n = d->boxes.size();
   if (!(max_iou < 1) || n < 2) return 0;
-  const size_t objects = !d->classes.empty() && d->classes.back() == "background" ? d->classes.size() - 1
-                                                                                     : d->classes.size();
+  const size_t objects = !d->classes.empty() && d->classes.back() == "background"
+                             ? d->classes.size() - 1
+                             : d->classes.size();
   std::vector<float> confidence(n, -std::numeric_limits<float>::infinity());
   std::vector<int> best_class(n, -1);
   for (size_t i = 0; i < n; ++i) {
     const auto& lp = d->boxes[i].log_prob;
     for (size_t c = 0; c < std::min(objects, lp.size()); ++c)
-      if (lp[c] > confidence[i]) confidence[i] = lp[c], best_class[i] = static_cast<int>(c);  // NaN never wins
+      if (lp[c] > confidence[i])
+        confidence[i] = lp[c], best_class[i] = static_cast<int>(c);  // NaN never wins
   }
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return confidence[a] > confidence[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return confidence[a] > confidence[b]; });
   std::vector<size_t> kept;
   for (size_t i : order) {
     const BoxDetection& a = d->boxes[i];

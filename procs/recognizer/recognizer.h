@@ -48,12 +48,14 @@ struct RecognizerOptions {
     v("encoder", encoder, "auto (cheaper of the two per frame), direct or flair");
     v("max_boxes", max_boxes, "boxes per frame beyond this are rejected");
     v("nms_iou", nms_iou,
-      "of two classified boxes overlapping by more than this IoU, the less confident is not published (>= 1: none)");
+      "of two classified boxes overlapping by more than this IoU, the less confident is not "
+      "published (>= 1: none)");
     v("nms_per_class", nms_per_class,
       "true: only boxes of the same most probable object class suppress each other");
     v("missing_background_log_prob", missing_background_log_prob,
       "log p(background) published when the model has no background class");
-    v.section("cost", cost, "time model that picks the encoder (slamaware-bench-recognizer measures it)");
+    v.section("cost", cost,
+              "time model that picks the encoder (slamaware-bench-recognizer measures it)");
     v.section("view_selection", view_selection,
               "which boxes are classified; the others carry their candidate's last result");
     v("frame_buffer", frame_buffer, "CAMERA frames kept for joining with PROPOSALS");
@@ -63,7 +65,8 @@ struct RecognizerOptions {
     v("model_watch_s", model_watch_s,
       "s between checks whether the model file was replaced (then it is reloaded live); 0: never");
     v("warm_up_width", warm_up_width,
-      "px, frame width whose buffers are prepared when the model loads (0: none; the first frames pay)");
+      "px, frame width whose buffers are prepared when the model loads (0: none; the first frames "
+      "pay)");
     v("warm_up_height", warm_up_height, "px, frame height of the same");
   }
 };
@@ -107,8 +110,8 @@ struct FrameDetections {
 };
 
 /// Non-maximum suppression of classified boxes (docs/architecture.md §3: overlapping boxes,
-/// IoU > max_iou, are suppressed). The boxes are taken in order of their most probable object class's
-/// probability (the background excluded; ties: request order), and a box is removed when it
+/// IoU > max_iou, are suppressed). The boxes are taken in order of their most probable object
+/// class's probability (the background excluded; ties: request order), and a box is removed when it
 /// overlaps one kept before it by IoU > max_iou (with `per_class`, only one whose most probable
 /// object class is the same: a bowl's box beside the box of the bowl and a mug, surer of a mug,
 /// stays). The others stay, in request order. Done after

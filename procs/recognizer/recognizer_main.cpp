@@ -19,8 +19,8 @@
 // frame waits for the load or is dropped because of it. A model that fails to load is refused
 // (counted in reload_failures, the reason in the status message) and the old one keeps running.
 #include <fmt/format.h>
-#include <sys/stat.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -63,7 +63,8 @@ struct FileStamp {
   off_t size = 0;
   int64_t mtime_ns = 0;
   bool operator==(const FileStamp& o) const {
-    return exists == o.exists && dev == o.dev && ino == o.ino && size == o.size && mtime_ns == o.mtime_ns;
+    return exists == o.exists && dev == o.dev && ino == o.ino && size == o.size &&
+           mtime_ns == o.mtime_ns;
   }
 };
 
@@ -83,8 +84,9 @@ std::unique_ptr<Recognizer> loadRecognizer(const RecognizerOptions& options, dou
   try {
     *warm_up_ms = recognizer->warmUp(options.warm_up_width, options.warm_up_height);
   } catch (const std::exception& e) {
-    spdlog::warn("preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
-                 options.warm_up_width, options.warm_up_height, e.what());
+    spdlog::warn(
+        "preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
+        options.warm_up_width, options.warm_up_height, e.what());
   }
   return recognizer;
 }
@@ -170,9 +172,12 @@ class RecognizerNode {
       last_watch_ = now;
       const FileStamp s = stampOf(options_.model);
       // A stamp whose load failed is not tried again; the next change of the file is.
-      if (s.exists && !(s == loaded_stamp_) && !(s == refused_stamp_)) requestReload("the file was replaced");
+      if (s.exists && !(s == loaded_stamp_) && !(s == refused_stamp_))
+        requestReload("the file was replaced");
     }
-    if (!loading_.valid() || loading_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    if (!loading_.valid() ||
+        loading_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+      return;
     try {
       Loaded l = loading_.get();
       recognizer_ = std::move(l.recognizer);
@@ -183,7 +188,8 @@ class RecognizerNode {
     } catch (const std::exception& e) {
       refused_stamp_ = loading_stamp_;
       status_.count("reload_failures");
-      status_.setMessage(std::string("new model refused: ") + e.what() + "; the previous model keeps running");
+      status_.setMessage(std::string("new model refused: ") + e.what() +
+                         "; the previous model keeps running");
       spdlog::error("new model refused: {}; the previous model keeps running", e.what());
     }
     if (reload_again_) {
@@ -282,7 +288,8 @@ class RecognizerNode {
     for (size_t i = 0; i < n; ++i) {
       const box_t& b = p.boxes[i];
       const auto& dir = p.view_direction[i];
-      views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]), p.median_depth[i], b.w, b.h};
+      views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
+                               p.median_depth[i], b.w, b.h};
     }
     // A restarted camera stream starts the selection afresh (its seqs start again). Proposals
     // sent late for an older frame (a map's reference keyframe) are classified in full.
@@ -308,7 +315,8 @@ class RecognizerNode {
       return;
     }
     for (const auto& b : d.boxes)
-      if (b.carried_seq < 0) selector_.remember(p.map_id, p.seq, views[static_cast<size_t>(b.input_index)], b.log_prob);
+      if (b.carried_seq < 0)
+        selector_.remember(p.map_id, p.seq, views[static_cast<size_t>(b.input_index)], b.log_prob);
     suppressOverlaps(&d, options_.nms_iou, options_.nms_per_class);
     status_.count("boxes_rejected", d.rejected());
     if (d.rejected_not_finite) status_.count("boxes_rejected.not_finite", d.rejected_not_finite);
@@ -376,7 +384,8 @@ int main(int argc, char** argv) {
     if (!model.empty()) options.model = model;
     checkOptions(options, node.config.empty() ? std::string("defaults") : node.config);
     Bus bus(sys.bus.url);
-    StatusReporter status(bus, node.nameOr("recognizer"), sys.channels.statusOf(node.nameOr("recognizer")));
+    StatusReporter status(bus, node.nameOr("recognizer"),
+                          sys.channels.statusOf(node.nameOr("recognizer")));
     RecognizerNode rec(bus, status, sys, options, node.nameOr("recognizer"));
     rec.ensureModel();
     status.publish();

@@ -1,7 +1,7 @@
 #pragma once
 // Pairs each proposals message with the camera frame of the same seq (docs/architecture.md §2:
-// downstream messages keep their frame's seq), with bounded buffers. No LCM in here: Frame and Proposals are
-// whatever the caller stores (the node keeps the decoded LCM messages).
+// downstream messages keep their frame's seq), with bounded buffers. No LCM in here: Frame and
+// Proposals are whatever the caller stores (the node keeps the decoded LCM messages).
 //
 // Frames come in seq order from one camera. A proposals message whose frame is buffered is joined
 // at once; one whose frame is older than every buffered frame, or was skipped by the camera

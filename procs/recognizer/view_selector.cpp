@@ -10,17 +10,20 @@ namespace {
 
 bool known(const CandidateView& v) {
   return v.candidate_id >= 0 && v.direction.allFinite() && v.direction.squaredNorm() > 0.5f &&
-         std::isfinite(v.depth) && v.depth > 0 && std::isfinite(v.w) && v.w > 0 && std::isfinite(v.h) && v.h > 0;
+         std::isfinite(v.depth) && v.depth > 0 && std::isfinite(v.w) && v.w > 0 &&
+         std::isfinite(v.h) && v.h > 0;
 }
 
 }  // namespace
 
 bool ViewSelector::isNewView(const CandidateView& now, const CandidateView& then) const {
-  const double cos_angle = static_cast<double>(now.direction.normalized().dot(then.direction.normalized()));
+  const double cos_angle =
+      static_cast<double>(now.direction.normalized().dot(then.direction.normalized()));
   if (cos_angle < std::cos(options_.angle_deg * M_PI / 180.0)) return true;
   const double limit = std::log1p(std::max(0.0, options_.scale));
   const auto changed = [&](double a, double b) { return std::abs(std::log(a / b)) > limit; };
-  return changed(now.depth, then.depth) || changed(double{now.w} * now.depth, double{then.w} * then.depth) ||
+  return changed(now.depth, then.depth) ||
+         changed(double{now.w} * now.depth, double{then.w} * then.depth) ||
          changed(double{now.h} * now.depth, double{then.h} * then.depth);
 }
 
@@ -47,7 +50,8 @@ std::vector<const CarriedView*> ViewSelector::select(int32_t map_id, int32_t seq
     keep.insert(key);
     out[i] = &it->second.result;
   }
-  for (auto it = last_.begin(); it != last_.end();) it = keep.count(it->first) ? std::next(it) : last_.erase(it);
+  for (auto it = last_.begin(); it != last_.end();)
+    it = keep.count(it->first) ? std::next(it) : last_.erase(it);
   return out;
 }
 

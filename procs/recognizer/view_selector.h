@@ -23,26 +23,28 @@
 namespace slamaware::recognizer {
 
 struct ViewSelectionOptions {
-  bool enabled = true;     ///< false: every box of every frame is classified
-  double angle_deg = 10;   ///< degrees of viewing direction that make a view new
-  double scale = 0.15;     ///< relative change of depth or metric box size that makes a view new
+  bool enabled = true;    ///< false: every box of every frame is classified
+  double angle_deg = 10;  ///< degrees of viewing direction that make a view new
+  double scale = 0.15;    ///< relative change of depth or metric box size that makes a view new
 
   template <class V>
   void visit(V& v) {
     v("enabled", enabled, "false: every box of every frame is classified (no result is carried)");
     v("angle_deg", angle_deg,
-      "a candidate is classified again when seen from a direction this many degrees from its last classified view");
+      "a candidate is classified again when seen from a direction this many degrees from its last "
+      "classified view");
     v("scale", scale,
-      "... or when its median depth or its box in map units changed by more than this factor (0.15: 15 %)");
+      "... or when its median depth or its box in map units changed by more than this factor "
+      "(0.15: 15 %)");
   }
 };
 
 /// A box of a frame as the selection sees it (from PROPOSALS).
 struct CandidateView {
-  int32_t candidate_id = -1;        ///< < 0: no candidate (always classified)
+  int32_t candidate_id = -1;                            ///< < 0: no candidate (always classified)
   Eigen::Vector3f direction = Eigen::Vector3f::Zero();  ///< unit; zero: unknown (always classified)
-  float depth = 0;                  ///< median depth, map units; <= 0: unknown (always classified)
-  float w = 0, h = 0;               ///< px
+  float depth = 0;     ///< median depth, map units; <= 0: unknown (always classified)
+  float w = 0, h = 0;  ///< px
 };
 
 /// The result of a candidate's last classified view, carried to the frames after it.
@@ -58,11 +60,13 @@ class ViewSelector {
   /// Decides for each box of frame `seq` of `map_id`: nullptr = classify it, else the result to
   /// carry (valid until the next call). Forgets the candidates that are not in this frame. A
   /// frame older than the newest one selected gets nullptr for every box and changes nothing.
-  std::vector<const CarriedView*> select(int32_t map_id, int32_t seq, const std::vector<CandidateView>& views);
+  std::vector<const CarriedView*> select(int32_t map_id, int32_t seq,
+                                         const std::vector<CandidateView>& views);
 
   /// Remembers `view` (a box of frame `seq`'s select()) as classified with `log_prob`; nothing for
   /// a frame older than the newest one selected.
-  void remember(int32_t map_id, int32_t seq, const CandidateView& view, const std::vector<float>& log_prob);
+  void remember(int32_t map_id, int32_t seq, const CandidateView& view,
+                const std::vector<float>& log_prob);
 
   /// Forgets every result and frame (another model was loaded, or the camera stream restarted
   /// and its seqs start again).

@@ -142,8 +142,8 @@ void FeatureCoder::assignChunk(const FeatureGrid& grid) {
 void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes* out,
                         const std::vector<CellRect>* only) {
   if (grid.features.cols() != kFeatureDims)
-    throw std::invalid_argument("FeatureCoder: features are not " +
-                                std::to_string(kFeatureDims) + "-D");
+    throw std::invalid_argument("FeatureCoder: features are not " + std::to_string(kFeatureDims) +
+                                "-D");
   const CellRect& region = grid.region;
   const int K = vocabulary_.size(), D = pca_.outDims(), s = steps_per_cell;
   const int64_t cells = region.area();
@@ -154,7 +154,8 @@ void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes*
       const CellRect c = r.intersected(region);
       for (int v = c.v0; v < c.v1; ++v)
         for (int u = c.u0; u < c.u1; ++u)
-          covered[static_cast<size_t>(int64_t{v - region.v0} * region.width() + (u - region.u0))] = 1;
+          covered[static_cast<size_t>(int64_t{v - region.v0} * region.width() + (u - region.u0))] =
+              1;
     }
   rows_.clear();
   for (int v = region.v0; v < region.v1; ++v)

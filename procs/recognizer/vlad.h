@@ -91,17 +91,18 @@ class FeatureCoder {
 
   const Pca& pca_;
   const Vocabulary& vocabulary_;
-  Eigen::MatrixXf word_scores_;  ///< 131 x K: basis x centres^T
-  Eigen::RowVectorXf word_bias_;   ///< K: offset x centres^T + |c|^2 / 2
-  Eigen::RowVectorXf offset_;      ///< mean x basis
-  Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> rgb_scores_;  ///< R, G, B rows of word_scores_
+  Eigen::MatrixXf word_scores_;   ///< 131 x K: basis x centres^T
+  Eigen::RowVectorXf word_bias_;  ///< K: offset x centres^T + |c|^2 / 2
+  Eigen::RowVectorXf offset_;     ///< mean x basis
+  Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor>
+      rgb_scores_;  ///< R, G, B rows of word_scores_
   // Scratch, reused across frames.
-  std::vector<int64_t> rows_;      ///< grid rows to code, cell by cell
+  std::vector<int64_t> rows_;  ///< grid rows to code, cell by cell
   std::vector<int16_t> row_words_;
   std::vector<int64_t> textured_;  ///< positions in rows_ waiting for the matrix product
   MatrixRM chunk_, chunk_scores_;
-  ReusableMatrix sums_;            ///< entries x 131: raw sums
-  std::vector<float> acc_;         ///< K x 131 sums of the cell being pooled
+  ReusableMatrix sums_;     ///< entries x 131: raw sums
+  std::vector<float> acc_;  ///< K x 131 sums of the cell being pooled
   std::vector<float> acc_n_;
 };
 

@@ -11,8 +11,8 @@
 #include <opencv2/core/utility.hpp>
 
 #include "common/bus/bus.h"
-#include "common/bus/input_loop.h"
 #include "common/bus/image_msg.h"
+#include "common/bus/input_loop.h"
 #include "common/bus/node.h"
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
@@ -82,8 +82,9 @@ int main(int argc, char** argv) {
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("slam"), ch.statusOf(node.nameOr("slam")));
-    SlamSystem slam(opts, lockstep,
-                    SlamThreadNice{sys.scheduling.slam_mapping_nice, sys.scheduling.slam_depth_nice});
+    SlamSystem slam(
+        opts, lockstep,
+        SlamThreadNice{sys.scheduling.slam_mapping_nice, sys.scheduling.slam_depth_nice});
 
     bus.subscribe<camera_info_t>(
         ch.camera_info,

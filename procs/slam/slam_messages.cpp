@@ -71,5 +71,4 @@ point_cloud_t toMessage(const CloudOutput& c) {
   return m;
 }
 
-
 }  // namespace slamaware::slam

@@ -44,7 +44,8 @@ struct InitOptions {
   double match_ratio = 0.8;          ///< nearest / second-nearest descriptor distance ratio
   int ba_iterations = 20;            ///< bundle adjustment iterations on the two-view map
   double max_reference_age_s = 3.0;  ///< s, a reference frame older than this is replaced
-  int threads = 2;  ///< candidate poses are refined on this many threads (results do not depend on it)
+  int threads =
+      2;  ///< candidate poses are refined on this many threads (results do not depend on it)
 
   template <class V>
   void visit(V& v) {
@@ -214,7 +215,8 @@ struct DepthFilterOptions {
       "keyframes of a map with fewer converged seeds take its map points (0: never)");
     v("sparse_depth_std", sparse_depth_std, "depth std of those points, share of their distance");
     v("young_convergence_ratio", young_convergence_ratio,
-      "their seeds are also published, provisionally, once sigma < inverse-depth range / this (<= 0: off)");
+      "their seeds are also published, provisionally, once sigma < inverse-depth range / this (<= "
+      "0: off)");
   }
 };
 
@@ -233,7 +235,8 @@ struct OutputOptions {
     v("full_map_period_s", full_map_period_s, "s of sequence time between full maps");
     v("live_cloud_growth", live_cloud_growth,
       "unfinished keyframes are republished after growing by this share (0: off)");
-    v("live_cloud_min_points", live_cloud_min_points, "points an unfinished keyframe needs to be published");
+    v("live_cloud_min_points", live_cloud_min_points,
+      "points an unfinished keyframe needs to be published");
   }
 };
 

@@ -62,7 +62,8 @@ void SlamSystem::restart() {
   depth_ = std::make_unique<DepthFilter>(options_.depth, camera_.width(), camera_.height(),
                                          intrinsics_->fx, intrinsics_->fy, intrinsics_->cx,
                                          intrinsics_->cy);
-  depth_worker_ = std::make_unique<SerialWorker>(options_.depth.threaded, "slam-depth", nice_.depth);
+  depth_worker_ =
+      std::make_unique<SerialWorker>(options_.depth.threaded, "slam-depth", nice_.depth);
   {
     std::lock_guard<std::mutex> lock(finished_mutex_);
     depth_finished_.clear();

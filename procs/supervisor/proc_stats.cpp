@@ -31,7 +31,8 @@ std::optional<ProcSample> sampleProcess(pid_t pid) {
 
 double cpuPercent(const ProcSample& before, const ProcSample& after, double dt_s) {
   if (dt_s <= 0 || after.cpu_ticks < before.cpu_ticks) return 0;
-  return 100.0 * static_cast<double>(after.cpu_ticks - before.cpu_ticks) / sysconf(_SC_CLK_TCK) / dt_s;
+  return 100.0 * static_cast<double>(after.cpu_ticks - before.cpu_ticks) / sysconf(_SC_CLK_TCK) /
+         dt_s;
 }
 
 }  // namespace slamaware::supervisor

@@ -10,9 +10,9 @@
 namespace slamaware::supervisor {
 
 int signalNumber(const std::string& name) {
-  static const std::pair<const char*, int> table[] = {{"INT", SIGINT},   {"TERM", SIGTERM}, {"HUP", SIGHUP},
-                                                      {"QUIT", SIGQUIT}, {"USR1", SIGUSR1}, {"USR2", SIGUSR2},
-                                                      {"KILL", SIGKILL}};
+  static const std::pair<const char*, int> table[] = {
+      {"INT", SIGINT},   {"TERM", SIGTERM}, {"HUP", SIGHUP},  {"QUIT", SIGQUIT},
+      {"USR1", SIGUSR1}, {"USR2", SIGUSR2}, {"KILL", SIGKILL}};
   for (const auto& [n, s] : table)
     if (name == n || name == std::string("SIG") + n) return s;
   return -1;
@@ -59,15 +59,20 @@ SupervisorConfig loadSupervisorConfig(const std::string& path) {
     file.loadListItem("processes", i, list);
     const std::string where = path + ": processes[" + std::to_string(i) + "]";
     if (spec.name.empty()) throw ConfigError(where + ": 'name' is required");
-    if (!names.insert(spec.name).second) throw ConfigError(where + ": duplicate process name '" + spec.name + "'");
-    if (spec.command.empty()) throw ConfigError(where + " (" + spec.name + "): 'command' is required");
+    if (!names.insert(spec.name).second)
+      throw ConfigError(where + ": duplicate process name '" + spec.name + "'");
+    if (spec.command.empty())
+      throw ConfigError(where + " (" + spec.name + "): 'command' is required");
     if (spec.restart != "never" && spec.restart != "on_failure" && spec.restart != "always")
-      throw ConfigError(where + " (" + spec.name + "): key 'restart': expected never, on_failure or always, got '" +
+      throw ConfigError(where + " (" + spec.name +
+                        "): key 'restart': expected never, on_failure or always, got '" +
                         spec.restart + "'");
     if (signalNumber(spec.stop_signal) < 0)
-      throw ConfigError(where + " (" + spec.name + "): key 'stop_signal': unknown signal '" + spec.stop_signal + "'");
+      throw ConfigError(where + " (" + spec.name + "): key 'stop_signal': unknown signal '" +
+                        spec.stop_signal + "'");
     if (!(spec.backoff_initial_s > 0) || spec.backoff_max_s < spec.backoff_initial_s)
-      throw ConfigError(where + " (" + spec.name + "): need 0 < backoff_initial_s <= backoff_max_s");
+      throw ConfigError(where + " (" + spec.name +
+                        "): need 0 < backoff_initial_s <= backoff_max_s");
     cfg.processes.push_back(std::move(spec));
   }
   return cfg;

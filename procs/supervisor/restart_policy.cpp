@@ -13,7 +13,11 @@ RestartPolicy::Mode RestartPolicy::parse(const std::string& s) {
 }
 
 RestartPolicy::RestartPolicy(Mode mode, double initial_s, double max_s, double stable_s)
-    : mode_(mode), initial_s_(initial_s), max_s_(max_s), stable_s_(stable_s), backoff_s_(initial_s) {}
+    : mode_(mode),
+      initial_s_(initial_s),
+      max_s_(max_s),
+      stable_s_(stable_s),
+      backoff_s_(initial_s) {}
 
 void RestartPolicy::started(double now) { started_at_ = now; }
 

@@ -17,23 +17,31 @@ namespace slamaware::supervisor {
 
 const char* procStateName(ProcState s) {
   switch (s) {
-    case ProcState::kStopped: return "stopped";
-    case ProcState::kStarting: return "starting";
-    case ProcState::kRunning: return "running";
-    case ProcState::kStopping: return "stopping";
-    case ProcState::kBackoff: return "backoff";
-    case ProcState::kFailed: return "failed";
-    case ProcState::kHung: return "hung";
+    case ProcState::kStopped:
+      return "stopped";
+    case ProcState::kStarting:
+      return "starting";
+    case ProcState::kRunning:
+      return "running";
+    case ProcState::kStopping:
+      return "stopping";
+    case ProcState::kBackoff:
+      return "backoff";
+    case ProcState::kFailed:
+      return "failed";
+    case ProcState::kHung:
+      return "hung";
   }
   return "?";
 }
 
 struct Supervisor::Managed {
   Managed(const ProcessSpec& s, std::string channel, const SupervisorOptions& o)
-      : spec(s), status_channel(std::move(channel)),
+      : spec(s),
+        status_channel(std::move(channel)),
         policy(RestartPolicy::parse(s.restart), s.backoff_initial_s, s.backoff_max_s, s.stable_s),
-        log(std::make_unique<RotatingLog>(o.log_dir + "/" + s.name + ".log", static_cast<size_t>(o.log_max_bytes),
-                                          o.log_keep)) {
+        log(std::make_unique<RotatingLog>(o.log_dir + "/" + s.name + ".log",
+                                          static_cast<size_t>(o.log_max_bytes), o.log_keep)) {
     info.name = s.name;
     info.group = s.group;
     info.host = s.host;
@@ -66,7 +74,8 @@ Supervisor::Supervisor(const SupervisorConfig& config,
   for (const auto& spec : config.processes) {
     if (spec.host != options_.host) continue;
     procs_.push_back(std::make_unique<Managed>(
-        spec, spec.status_channel.empty() ? status_channel_of(spec.name) : spec.status_channel, options_));
+        spec, spec.status_channel.empty() ? status_channel_of(spec.name) : spec.status_channel,
+        options_));
   }
 }
 
@@ -114,14 +123,16 @@ void Supervisor::spawn(Managed& m, double now) {
   fcntl(fds[0], F_SETFL, O_NONBLOCK);
   m.out_fd = fds[0];
   m.info.pid = pid;
-  m.info.state = (m.spec.wait_running || m.spec.heartbeat_timeout_s > 0) ? ProcState::kStarting : ProcState::kRunning;
+  m.info.state = (m.spec.wait_running || m.spec.heartbeat_timeout_s > 0) ? ProcState::kStarting
+                                                                         : ProcState::kRunning;
   m.info.backoff_s = 0;
   m.started_at = now;
   m.last_heartbeat = -1;
   m.start_reported = false;
   m.last_sample.reset();
   m.policy.started(now);
-  m.info.message = m.info.restarts > 0 ? "restart " + std::to_string(m.info.restarts) + " (last run: " + m.last_exit + ")"
+  m.info.message = m.info.restarts > 0 ? "restart " + std::to_string(m.info.restarts) +
+                                             " (last run: " + m.last_exit + ")"
                                        : "started";
   m.log->note("started pid " + std::to_string(pid));
   spdlog::info("{}: started (pid {})", m.spec.name, pid);
@@ -134,7 +145,8 @@ void Supervisor::startAll(double now) {
   // Processes waiting for their turn in the start order count as starting (so that nobody takes
   // a queued process for one that has already run and stopped).
   for (auto& m : procs_)
-    if (m->spec.autostart && m->info.pid == 0 && m->started_at == 0 && m->info.state == ProcState::kStopped) {
+    if (m->spec.autostart && m->info.pid == 0 && m->started_at == 0 &&
+        m->info.state == ProcState::kStopped) {
       m->info.state = ProcState::kStarting;
       m->info.message = "queued in the start order";
     }
@@ -181,16 +193,19 @@ void Supervisor::onExit(Managed& m, int status, double now) {
   const double delay = m.policy.ended(now, failed);
   if (delay < 0) {
     m.info.state = failed ? ProcState::kFailed : ProcState::kStopped;
-    m.info.message = how + (hung ? " (hung)" : "") + "; not restarted (restart: " + m.spec.restart + ")";
+    m.info.message =
+        how + (hung ? " (hung)" : "") + "; not restarted (restart: " + m.spec.restart + ")";
     spdlog::warn("{}: {}", m.spec.name, m.info.message);
     return;
   }
   m.info.state = ProcState::kBackoff;
   m.restart_at = now + delay;
   m.info.backoff_s = delay;
-  m.info.message = how + (hung ? " (hung)" : "") + "; restart in " + std::to_string(delay).substr(0, 5) + " s";
+  m.info.message =
+      how + (hung ? " (hung)" : "") + "; restart in " + std::to_string(delay).substr(0, 5) + " s";
   if (m.policy.quickFailures() >= 3)
-    m.info.message += " (crash loop: " + std::to_string(m.policy.quickFailures()) + " quick failures)";
+    m.info.message +=
+        " (crash loop: " + std::to_string(m.policy.quickFailures()) + " quick failures)";
   spdlog::warn("{}: {}", m.spec.name, m.info.message);
 }
 
@@ -247,12 +262,13 @@ void Supervisor::tick(double now) {
         if (m.spec.heartbeat_timeout_s <= 0) break;
         // Before its first heartbeat a process gets its start timeout.
         const double ref = m.last_heartbeat >= 0 ? m.last_heartbeat : m.started_at;
-        const double limit = m.last_heartbeat >= 0 ? m.spec.heartbeat_timeout_s
-                                                   : std::max(m.spec.heartbeat_timeout_s, m.spec.start_timeout_s);
+        const double limit = m.last_heartbeat >= 0
+                                 ? m.spec.heartbeat_timeout_s
+                                 : std::max(m.spec.heartbeat_timeout_s, m.spec.start_timeout_s);
         if (now - ref > limit && m.info.pid > 0) {
           m.info.state = ProcState::kHung;
-          m.info.message = "no heartbeat on " + m.status_channel + " for " + std::to_string(now - ref).substr(0, 4) +
-                           " s: killed";
+          m.info.message = "no heartbeat on " + m.status_channel + " for " +
+                           std::to_string(now - ref).substr(0, 4) + " s: killed";
           spdlog::warn("{}: {}", m.spec.name, m.info.message);
           m.log->note(m.info.message);
           kill(-m.info.pid, SIGKILL);
@@ -269,15 +285,19 @@ void Supervisor::tick(double now) {
   while (starting_ && next_to_start_ < procs_.size()) {
     Managed& prev_or_next = *procs_[next_to_start_];
     if (prev_or_next.info.pid == 0 && prev_or_next.spec.autostart && prev_or_next.started_at == 0 &&
-        (prev_or_next.info.state == ProcState::kStopped || prev_or_next.info.state == ProcState::kStarting)) {
+        (prev_or_next.info.state == ProcState::kStopped ||
+         prev_or_next.info.state == ProcState::kStarting)) {
       spawn(prev_or_next, now);
     }
     Managed& m = prev_or_next;
-    const bool waiting = m.spec.autostart && m.spec.wait_running && m.info.state == ProcState::kStarting &&
-                         !m.start_reported && now - m.started_at < m.spec.start_timeout_s;
+    const bool waiting = m.spec.autostart && m.spec.wait_running &&
+                         m.info.state == ProcState::kStarting && !m.start_reported &&
+                         now - m.started_at < m.spec.start_timeout_s;
     if (waiting) break;
-    if (m.spec.autostart && m.spec.wait_running && !m.start_reported && m.info.state == ProcState::kStarting)
-      m.info.message = "no running report within " + std::to_string(m.spec.start_timeout_s).substr(0, 4) + " s";
+    if (m.spec.autostart && m.spec.wait_running && !m.start_reported &&
+        m.info.state == ProcState::kStarting)
+      m.info.message =
+          "no running report within " + std::to_string(m.spec.start_timeout_s).substr(0, 4) + " s";
     ++next_to_start_;
   }
   if (next_to_start_ >= procs_.size()) starting_ = false;

@@ -16,7 +16,15 @@
 
 namespace slamaware::supervisor {
 
-enum class ProcState { kStopped = 0, kStarting = 1, kRunning = 2, kStopping = 3, kBackoff = 4, kFailed = 5, kHung = 6 };
+enum class ProcState {
+  kStopped = 0,
+  kStarting = 1,
+  kRunning = 2,
+  kStopping = 3,
+  kBackoff = 4,
+  kFailed = 5,
+  kHung = 6
+};
 const char* procStateName(ProcState s);
 
 /// What the supervisor reports about one process.
@@ -39,7 +47,8 @@ class Supervisor {
 
   /// Manages the processes of `config` whose host is config.options.host.
   /// `status_channel_of(name)` gives a process's default heartbeat channel.
-  Supervisor(const SupervisorConfig& config, const std::function<std::string(const std::string&)>& status_channel_of);
+  Supervisor(const SupervisorConfig& config,
+             const std::function<std::string(const std::string&)>& status_channel_of);
   ~Supervisor();
 
   /// Starts the autostart processes in order (one per tick when they wait for "running").

@@ -62,7 +62,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   return runNode("supervisor", node, [&]() -> int {
-    if (node.system.empty()) throw ConfigError("--system FILE is required: it lists the processes to run");
+    if (node.system.empty())
+      throw ConfigError("--system FILE is required: it lists the processes to run");
     const SystemConfig sys = loadSystem(node);
     SupervisorConfig cfg = loadSupervisorConfig(node.system);
     if (!host.empty()) cfg.options.host = host;
@@ -82,25 +83,35 @@ int main(int argc, char** argv) {
       if (!c.host.empty() && c.host != cfg.options.host) return;
       Supervisor::Command cmd;
       switch (c.command) {
-        case proc_command_t::COMMAND_START: cmd = Supervisor::Command::kStart; break;
-        case proc_command_t::COMMAND_STOP: cmd = Supervisor::Command::kStop; break;
-        case proc_command_t::COMMAND_RESTART: cmd = Supervisor::Command::kRestart; break;
-        case proc_command_t::COMMAND_RELOAD: return;  // for the process itself, not its supervisor
+        case proc_command_t::COMMAND_START:
+          cmd = Supervisor::Command::kStart;
+          break;
+        case proc_command_t::COMMAND_STOP:
+          cmd = Supervisor::Command::kStop;
+          break;
+        case proc_command_t::COMMAND_RESTART:
+          cmd = Supervisor::Command::kRestart;
+          break;
+        case proc_command_t::COMMAND_RELOAD:
+          return;  // for the process itself, not its supervisor
         default:
           bus.reject(ch.proc_command, "unknown command " + std::to_string(c.command));
           return;
       }
       const int n = sup.command(cmd, c.target, monotonic());
-      spdlog::info("command {} {}: {} process(es) on this host", static_cast<int>(c.command), c.target, n);
+      spdlog::info("command {} {}: {} process(es) on this host", static_cast<int>(c.command),
+                   c.target, n);
       status.count("commands");
     });
 
-    spdlog::info("host '{}': {} process(es), logs in {}", cfg.options.host, sup.table().size(), cfg.options.log_dir);
+    spdlog::info("host '{}': {} process(es), logs in {}", cfg.options.host, sup.table().size(),
+                 cfg.options.log_dir);
     sup.startAll(monotonic());
     status.setState(StatusReporter::State::kRunning);
     const double period = 1.0 / std::max(0.1, cfg.options.status_rate_hz);
     double last_status = -1;
-    bool unpublished_change = false;  // a change within 0.1 s of the last status goes out 0.1 s after it
+    bool unpublished_change =
+        false;  // a change within 0.1 s of the last status goes out 0.1 s after it
     while (!shutdownRequested()) {
       std::vector<pollfd> fds{{bus.fileno(), POLLIN, 0}};
       for (int fd : sup.outputFds()) fds.push_back({fd, POLLIN, 0});

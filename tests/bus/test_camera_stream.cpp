@@ -30,15 +30,17 @@ TEST(CameraStream, ThreeHundredVgaFramesAt30HzArriveIntactAndInOrder) {
 
   Bus bus(test::testUrl());
   std::vector<std::vector<uint8_t>> received;
-  bus.subscribeRaw("CAMERA", [&](const Bus::RawMessage& m) { received.emplace_back(m.data, m.data + m.size); },
-                   16 << 20);
+  bus.subscribeRaw(
+      "CAMERA", [&](const Bus::RawMessage& m) { received.emplace_back(m.data, m.data + m.size); },
+      16 << 20);
   std::atomic<bool> stop{false};
   std::thread listener([&] {
     while (!stop) bus.handle(50);
   });
   test::BusRecorder recorder(log_path);
-  test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", seq_dir, "--lcm-url", test::testUrl()},
-                            log_path + ".camera.txt");
+  test::ChildProcess camera(
+      {test::binPath("slamaware-camera"), "--source", seq_dir, "--lcm-url", test::testUrl()},
+      log_path + ".camera.txt");
   const int rc = camera.wait(60s);
   std::this_thread::sleep_for(300ms);
   stop = true;
@@ -52,17 +54,21 @@ TEST(CameraStream, ThreeHundredVgaFramesAt30HzArriveIntactAndInOrder) {
   for (int i = 0; i < kFrames; ++i) {
     const cv::Mat img = readImage(seq.framePath(i));
     const int64_t utime = static_cast<int64_t>(std::llround(seq.timestamp(i) * 1e6));
-    expected.push_back(encodeMessage(makeImageMessage(img, utime, i, image_t::PIXEL_FORMAT_JPEG, 90)));
+    expected.push_back(
+        encodeMessage(makeImageMessage(img, utime, i, image_t::PIXEL_FORMAT_JPEG, 90)));
   }
 
-  ASSERT_EQ(received.size(), static_cast<size_t>(kFrames)) << "frames lost on the way to the subscriber";
-  for (int i = 0; i < kFrames; ++i) ASSERT_EQ(received[i], expected[i]) << "frame " << i << " differs";
+  ASSERT_EQ(received.size(), static_cast<size_t>(kFrames))
+      << "frames lost on the way to the subscriber";
+  for (int i = 0; i < kFrames; ++i)
+    ASSERT_EQ(received[i], expected[i]) << "frame " << i << " differs";
 
   std::vector<LogRecord> logged;
   for (auto& ev : LogReader::readAll(log_path))
     if (ev.channel == "CAMERA") logged.push_back(std::move(ev));
   ASSERT_EQ(logged.size(), static_cast<size_t>(kFrames)) << "frames lost on the way to lcm-logger";
-  for (int i = 0; i < kFrames; ++i) ASSERT_EQ(logged[i].data, expected[i]) << "logged frame " << i << " differs";
-  std::printf("frames sent %d, received by the subscriber %zu, by lcm-logger %zu\n", kFrames, received.size(),
-              logged.size());
+  for (int i = 0; i < kFrames; ++i)
+    ASSERT_EQ(logged[i].data, expected[i]) << "logged frame " << i << " differs";
+  std::printf("frames sent %d, received by the subscriber %zu, by lcm-logger %zu\n", kFrames,
+              received.size(), logged.size());
 }

@@ -70,7 +70,9 @@ TEST(LogReader, TruncatedLogIsAnErrorWithOffset) {
   } catch (const LogError& e) {
     EXPECT_EQ(n, 7);
     EXPECT_EQ(e.offset(), offsets[7]);
-    EXPECT_NE(std::string(e.what()).find("byte offset " + std::to_string(offsets[7])), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("byte offset " + std::to_string(offsets[7])),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -26,8 +26,8 @@ std::string recordSession(const std::string& dir, int frames) {
       test::makeTestSequence(std::filesystem::path(dir).filename().string() + "_seq", frames, 30.0);
   const std::string log = dir + "/session.lcm";
   test::BusRecorder recorder(log);
-  test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", seq_dir, "--lcm-url", test::testUrl(),
-                             "--speed", "4"},
+  test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", seq_dir, "--lcm-url",
+                             test::testUrl(), "--speed", "4"},
                             dir + "/camera.txt");
   EXPECT_EQ(camera.wait(30s), 0) << camera.log();
   recorder.stop();
@@ -48,8 +48,8 @@ TEST(Replay, LockstepReplayTwiceIsByteIdentical) {
     // The replayer is its own last stage here: each frame waits until it is seen on CAMERA. At
     // the camera's rate, not as fast as possible: 40 frames in a burst are more than the recorder
     // keeps (BusRecorder; a loaded machine lost frames 32-39).
-    test::ChildProcess replay({test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(), "--lockstep",
-                               "CAMERA", "--speed", "1"},
+    test::ChildProcess replay({test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(),
+                               "--lockstep", "CAMERA", "--speed", "1"},
                               dir + "/replay" + std::to_string(run) + ".txt");
     ASSERT_EQ(replay.wait(60s), 0) << replay.log();
     recorder.stop();
@@ -66,8 +66,9 @@ TEST(Replay, DamagedLogIsReportedWithByteOffset) {
   const std::string log = recordSession(dir, 10);
   const auto size = std::filesystem::file_size(log);
   std::filesystem::resize_file(log, size - 100);
-  test::ChildProcess replay({test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(), "--speed", "0"},
-                            dir + "/replay.txt");
+  test::ChildProcess replay(
+      {test::binPath("slamaware-replay"), log, "--lcm-url", test::testUrl(), "--speed", "0"},
+      dir + "/replay.txt");
   EXPECT_EQ(replay.wait(30s), 3) << replay.log();
   EXPECT_NE(replay.log().find("byte offset"), std::string::npos) << replay.log();
 }
@@ -82,8 +83,8 @@ TEST(Replay, CameraPlaysALogAsItsSource) {
   const std::string out = dir + "/played.lcm";
   {
     test::BusRecorder recorder(out, "CAMERA.*");
-    test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", log, "--lcm-url", test::testUrl(),
-                               "--speed", "0", "--lockstep", "CAMERA"},
+    test::ChildProcess camera({test::binPath("slamaware-camera"), "--source", log, "--lcm-url",
+                               test::testUrl(), "--speed", "0", "--lockstep", "CAMERA"},
                               dir + "/played.txt");
     ASSERT_EQ(camera.wait(30s), 0) << camera.log();
     EXPECT_NE(camera.log().find("12 frames"), std::string::npos) << camera.log();
@@ -93,16 +94,17 @@ TEST(Replay, CameraPlaysALogAsItsSource) {
 
   // A damaged log: the frames before the damage are played, the damage is reported.
   std::filesystem::resize_file(log, std::filesystem::file_size(log) - 100);
-  test::ChildProcess damaged({test::binPath("slamaware-camera"), "--source", log, "--lcm-url", test::testUrl(),
-                              "--speed", "0"},
+  test::ChildProcess damaged({test::binPath("slamaware-camera"), "--source", log, "--lcm-url",
+                              test::testUrl(), "--speed", "0"},
                              dir + "/damaged.txt");
   EXPECT_EQ(damaged.wait(30s), 0) << damaged.log();
   EXPECT_NE(damaged.log().find("byte offset"), std::string::npos) << damaged.log();
   // A file that is not a log at all is a clear error.
   const std::string bogus = dir + "/bogus.lcm";
   std::ofstream(bogus) << "not a log";
-  test::ChildProcess bad({test::binPath("slamaware-camera"), "--source", bogus, "--lcm-url", test::testUrl()},
-                         dir + "/bogus.txt");
+  test::ChildProcess bad(
+      {test::binPath("slamaware-camera"), "--source", bogus, "--lcm-url", test::testUrl()},
+      dir + "/bogus.txt");
   EXPECT_EQ(bad.wait(10s), 2) << bad.log();
   EXPECT_NE(bad.log().find("bogus.lcm"), std::string::npos) << bad.log();
 }

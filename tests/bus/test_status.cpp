@@ -20,7 +20,8 @@ struct Heartbeat : ::testing::Test {
   StatusReporter status{bus, "probe", "PROBE_STATUS"};
   std::vector<status_t> got;
   void SetUp() override {
-    bus.subscribe<status_t>("PROBE_STATUS", [this](const status_t& m) { got.push_back(m); }, 4096);
+    bus.subscribe<status_t>(
+        "PROBE_STATUS", [this](const status_t& m) { got.push_back(m); }, 4096);
   }
   void drain() {
     while (bus.handle(0) > 0) {

@@ -42,7 +42,8 @@ struct Fixture : ::testing::Test {
   Bus bus{"memq://"};
   std::vector<detections_t> got;
   void SetUp() override {
-    bus.subscribe<detections_t>("DETECTIONS", [this](const detections_t& m) { got.push_back(m); }, 4096);
+    bus.subscribe<detections_t>(
+        "DETECTIONS", [this](const detections_t& m) { got.push_back(m); }, 4096);
   }
   void send(const std::vector<uint8_t>& bytes) {
     bus.publishRaw("DETECTIONS", bytes.data(), bytes.size());
@@ -143,7 +144,8 @@ TEST(FrameStamp, ReadsUtimeAndSeqOfPerFrameTypesOnly) {
   EXPECT_EQ(s->utime, 123456789);
   EXPECT_EQ(s->seq, 42);
   const std::vector<uint8_t> cut(d.begin(), d.end() - 1);
-  EXPECT_FALSE(peekFrameStamp(cut.data(), cut.size()).has_value()) << "a truncated message is not an answer";
+  EXPECT_FALSE(peekFrameStamp(cut.data(), cut.size()).has_value())
+      << "a truncated message is not an answer";
   image_t img{};
   img.seq = -7;
   std::vector<uint8_t> b(img.getEncodedSize());

@@ -61,8 +61,9 @@ TEST(CameraModel, UndistortPixelAgreesWithOpenCV) {
   cv::Mat K = (cv::Mat_<double>(3, 3) << cam.fx(), 0, cam.cx(), 0, cam.fy(), cam.cy(), 0, 0, 1);
   cv::Mat D = (cv::Mat_<double>(1, 5) << -0.28, 0.07, 0.001, -0.0005, 0.01);
   std::vector<cv::Point2d> in = {{10, 10}, {630, 20}, {320, 240}, {600, 470}, {100, 400}}, out;
-  cv::undistortPoints(in, out, K, D, cv::noArray(), K,
-                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
+  cv::undistortPoints(
+      in, out, K, D, cv::noArray(), K,
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
   for (size_t i = 0; i < in.size(); ++i) {
     const Eigen::Vector2d ours = cam.undistortPixel(Eigen::Vector2d(in[i].x, in[i].y));
     EXPECT_NEAR(ours.x(), out[i].x, 1e-3);
@@ -97,7 +98,9 @@ TEST(CameraModel, UndistortImageStraightensLines) {
   cv::Mat img(480, 640, CV_8UC1, cv::Scalar(0));
   for (double x = -0.55; x <= 0.55; x += 0.0005) {
     const Eigen::Vector2d px = cam.project(Eigen::Vector3d(x, 0.3, 1.0));
-    if (cam.inImage(px)) img.at<uint8_t>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x()))) = 255;
+    if (cam.inImage(px))
+      img.at<uint8_t>(static_cast<int>(std::lround(px.y())),
+                      static_cast<int>(std::lround(px.x()))) = 255;
   }
   const cv::Mat und = cam.undistortImage(img);
   const double y_expected = cam.fy() * 0.3 + cam.cy();

@@ -46,7 +46,8 @@ struct ToyOptions {
 std::string writeYaml(const std::string& name, const std::string& text) {
   // A folder per test: ctest runs the cases of this file in parallel.
   const std::string path =
-      test::tempDir(std::string("config_") + ::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+      test::tempDir(std::string("config_") +
+                    ::testing::UnitTest::GetInstance()->current_test_info()->name()) +
       "/" + name;
   std::ofstream(path) << text;
   return path;
@@ -83,9 +84,10 @@ TEST(Config, DefaultsWithoutFile) {
 }
 
 TEST(Config, LoadsValuesAndNestedSections) {
-  const std::string path = writeYaml("ok.yaml",
-                                     "toy:\n  count: 7\n  seed: 18446744073709551615\n  ratio: 2\n  name: x\n"
-                                     "  weights: [3.5, 4]\n  tags: [p, q]\n  filter:\n    min_depth: 0.25\n");
+  const std::string path =
+      writeYaml("ok.yaml",
+                "toy:\n  count: 7\n  seed: 18446744073709551615\n  ratio: 2\n  name: x\n"
+                "  weights: [3.5, 4]\n  tags: [p, q]\n  filter:\n    min_depth: 0.25\n");
   const ToyOptions o = loadConfig<ToyOptions>(path, "toy", false);
   EXPECT_EQ(o.count, 7);
   EXPECT_EQ(o.seed, 18446744073709551615ull);
@@ -110,12 +112,17 @@ TEST(Config, UnknownNestedKey) {
 }
 
 TEST(Config, IllTypedValues) {
-  EXPECT_NE(errorOf("toy:\n  count: abc\n").find("key 'count': expected an integer, got 'abc'"), std::string::npos);
-  EXPECT_NE(errorOf("toy:\n  count: 1.5\n").find("key 'count': expected an integer"), std::string::npos);
-  EXPECT_NE(errorOf("toy:\n  enabled: maybe\n").find("key 'enabled': expected true or false"), std::string::npos);
-  EXPECT_NE(errorOf("toy:\n  ratio: [1]\n").find("key 'ratio': expected a number, got a list"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  count: abc\n").find("key 'count': expected an integer, got 'abc'"),
+            std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  count: 1.5\n").find("key 'count': expected an integer"),
+            std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  enabled: maybe\n").find("key 'enabled': expected true or false"),
+            std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  ratio: [1]\n").find("key 'ratio': expected a number, got a list"),
+            std::string::npos);
   EXPECT_NE(errorOf("toy:\n  ratio: .nan\n").find("finite"), std::string::npos);
-  EXPECT_NE(errorOf("toy:\n  weights: 3\n").find("key 'weights': expected a list"), std::string::npos);
+  EXPECT_NE(errorOf("toy:\n  weights: 3\n").find("key 'weights': expected a list"),
+            std::string::npos);
   EXPECT_NE(errorOf("toy:\n  weights: [1, x]\n").find("key 'weights[1]'"), std::string::npos);
   EXPECT_NE(errorOf("toy:\n  filter: 3\n").find("key 'filter': expected a map"), std::string::npos);
   EXPECT_NE(errorOf("toy: 3\n").find("section 'toy': expected a map"), std::string::npos);
@@ -155,12 +162,14 @@ TEST(Config, DescribeRoundTripsAndEquals) {
 }
 
 TEST(Config, SystemConfigRejectsUnknownSection) {
-  const std::string path = writeYaml("system.yaml", "bus:\n  lockstep: true\nchanels:\n  camera: X\n");
+  const std::string path =
+      writeYaml("system.yaml", "bus:\n  lockstep: true\nchanels:\n  camera: X\n");
   try {
     loadSystemConfig(path, false);
     FAIL() << "an unknown section must be refused";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown section 'chanels'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown section 'chanels'"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -173,14 +182,16 @@ TEST(Config, SchedulingNiceOutOfRangeIsRefused) {
   EXPECT_EQ(sys.scheduling.background_nice, 19);
   EXPECT_EQ(sys.scheduling.slam_mapping_nice, 1);
   EXPECT_EQ(sys.scheduling.slam_depth_nice, 3);
-  for (const char* text : {"scheduling:\n  recognizer_nice: -5\n", "scheduling:\n  background_nice: 20\n",
-                           "scheduling:\n  slam_mapping_nice: -1\n", "scheduling:\n  slam_depth_nice: 20\n"}) {
+  for (const char* text :
+       {"scheduling:\n  recognizer_nice: -5\n", "scheduling:\n  background_nice: 20\n",
+        "scheduling:\n  slam_mapping_nice: -1\n", "scheduling:\n  slam_depth_nice: 20\n"}) {
     const std::string path = writeYaml("system4.yaml", text);
     try {
       loadSystemConfig(path, false);
       FAIL() << "must be refused: " << text;
     } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("_nice': a nice increment is 0..19"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("_nice': a nice increment is 0..19"), std::string::npos)
+          << e.what();
       EXPECT_NE(std::string(e.what()).find("system4.yaml"), std::string::npos) << e.what();
     }
   }
@@ -193,4 +204,3 @@ TEST(Config, ChannelPrefixAndStatusNames) {
   EXPECT_EQ(sys.channels.slam_pose, "R1_SLAM_POSE");
   EXPECT_EQ(sys.channels.statusOf("slam"), "R1_SLAM_STATUS");
 }
-

@@ -75,7 +75,9 @@ TEST(Dataset, WrittenSequenceReadsBack) {
   info.classes = {"bowl", "cap"};
   info.notes = "written by a test";
   writeSequenceInfo(dir + "/sequence.yaml", info);
-  for (int i = 0; i < 3; ++i) writeImage(dir + "/rgb/00000" + std::to_string(i) + ".png", cv::Mat(48, 64, CV_8UC3, cv::Scalar(i, 2, 3)));
+  for (int i = 0; i < 3; ++i)
+    writeImage(dir + "/rgb/00000" + std::to_string(i) + ".png",
+               cv::Mat(48, 64, CV_8UC3, cv::Scalar(i, 2, 3)));
   writeBoxes(dir + "/boxes.csv", {{1, 2.5, 3, 10, 11, "bowl", "bowl_7"}});
   GroundTruthObject o;
   o.instance = "bowl_7";
@@ -106,9 +108,11 @@ TEST(Dataset, BadFoldersAreRefusedWithTheFileNamed) {
   EXPECT_NE(errorOf().find("sequence.yaml"), std::string::npos);
   std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\n";
   EXPECT_NE(errorOf().find("camera"), std::string::npos);
-  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1, distortion: [1, 2]}\n";
+  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\ncamera: {width: 4, height: 4, fx: 1, "
+                                           "fy: 1, cx: 1, cy: 1, distortion: [1, 2]}\n";
   EXPECT_NE(errorOf().find("5 values"), std::string::npos);
-  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
+  std::ofstream(dir + "/sequence.yaml")
+      << "name: x\nfps: 10\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
   EXPECT_NE(errorOf().find("rgb"), std::string::npos);
   fs::create_directories(dir + "/rgb");
   writeImage(dir + "/rgb/0.png", cv::Mat(4, 4, CV_8UC3, cv::Scalar(1, 2, 3)));
@@ -118,8 +122,9 @@ TEST(Dataset, BadFoldersAreRefusedWithTheFileNamed) {
   const SequenceFolder seq = SequenceFolder::open(dir);
   // Not numbers, numbers that are not finite, and frame numbers beyond int (were undefined
   // behaviour in the conversion: found while writing fuzz_datasets).
-  for (const char* row : {"0,1,2,3,abc,bowl,bowl_1", "0,1,2,3,nan,bowl,bowl_1", "0,1,inf,3,4,bowl,bowl_1",
-                          "1e300,1,2,3,4,bowl,bowl_1", "1.5,1,2,3,4,bowl,bowl_1"}) {
+  for (const char* row :
+       {"0,1,2,3,abc,bowl,bowl_1", "0,1,2,3,nan,bowl,bowl_1", "0,1,inf,3,4,bowl,bowl_1",
+        "1e300,1,2,3,4,bowl,bowl_1", "1.5,1,2,3,4,bowl,bowl_1"}) {
     std::ofstream(dir + "/boxes.csv") << "frame,x,y,w,h,class,instance\n" << row << "\n";
     try {
       seq.boxes();
@@ -129,9 +134,11 @@ TEST(Dataset, BadFoldersAreRefusedWithTheFileNamed) {
     }
   }
   // A value of the wrong type in sequence.yaml names the file (yaml-cpp's own exception escaped).
-  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\nframes: many\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
+  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: 10\nframes: many\ncamera: {width: 4, "
+                                           "height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
   EXPECT_NE(errorOf().find("sequence.yaml"), std::string::npos) << errorOf();
-  std::ofstream(dir + "/sequence.yaml") << "name: x\nfps: .inf\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
+  std::ofstream(dir + "/sequence.yaml")
+      << "name: x\nfps: .inf\ncamera: {width: 4, height: 4, fx: 1, fy: 1, cx: 1, cy: 1}\n";
   EXPECT_NE(errorOf().find("fps"), std::string::npos) << errorOf();
 }
 

@@ -38,8 +38,10 @@ TEST(ImageCodec, JpegQualityAffectsErrorAndSize) {
   const cv::Mat img = testImage();
   const auto q95 = encodeJpeg(img, 95), q30 = encodeJpeg(img, 30);
   EXPECT_GT(q95.size(), q30.size());
-  const double e95 = cv::norm(img, decodeImage(q95.data(), q95.size(), "q95"), cv::NORM_L1) / img.total();
-  const double e30 = cv::norm(img, decodeImage(q30.data(), q30.size(), "q30"), cv::NORM_L1) / img.total();
+  const double e95 =
+      cv::norm(img, decodeImage(q95.data(), q95.size(), "q95"), cv::NORM_L1) / img.total();
+  const double e30 =
+      cv::norm(img, decodeImage(q30.data(), q30.size(), "q30"), cv::NORM_L1) / img.total();
   EXPECT_LT(e95, e30);
   EXPECT_LT(e95, 6.0);
 }
@@ -89,7 +91,8 @@ TEST(ImageCodec, AHeaderAskingForAGiantImageIsRefusedBeforeDecoding) {
   ASSERT_TRUE(peekImageSize(jpeg.data(), jpeg.size(), &w, &h));
   EXPECT_EQ(w, testImage().cols);
   size_t sof = 2;
-  while (!(jpeg[sof] == 0xFF && jpeg[sof + 1] == 0xC0)) sof += 2 + (jpeg[sof + 2] << 8 | jpeg[sof + 3]);
+  while (!(jpeg[sof] == 0xFF && jpeg[sof + 1] == 0xC0))
+    sof += 2 + (jpeg[sof + 2] << 8 | jpeg[sof + 3]);
   jpeg[sof + 5] = jpeg[sof + 6] = jpeg[sof + 7] = jpeg[sof + 8] = 0xEA;  // 60138 x 60138
   EXPECT_NE(errorOf(jpeg).find("60138x60138"), std::string::npos) << errorOf(jpeg);
 }

@@ -15,7 +15,8 @@ using namespace slamaware;
 namespace {
 
 // Items of very different cost, so that workers finish out of order.
-std::vector<long> squaresInConsumedOrder(int workers, size_t n, size_t window, std::vector<int>* used_by) {
+std::vector<long> squaresInConsumedOrder(int workers, size_t n, size_t window,
+                                         std::vector<int>* used_by) {
   std::vector<int> states(static_cast<size_t>(workers));
   for (int w = 0; w < workers; ++w) states[static_cast<size_t>(w)] = w;
   std::vector<long> out;

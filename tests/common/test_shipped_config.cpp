@@ -18,9 +18,11 @@ TEST(ShippedConfig, SystemYamlEqualsDefaults) {
 }
 
 TEST(ShippedConfig, CameraYamlEqualsDefaults) {
-  camera::CameraOptions file = loadConfig<camera::CameraOptions>(test::sourcePath("config/camera.yaml"), "camera", false);
+  camera::CameraOptions file =
+      loadConfig<camera::CameraOptions>(test::sourcePath("config/camera.yaml"), "camera", false);
   camera::CameraOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
-  EXPECT_EQ(test::readTextFile(test::sourcePath("config/camera.yaml")), defaultConfigFileText<camera::CameraOptions>("camera"))
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/camera.yaml")),
+            defaultConfigFileText<camera::CameraOptions>("camera"))
       << "config/camera.yaml is generated from the built-in defaults: make configs";
 }

@@ -1,10 +1,9 @@
 // The scheduling helpers change the calling thread's nice value, and only that thread's.
 #include <gtest/gtest.h>
+#include <pthread.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
-
-#include <pthread.h>
 
 #include <string>
 #include <thread>
@@ -15,9 +14,7 @@ using namespace slamaware;
 
 namespace {
 
-int myNice() {
-  return getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
-}
+int myNice() { return getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid))); }
 
 }  // namespace
 

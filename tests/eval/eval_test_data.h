@@ -14,8 +14,10 @@
 namespace slamaware::test {
 
 // A sequence folder with `frames` placeholder frames (never read), the classes and the boxes; a
-// video (ground-truth poses, all at the origin) unless `video` is false (separate views: boxes only).
-inline std::string makeSequence(const std::string& name, int frames, const std::vector<std::string>& classes,
+// video (ground-truth poses, all at the origin) unless `video` is false (separate views: boxes
+// only).
+inline std::string makeSequence(const std::string& name, int frames,
+                                const std::vector<std::string>& classes,
                                 const std::vector<GroundTruthBox>& boxes, bool video = true) {
   const std::string dir = tempDir(name);
   std::filesystem::create_directories(dir + "/rgb");

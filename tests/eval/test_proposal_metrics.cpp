@@ -6,11 +6,11 @@
 #include <filesystem>
 
 #include "procs/proposals/proposal_engine.h"
-#include "tools/train/trainer.h"
 #include "procs/proposals/synthetic_map.h"
 #include "tests/eval/eval_test_data.h"
 #include "tests/support/test_support.h"
 #include "tools/eval/proposal_metrics.h"
+#include "tools/train/trainer.h"
 
 using namespace slamaware;
 using namespace slamaware::proposals;
@@ -62,13 +62,14 @@ TEST(ProposalMisses, EachUncoveredBoxHasItsCause) {
     test::writeEvent(log, ch.slam_pose, poseMessage(5, pose_t::STATE_TRACKING, T), n++);
   }
   const std::vector<GroundTruthBox> boxes = {
-      truth(0, b.x, b.y, b.w, b.h),                    // before the first proposal
-      truth(5, b.x, b.y, b.w, b.h),                    // covered
-      truth(5, b.x, b.y, b.w * 2.2, b.h),              // IoU 1 / 2.2: partial
-      truth(5, 10, 10, 40, 40),                        // nothing there
-      truth(10, b.x, b.y, b.w, b.h),                   // SLAM gave no pose
+      truth(0, b.x, b.y, b.w, b.h),        // before the first proposal
+      truth(5, b.x, b.y, b.w, b.h),        // covered
+      truth(5, b.x, b.y, b.w * 2.2, b.h),  // IoU 1 / 2.2: partial
+      truth(5, 10, 10, 40, 40),            // nothing there
+      truth(10, b.x, b.y, b.w, b.h),       // SLAM gave no pose
   };
-  const SequenceFolder seq = SequenceFolder::open(test::makeSequence("eval_proposal_misses_seq", 11, {"soda_can"}, boxes));
+  const SequenceFolder seq =
+      SequenceFolder::open(test::makeSequence("eval_proposal_misses_seq", 11, {"soda_can"}, boxes));
   ProposalMisses m;
   const ProposalRecording run = rerunProposals(log_path, ch, o, &seq, 5, &m);
   EXPECT_EQ(run.boxes.at(5).size(), 1u);
@@ -79,8 +80,8 @@ TEST(ProposalMisses, EachUncoveredBoxHasItsCause) {
   EXPECT_EQ(m.no_candidate, 1);
   EXPECT_EQ(m.not_localized, 1);
   EXPECT_EQ(m.suppressed + m.occluded, 0);
-  EXPECT_EQ(m.boxes, m.covered + m.before_first + m.not_localized + m.suppressed + m.occluded + m.partial +
-                         m.no_candidate);
+  EXPECT_EQ(m.boxes, m.covered + m.before_first + m.not_localized + m.suppressed + m.occluded +
+                         m.partial + m.no_candidate);
   const nlohmann::json j = missesSection(m);
   EXPECT_EQ(j["partial"], 1);
   EXPECT_EQ(j["ground_truth_boxes"], 5);
@@ -89,7 +90,8 @@ TEST(ProposalMisses, EachUncoveredBoxHasItsCause) {
 TEST(ProposalMisses, ABoxTheRankingSuppressedIsCountedAsSuppressed) {
   // A can and a small one 2.5 cm beside it: apart at the fine density scales, one cluster at the
   // coarse ones. The pair's box overlaps the can's by IoU > 0.5, so only the can's (found at more
-  // scales alike) is published; ground truth around the pair is covered by a candidate but suppressed.
+  // scales alike) is published; ground truth around the pair is covered by a candidate but
+  // suppressed.
   ProposalOptions o = metricOptions();
   o.nms_iou = 0.5;  // the stage's own suppression (off by default: the recognizer's, by confidence)
   const SE3 T = lookingDown(1.0);
@@ -114,8 +116,9 @@ TEST(ProposalMisses, ABoxTheRankingSuppressedIsCountedAsSuppressed) {
   };
   for (const auto& c : all) {
     const Box2 cb{c.x, c.y, c.w, c.h};
-    for (const Box2& g : {cb, Box2{c.x - 0.4 * c.w, c.y, 1.4 * c.w, c.h}, Box2{c.x, c.y, 1.4 * c.w, c.h},
-                          Box2{c.x, c.y - 0.4 * c.h, c.w, 1.4 * c.h}, Box2{c.x, c.y, c.w, 1.4 * c.h}})
+    for (const Box2& g :
+         {cb, Box2{c.x - 0.4 * c.w, c.y, 1.4 * c.w, c.h}, Box2{c.x, c.y, 1.4 * c.w, c.h},
+          Box2{c.x, c.y - 0.4 * c.h, c.w, 1.4 * c.h}, Box2{c.x, c.y, c.w, 1.4 * c.h}})
       if (!covered(g) && iou(g, cb) >= 0.5) {
         boxes.push_back(truth(5, g.x, g.y, g.w, g.h));
         break;
@@ -130,8 +133,8 @@ TEST(ProposalMisses, ABoxTheRankingSuppressedIsCountedAsSuppressed) {
     test::writeEvent(log, ch.slam_map, cloudMessage(1, scene), 1);
     test::writeEvent(log, ch.slam_pose, poseMessage(5, pose_t::STATE_TRACKING, T), 2);
   }
-  const SequenceFolder seq =
-      SequenceFolder::open(test::makeSequence("eval_proposal_suppressed_seq", 6, {"soda_can"}, boxes));
+  const SequenceFolder seq = SequenceFolder::open(
+      test::makeSequence("eval_proposal_suppressed_seq", 6, {"soda_can"}, boxes));
   ProposalMisses m;
   rerunProposals(log_path, ch, o, &seq, 5, &m);
   EXPECT_EQ(m.suppressed, static_cast<int>(boxes.size()));
@@ -147,6 +150,7 @@ TEST(ProposalBoxes, WhatTheEvaluatorDumpsTheTrainerReadsBack) {
   writeProposalBoxes(run, path);
   const auto read = recognizer::readProposalBoxes(path);
   ASSERT_EQ(read.size(), 2u);
-  EXPECT_EQ(read.at(0), (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2.25, 3, 4)}));
+  EXPECT_EQ(read.at(0),
+            (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2.25, 3, 4)}));
   EXPECT_EQ(read.at(12), (std::vector<cv::Rect2d>{cv::Rect2d(600.5, 400, 39.5, 80)}));
 }

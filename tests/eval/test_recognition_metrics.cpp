@@ -6,14 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <functional>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 
+#include "procs/objectmap/object_map.h"
 #include "tests/eval/eval_test_data.h"
 #include "tests/objectmap/synthetic_world.h"
-#include "procs/objectmap/object_map.h"
 #include "tests/support/test_support.h"
 #include "tools/eval/recognition_metrics.h"
 
@@ -94,8 +94,8 @@ detections_t detections(int32_t seq, int32_t map_id, const std::vector<std::stri
 // AP = 1/3 * 1 + 1/3 * 2/3 = 5/9.
 TEST(AveragePrecision, HandComputedVocAllPointExample) {
   std::vector<PrPoint> curve;
-  const double ap =
-      averagePrecision(hits({{0.5, false}, {0.9, true}, {0.6, false}, {0.7, true}, {0.8, false}}), 3, &curve);
+  const double ap = averagePrecision(
+      hits({{0.5, false}, {0.9, true}, {0.6, false}, {0.7, true}, {0.8, false}}), 3, &curve);
   EXPECT_NEAR(ap, 5.0 / 9.0, 1e-12);
   ASSERT_EQ(curve.size(), 5u);
   EXPECT_NEAR(curve[0].precision, 1.0, 1e-12);
@@ -105,7 +105,8 @@ TEST(AveragePrecision, HandComputedVocAllPointExample) {
   // Every box found, the best first: AP 1. A false positive above all of them: the precision at
   // every recall is the precision after it is passed.
   EXPECT_NEAR(averagePrecision(hits({{0.9, true}, {0.8, true}}), 2), 1.0, 1e-12);
-  EXPECT_NEAR(averagePrecision(hits({{0.99, false}, {0.9, true}, {0.8, true}}), 2), 2.0 / 3.0, 1e-12);
+  EXPECT_NEAR(averagePrecision(hits({{0.99, false}, {0.9, true}, {0.8, true}}), 2), 2.0 / 3.0,
+              1e-12);
 }
 
 // Equal scores are one step of the curve, so their order does not matter: a TP and an FP tied at
@@ -113,12 +114,14 @@ TEST(AveragePrecision, HandComputedVocAllPointExample) {
 // TP taken first alone would give 2/3. A TP tied with two FPs is one step to recall 1/2 at
 // precision 1/3, wherever the TP is among them.
 TEST(AveragePrecision, TiedScoresAreOneStepWhateverTheirOrder) {
-  const double a = averagePrecision(hits({{0.9, true}, {0.8, true}, {0.8, false}, {0.5, false}}), 3);
-  const double b = averagePrecision(hits({{0.9, true}, {0.8, false}, {0.8, true}, {0.5, false}}), 3);
+  const double a =
+      averagePrecision(hits({{0.9, true}, {0.8, true}, {0.8, false}, {0.5, false}}), 3);
+  const double b =
+      averagePrecision(hits({{0.9, true}, {0.8, false}, {0.8, true}, {0.5, false}}), 3);
   EXPECT_NEAR(a, 5.0 / 9.0, 1e-12);
   EXPECT_NEAR(b, 5.0 / 9.0, 1e-12);
-  EXPECT_NEAR(averagePrecision(hits({{0.9, true}, {0.81, true}, {0.8, false}, {0.5, false}}), 3), 2.0 / 3.0,
-              1e-12);
+  EXPECT_NEAR(averagePrecision(hits({{0.9, true}, {0.81, true}, {0.8, false}, {0.5, false}}), 3),
+              2.0 / 3.0, 1e-12);
   const double c = averagePrecision(hits({{0.7, true}, {0.7, false}, {0.7, false}}), 2);
   const double d = averagePrecision(hits({{0.7, false}, {0.7, false}, {0.7, true}}), 2);
   EXPECT_NEAR(c, 1.0 / 6.0, 1e-12);
@@ -138,7 +141,8 @@ TEST(AveragePrecision, AClassWithoutGroundTruthHasNoApAndOneWithoutDetectionsHas
 // not match a box that is already matched), both for AP and at the argmax label.
 TEST(RecognitionMatching, ADetectionCannotMatchAnAlreadyMatchedBox) {
   RecognitionScores s = emptyScores({"cap", "coffee_mug"});
-  scoreFrame(kModel, {box(102, 102, 50, 50, {0.7, 0.2, 0.1}), box(100, 100, 50, 50, {0.8, 0.1, 0.1})},
+  scoreFrame(kModel,
+             {box(102, 102, 50, 50, {0.7, 0.2, 0.1}), box(100, 100, 50, 50, {0.8, 0.1, 0.1})},
              {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &s);
   const ClassTally& cap = s.classes.at("cap");
   EXPECT_EQ(cap.truth, 1);
@@ -149,7 +153,8 @@ TEST(RecognitionMatching, ADetectionCannotMatchAnAlreadyMatchedBox) {
   EXPECT_EQ(cap.labelled, 2);
   EXPECT_EQ(cap.labelled_tp, 1);
   EXPECT_EQ(s.classes.at("coffee_mug").truth, 0);
-  EXPECT_EQ(s.classes.at("coffee_mug").ranked.size(), 2u) << "every box is a detection of every class";
+  EXPECT_EQ(s.classes.at("coffee_mug").ranked.size(), 2u)
+      << "every box is a detection of every class";
   EXPECT_EQ(s.boxes_on_objects, 2);
   EXPECT_EQ(s.correct_on_objects, 2);
   const nlohmann::json j = recognitionSection(s);
@@ -163,7 +168,8 @@ TEST(RecognitionMatching, ADetectionCannotMatchAnAlreadyMatchedBox) {
 // caps is found by the second detection even though that detection overlaps the first cap more.
 TEST(RecognitionMatching, TheUnmatchedBoxOverlappingMostIsTaken) {
   RecognitionScores s = emptyScores({"cap"});
-  scoreFrame(kModel, {box(120, 100, 50, 50, {0.9, 0.05, 0.05}), box(115, 100, 50, 50, {0.8, 0.1, 0.1})},
+  scoreFrame(kModel,
+             {box(120, 100, 50, 50, {0.9, 0.05, 0.05}), box(115, 100, 50, 50, {0.8, 0.1, 0.1})},
              {truth(0, 100, 100, 50, 50, "cap"), truth(0, 120, 100, 50, 50, "cap")}, 0.5, &s);
   const ClassTally& cap = s.classes.at("cap");
   EXPECT_EQ(cap.truth, 2);
@@ -172,16 +178,18 @@ TEST(RecognitionMatching, TheUnmatchedBoxOverlappingMostIsTaken) {
   EXPECT_EQ(cap.labelled_tp, 2);
   // Below the threshold nothing matches.
   RecognitionScores t = emptyScores({"cap"});
-  scoreFrame(kModel, {box(140, 100, 50, 50, {0.9, 0.05, 0.05})}, {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &t);
+  scoreFrame(kModel, {box(140, 100, 50, 50, {0.9, 0.05, 0.05})},
+             {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &t);
   EXPECT_FALSE(t.classes.at("cap").ranked[0].true_positive) << "IoU 10/90";
   EXPECT_EQ(t.boxes_elsewhere, 1);
 }
 
-// Ground-truth boxes of classes that are not evaluated (the scene's distractors, or a model class the
-// sequence does not list) are not ground truth: they are never missed, and a box on one that is
+// Ground-truth boxes of classes that are not evaluated (the scene's distractors, or a model class
+// the sequence does not list) are not ground truth: they are never missed, and a box on one that is
 // called a cap is a false positive of cap.
 TEST(RecognitionMatching, ADistractorIsNotGroundTruth) {
-  RecognitionScores s = emptyScores({"cap"});  // coffee_mug: a model class this sequence does not list
+  RecognitionScores s =
+      emptyScores({"cap"});  // coffee_mug: a model class this sequence does not list
   scoreFrame(kModel,
              {box(300, 100, 60, 40, {0.9, 0.05, 0.05}), box(300, 100, 60, 41, {0.1, 0.1, 0.8}),
               box(400, 100, 50, 50, {0.2, 0.7, 0.1}), box(100, 100, 50, 50, {0.6, 0.3, 0.1})},
@@ -196,7 +204,8 @@ TEST(RecognitionMatching, ADistractorIsNotGroundTruth) {
   int tps = 0;
   for (const auto& d : cap.ranked) tps += d.true_positive;
   EXPECT_EQ(tps, 1);
-  EXPECT_FALSE(cap.ranked[0].true_positive) << "p(cap) 0.9 on the calculator ranks first and is false";
+  EXPECT_FALSE(cap.ranked[0].true_positive)
+      << "p(cap) 0.9 on the calculator ranks first and is false";
   EXPECT_EQ(s.boxes_on_distractors, 3);
   EXPECT_EQ(s.background_on_distractors, 1);
   EXPECT_EQ(s.boxes_on_objects, 1);
@@ -210,20 +219,24 @@ TEST(RecognitionMatching, ADistractorIsNotGroundTruth) {
 
 TEST(RecognitionSection, HasTheKeysOfDesignSection7InPercent) {
   RecognitionScores s = emptyScores({"cap", "coffee_mug"});
-  scoreFrame(kModel, {box(100, 100, 50, 50, {0.8, 0.1, 0.1}), box(300, 300, 50, 50, {0.3, 0.6, 0.1})},
+  scoreFrame(kModel,
+             {box(100, 100, 50, 50, {0.8, 0.1, 0.1}), box(300, 300, 50, 50, {0.3, 0.6, 0.1})},
              {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &s);
-  scoreFrame(kModel, {}, {truth(5, 100, 100, 50, 50, "cap")}, 0.5, &s);  // a frame without boxes: a miss
+  scoreFrame(kModel, {}, {truth(5, 100, 100, 50, 50, "cap")}, 0.5,
+             &s);  // a frame without boxes: a miss
   const nlohmann::json j = recognitionSection(s);
   for (const char* key : {"mAP", "recall", "per_class"}) EXPECT_TRUE(j.contains(key)) << key;
   ASSERT_TRUE(j["per_class"].is_object());
   for (const char* cls : {"cap", "coffee_mug"}) {
     ASSERT_TRUE(j["per_class"].contains(cls)) << cls;
-    for (const char* key : {"AP", "precision", "recall"}) EXPECT_TRUE(j["per_class"][cls].contains(key)) << key;
+    for (const char* key : {"AP", "precision", "recall"})
+      EXPECT_TRUE(j["per_class"][cls].contains(key)) << key;
   }
   EXPECT_NEAR(j["per_class"]["cap"]["AP"].get<double>(), 50.0, 1e-9);
   EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["recall"].get<double>(), 50.0);
   EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["precision"].get<double>(), 100.0);
-  // No ground truth: no AP, no recall, and not in the mAP; precision of the one box called a mug: 0.
+  // No ground truth: no AP, no recall, and not in the mAP; precision of the one box called a mug:
+  // 0.
   EXPECT_TRUE(j["per_class"]["coffee_mug"]["AP"].is_null());
   EXPECT_TRUE(j["per_class"]["coffee_mug"]["recall"].is_null());
   EXPECT_DOUBLE_EQ(j["per_class"]["coffee_mug"]["precision"].get<double>(), 0.0);
@@ -234,17 +247,20 @@ TEST(RecognitionSection, HasTheKeysOfDesignSection7InPercent) {
 }
 
 // A ground-truth box that no box overlaps at the threshold is missed whatever the labels: the share
-// of boxed ground truth bounds recall and AP, per class and (mean over classes) the mAP. Three caps:
-// one boxed and found, one boxed but called background, one overlapped at IoU 0.33 only; and a
-// frame without boxes. A mug nobody boxed makes the class bound 0.
+// of boxed ground truth bounds recall and AP, per class and (mean over classes) the mAP. Three
+// caps: one boxed and found, one boxed but called background, one overlapped at IoU 0.33 only; and
+// a frame without boxes. A mug nobody boxed makes the class bound 0.
 TEST(RecognitionSection, TheBoxedShareBoundsRecallAndAp) {
   RecognitionScores s = emptyScores({"cap", "coffee_mug"});
   scoreFrame(kModel,
              {box(100, 100, 50, 50, {0.8, 0.1, 0.1}), box(300, 100, 50, 50, {0.1, 0.1, 0.8}),
               box(525, 100, 50, 50, {0.7, 0.2, 0.1})},
-             {truth(0, 100, 100, 50, 50, "cap"), truth(0, 300, 100, 50, 50, "cap"), truth(0, 500, 100, 50, 50, "cap")},
+             {truth(0, 100, 100, 50, 50, "cap"), truth(0, 300, 100, 50, 50, "cap"),
+              truth(0, 500, 100, 50, 50, "cap")},
              0.5, &s);
-  scoreFrame(kModel, {}, {truth(5, 100, 100, 50, 50, "cap"), truth(5, 300, 300, 40, 60, "coffee_mug")}, 0.5, &s);
+  scoreFrame(kModel, {},
+             {truth(5, 100, 100, 50, 50, "cap"), truth(5, 300, 300, 40, 60, "coffee_mug")}, 0.5,
+             &s);
   EXPECT_EQ(s.classes.at("cap").boxed, 2);
   EXPECT_EQ(s.classes.at("coffee_mug").boxed, 0);
   const nlohmann::json j = recognitionSection(s);
@@ -253,10 +269,12 @@ TEST(RecognitionSection, TheBoxedShareBoundsRecallAndAp) {
   EXPECT_DOUBLE_EQ(j["boxed"].get<double>(), 40.0) << "2 of 5 ground-truth boxes";
   EXPECT_DOUBLE_EQ(j["mAP_bound"].get<double>(), 25.0) << "the mean of 50 and 0";
   // p(cap) 0.1 on the second cap still ranks it, after the partial box: AP 1/4 + 1/4 x 2/3 = 5/12.
-  EXPECT_LE(j["per_class"]["cap"]["AP"].get<double>(), j["per_class"]["cap"]["boxed"].get<double>());
+  EXPECT_LE(j["per_class"]["cap"]["AP"].get<double>(),
+            j["per_class"]["cap"]["boxed"].get<double>());
   EXPECT_NEAR(j["per_class"]["cap"]["AP"].get<double>(), 500.0 / 12.0, 1e-9);
   EXPECT_LE(j["mAP"].get<double>(), j["mAP_bound"].get<double>());
-  EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["recall"].get<double>(), 25.0) << "at the argmax label, 1 of 4";
+  EXPECT_DOUBLE_EQ(j["per_class"]["cap"]["recall"].get<double>(), 25.0)
+      << "at the argmax label, 1 of 4";
   // Pooled over a suite, the counts add up.
   RecognitionScores suite;
   mergeRecognition(&suite, s);
@@ -270,8 +288,10 @@ TEST(RecognitionSection, TheBoxedShareBoundsRecallAndAp) {
 // TP (A) 0.9, TP (B) 0.5 -> precision 2/3 up to recall 1: AP 2/3 (the mean would be 3/4).
 TEST(RecognitionSection, TheSuiteIsScoredOnPooledDetections) {
   RecognitionScores a = emptyScores({"cap"}), b = emptyScores({"cap"});
-  scoreFrame(kModel, {box(100, 100, 50, 50, {0.9, 0.05, 0.05})}, {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &a);
-  scoreFrame(kModel, {box(300, 100, 50, 50, {0.95, 0.03, 0.02}), box(100, 100, 50, 50, {0.5, 0.3, 0.2})},
+  scoreFrame(kModel, {box(100, 100, 50, 50, {0.9, 0.05, 0.05})},
+             {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &a);
+  scoreFrame(kModel,
+             {box(300, 100, 50, 50, {0.95, 0.03, 0.02}), box(100, 100, 50, 50, {0.5, 0.3, 0.2})},
              {truth(0, 100, 100, 50, 50, "cap")}, 0.5, &b);
   EXPECT_NEAR(recognitionSection(a)["mAP"].get<double>(), 100.0, 1e-9);
   EXPECT_NEAR(recognitionSection(b)["mAP"].get<double>(), 50.0, 1e-9);
@@ -310,7 +330,8 @@ const std::vector<detections_t>& threeFrames() {
   return messages;
 }
 
-std::string recordThreeFrames(const std::string& path, const std::function<void(object_detections_t&)>& edit = {}) {
+std::string recordThreeFrames(const std::string& path,
+                              const std::function<void(object_detections_t&)>& edit = {}) {
   const Channels ch;
   ObjectMapEngine node(plainSum());
   lcm::LogFile log(path, "w");
@@ -347,7 +368,8 @@ TEST(PublishedLabels, BoxesAreScoredAsTheObjectMapPublishedThem) {
   EXPECT_EQ(run.objects, 2);
   const object_t* mug_object = nullptr;
   for (const auto& o : outputs.last_map.objects)
-    if (std::find(o.candidate_ids.begin(), o.candidate_ids.end(), 5) != o.candidate_ids.end()) mug_object = &o;
+    if (std::find(o.candidate_ids.begin(), o.candidate_ids.end(), 5) != o.candidate_ids.end())
+      mug_object = &o;
   ASSERT_NE(mug_object, nullptr) << "OBJECT_MAP names the candidates of each object";
   EXPECT_EQ(mug_object->label, "coffee_mug");
   for (int f : {0, 5, 10}) {
@@ -355,29 +377,36 @@ TEST(PublishedLabels, BoxesAreScoredAsTheObjectMapPublishedThem) {
     const object_detections_t& od = outputs.frames.at(f);
     EXPECT_EQ(b.object, mug_object->id);
     EXPECT_EQ(b.role, object_detections_t::PRIMARY);
-    for (size_t c = 0; c < 3; ++c) EXPECT_EQ(b.online.log_p[c], static_cast<double>(od.log_score[0][c]));
+    for (size_t c = 0; c < 3; ++c)
+      EXPECT_EQ(b.online.log_p[c], static_cast<double>(od.log_score[0][c]));
     EXPECT_EQ(b.online.label, f == 10 ? 1 : 0) << "frame " << f << ": what the map knew then";
     EXPECT_EQ(b.final.label, 1) << "frame " << f << ": the last map's label";
     for (size_t c = 0; c < 2; ++c)
       EXPECT_NEAR(b.final.log_p[c], mug_object->log_posterior[c] + od.log_weight[0][c], 1e-6);
-    EXPECT_NEAR(std::exp(b.final.log_p[0]) + std::exp(b.final.log_p[1]) + std::exp(b.final.log_p[2]), 1.0, 1e-6);
+    EXPECT_NEAR(
+        std::exp(b.final.log_p[0]) + std::exp(b.final.log_p[1]) + std::exp(b.final.log_p[2]), 1.0,
+        1e-6);
   }
 
-  const std::string seq = makeSequence("eval_published_seq", 11, {"cap", "coffee_mug"},
-                                       {truth(0, 100, 100, 50, 50, "coffee_mug"),
-                                        truth(5, 100, 100, 50, 50, "coffee_mug"),
-                                        truth(10, 100, 100, 50, 50, "coffee_mug")});
-  const RecognitionResult r = scoreRecognition(run, SequenceFolder::open(seq), RecognitionEvalOptions{});
+  const std::string seq = makeSequence(
+      "eval_published_seq", 11, {"cap", "coffee_mug"},
+      {truth(0, 100, 100, 50, 50, "coffee_mug"), truth(5, 100, 100, 50, 50, "coffee_mug"),
+       truth(10, 100, 100, 50, 50, "coffee_mug")});
+  const RecognitionResult r =
+      scoreRecognition(run, SequenceFolder::open(seq), RecognitionEvalOptions{});
   EXPECT_EQ(r.single.frames, 3) << "frames 0, 5, 10";
   EXPECT_EQ(r.single.classes.at("coffee_mug").labelled_tp, 1);
-  EXPECT_EQ(r.online.classes.at("coffee_mug").labelled_tp, 1) << "frames 0 and 5 were labelled cap then";
+  EXPECT_EQ(r.online.classes.at("coffee_mug").labelled_tp, 1)
+      << "frames 0 and 5 were labelled cap then";
   EXPECT_EQ(r.online.classes.at("cap").labelled, 2);
   EXPECT_EQ(r.final.classes.at("coffee_mug").labelled_tp, 3);
-  EXPECT_NEAR(recognitionSection(r.final)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0, 1e-9);
+  EXPECT_NEAR(recognitionSection(r.final)["per_class"]["coffee_mug"]["recall"].get<double>(), 100.0,
+              1e-9);
 }
 
-// The evaluator relabels nothing: a label or score changed in the recorded OBJECT_DETECTIONS is what
-// it scores, and a DETECTIONS without its OBJECT_DETECTIONS counts as a box the map said nothing of.
+// The evaluator relabels nothing: a label or score changed in the recorded OBJECT_DETECTIONS is
+// what it scores, and a DETECTIONS without its OBJECT_DETECTIONS counts as a box the map said
+// nothing of.
 TEST(PublishedLabels, TheEvaluatorScoresTheRecordedLabelsWhateverTheyAre) {
   const std::string dir = test::tempDir("eval_published_edit");
   const std::string log = recordThreeFrames(dir + "/edited.lcm", [](object_detections_t& od) {
@@ -387,7 +416,8 @@ TEST(PublishedLabels, TheEvaluatorScoresTheRecordedLabelsWhateverTheyAre) {
   });
   const Channels ch;
   const RecognitionRecording run = readRecognitionRecording(log, ch, readObjectMapOutputs(log, ch));
-  EXPECT_EQ(run.frames.at(10)[0].online.label, 0) << "the recorded label, not one of the evaluator's";
+  EXPECT_EQ(run.frames.at(10)[0].online.label, 0)
+      << "the recorded label, not one of the evaluator's";
   EXPECT_NEAR(run.frames.at(10)[0].online.log_p[0], std::log(0.6), 1e-6);
 
   ObjectMapOutputs missing = readObjectMapOutputs(log, ch);
@@ -407,7 +437,8 @@ TEST(PublishedLabels, ReRunningTheObjectMapGivesTheNodesMessages) {
   const ObjectMapOutputs recorded = readObjectMapOutputs(log, ch);
   const ObjectMapOutputs again = rerunObjectMap(log, ch, plainSum());
   ASSERT_EQ(again.frames.size(), recorded.frames.size());
-  for (const auto& [seq, m] : recorded.frames) EXPECT_EQ(bytes(again.frames.at(seq)), bytes(m)) << "seq " << seq;
+  for (const auto& [seq, m] : recorded.frames)
+    EXPECT_EQ(bytes(again.frames.at(seq)), bytes(m)) << "seq " << seq;
   EXPECT_EQ(bytes(again.last_map), bytes(recorded.last_map));
   ObjectMapOptions average = plainSum();
   average.posterior_views_exponent = 1;
@@ -417,16 +448,19 @@ TEST(PublishedLabels, ReRunningTheObjectMapGivesTheNodesMessages) {
 // A sequence whose classes the model does not know (the real sequences: temple, cabinet) has no
 // recognition sections.
 TEST(RecognitionSection, ASequenceWithoutAModelClassIsNotEvaluated) {
-  const std::string seq = makeSequence("eval_foreign_classes", 3, {"temple"}, {truth(0, 1, 1, 30, 30, "temple")});
+  const std::string seq =
+      makeSequence("eval_foreign_classes", 3, {"temple"}, {truth(0, 1, 1, 30, 30, "temple")});
   EXPECT_TRUE(evaluatedClasses(kModel, SequenceFolder::open(seq)).empty());
 }
 
 // A sequence of separate views (boxes, no ground-truth poses: uw_scenes_v2_public) is scored on
-// every frame, a video on every stride-th; a detection on a frame that is not scored counts nowhere.
+// every frame, a video on every stride-th; a detection on a frame that is not scored counts
+// nowhere.
 TEST(RecognitionEval, EveryFrameOfASequenceOfSeparateViewsIsScored) {
   std::vector<GroundTruthBox> boxes;
   for (int f = 0; f < 7; ++f) boxes.push_back(truth(f, 100, 100, 50, 50, "coffee_mug"));
-  const std::string views = makeSequence("eval_separate_views_seq", 7, {"coffee_mug"}, boxes, false);
+  const std::string views =
+      makeSequence("eval_separate_views_seq", 7, {"coffee_mug"}, boxes, false);
   const std::string video = makeSequence("eval_video_seq", 7, {"coffee_mug"}, boxes, true);
   EXPECT_EQ(framesToScore(SequenceFolder::open(views), 5), (std::vector<int>{0, 1, 2, 3, 4, 5, 6}));
   EXPECT_EQ(framesToScore(SequenceFolder::open(video), 5), (std::vector<int>{0, 5}));
@@ -439,11 +473,13 @@ TEST(RecognitionEval, EveryFrameOfASequenceOfSeparateViewsIsScored) {
     b.online = b.final = b.single;
     run.frames[f].push_back(b);
   }
-  const RecognitionResult r = scoreRecognition(run, SequenceFolder::open(views), RecognitionEvalOptions{});
+  const RecognitionResult r =
+      scoreRecognition(run, SequenceFolder::open(views), RecognitionEvalOptions{});
   EXPECT_EQ(r.single.frames, 7);
   EXPECT_EQ(r.single.classes.at("coffee_mug").truth, 7);
   EXPECT_EQ(r.single.classes.at("coffee_mug").labelled_tp, 7);
-  const RecognitionResult v = scoreRecognition(run, SequenceFolder::open(video), RecognitionEvalOptions{});
+  const RecognitionResult v =
+      scoreRecognition(run, SequenceFolder::open(video), RecognitionEvalOptions{});
   EXPECT_EQ(v.single.frames, 2);
   EXPECT_EQ(v.single.classes.at("coffee_mug").truth, 2);
 }

@@ -17,11 +17,11 @@
 #include "procs/objectmap/objectmap_options.h"
 #include "procs/proposals/proposal_options.h"
 #include "procs/recognizer/recognizer.h"
-#include "tools/train/trainer.h"
 #include "procs/slam/slam_options.h"
 #include "procs/supervisor/process_spec.h"
-#include "tools/synth/synth_options.h"
 #include "tests/fuzz/fuzz_support.h"
+#include "tools/synth/synth_options.h"
+#include "tools/train/trainer.h"
 
 namespace {
 

@@ -1,5 +1,5 @@
-// Fuzz target: the readers of the two on-disk layouts of DATASETS.md, as the camera, the trainer and
-// the evaluator open them. Input: one byte of flags, then parts cut by fuzz::kSeparator.
+// Fuzz target: the readers of the two on-disk layouts of DATASETS.md, as the camera, the trainer
+// and the evaluator open them. Input: one byte of flags, then parts cut by fuzz::kSeparator.
 //   bit 0 clear, a sequence folder: sequence.yaml, boxes.csv, objects.csv, groundtruth.txt,
 //     timestamps.txt, then the names of the files in rgb/ (one per line); a part that is absent or
 //     empty is a file that is not there.
@@ -32,19 +32,22 @@ bool safeRelative(const std::string& p) {
   int levels = 1;
   std::istringstream in(p);
   for (std::string part; std::getline(in, part, '/');) {
-    if (part.empty() || part == "." || part == ".." || part.find('\0') != std::string::npos) return false;
+    if (part.empty() || part == "." || part == ".." || part.find('\0') != std::string::npos)
+      return false;
     ++levels;
   }
   return levels <= 5;
 }
 
 void sequence(const std::vector<std::string>& parts, const std::string& dir) {
-  const char* names[] = {"sequence.yaml", "boxes.csv", "objects.csv", "groundtruth.txt", "timestamps.txt"};
+  const char* names[] = {"sequence.yaml", "boxes.csv", "objects.csv", "groundtruth.txt",
+                         "timestamps.txt"};
   for (size_t i = 0; i < 5 && i < parts.size(); ++i)
     if (!parts[i].empty()) slamaware::fuzz::writeFile(dir + "/" + names[i], parts[i]);
   if (parts.size() > 5)
     for (const auto& name : lines(parts[5]))
-      if (safeRelative(name) && name.find('/') == std::string::npos) slamaware::fuzz::writeFile(dir + "/rgb/" + name, "");
+      if (safeRelative(name) && name.find('/') == std::string::npos)
+        slamaware::fuzz::writeFile(dir + "/rgb/" + name, "");
   const auto seq = slamaware::SequenceFolder::open(dir);
   for (size_t i = 0; i < seq.size(); ++i) {
     seq.framePath(i);
@@ -62,7 +65,8 @@ void objectSet(const std::vector<std::string>& parts, const std::string& dir) {
   if (parts.size() > 1) {
     const auto files = lines(parts[1]);
     for (size_t i = 0; i < files.size(); ++i)
-      if (safeRelative(files[i])) slamaware::fuzz::writeFile(dir + "/" + files[i], i + 2 < parts.size() ? parts[i + 2] : "");
+      if (safeRelative(files[i]))
+        slamaware::fuzz::writeFile(dir + "/" + files[i], i + 2 < parts.size() ? parts[i + 2] : "");
   }
   const auto set = slamaware::ObjectSet::open(dir);
   set.instances();
@@ -82,7 +86,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       sequence(parts, dir);
   } catch (const slamaware::DatasetError& e) {
     if (std::string(e.what()).find(dir) == std::string::npos) {
-      std::fprintf(stderr, "fuzz_datasets: a refusal that names no file of the folder: %s\n", e.what());
+      std::fprintf(stderr, "fuzz_datasets: a refusal that names no file of the folder: %s\n",
+                   e.what());
       std::abort();
     }
   }

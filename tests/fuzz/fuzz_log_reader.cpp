@@ -25,7 +25,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                      static_cast<long long>(record->offset), static_cast<long long>(previous_end));
         std::abort();
       }
-      previous_end = record->offset + 4 + 8 + 8 + 4 + 4 + static_cast<int64_t>(record->channel.size()) +
+      previous_end = record->offset + 4 + 8 + 8 + 4 + 4 +
+                     static_cast<int64_t>(record->channel.size()) +
                      static_cast<int64_t>(record->data.size());
       if (previous_end > static_cast<int64_t>(size)) {
         std::fprintf(stderr, "fuzz_log_reader: an event ends after the end of the file\n");

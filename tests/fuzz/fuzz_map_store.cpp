@@ -19,7 +19,7 @@
 namespace {
 
 slamaware::objectmap::LoadReport loadInto(const std::string& dir,
-                                         slamaware::objectmap::ObjectMapEngine* engine) {
+                                          slamaware::objectmap::ObjectMapEngine* engine) {
   slamaware::objectmap::MapStore store(dir);
   return store.load([&](const slamaware::objectmap::MapSnapshot& s) { engine->restore(s); });
 }
@@ -39,7 +39,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       snapshot.content = nlohmann::json::parse(parts[0]);
       size_t next = 1;
       for (const auto& seg : snapshot.content.at("segments"))
-        snapshot.segment_files[seg.at("id").get<int32_t>()] = next < parts.size() ? parts[next++] : std::string();
+        snapshot.segment_files[seg.at("id").get<int32_t>()] =
+            next < parts.size() ? parts[next++] : std::string();
       MapStore(dir).save(snapshot);
     } catch (const std::exception&) {
       return 0;  // not something the map could have saved

@@ -46,7 +46,8 @@ std::vector<uint8_t> encodeExactly(const Msg& m) {
   const int n = m.getEncodedSize();
   if (n < 0) fail("negative encoded size", Msg::getTypeName());
   std::vector<uint8_t> out(static_cast<size_t>(n));
-  if (m.encode(out.data(), 0, n) != n) fail("encode() wrote another size than getEncodedSize()", Msg::getTypeName());
+  if (m.encode(out.data(), 0, n) != n)
+    fail("encode() wrote another size than getEncodedSize()", Msg::getTypeName());
   return out;
 }
 
@@ -59,8 +60,10 @@ bool roundTrip(const uint8_t* data, size_t size, Msg* msg) {
   }
   const std::vector<uint8_t> once = encodeExactly(*msg);
   Msg again{};
-  if (!decodeMessage(once.data(), once.size(), &again, &why)) fail("its own encoding does not decode", Msg::getTypeName());
-  if (encodeExactly(again) != once) fail("decode(encode(m)) encodes differently", Msg::getTypeName());
+  if (!decodeMessage(once.data(), once.size(), &again, &why))
+    fail("its own encoding does not decode", Msg::getTypeName());
+  if (encodeExactly(again) != once)
+    fail("decode(encode(m)) encodes differently", Msg::getTypeName());
   return true;
 }
 
@@ -75,7 +78,8 @@ void image(const uint8_t* data, size_t size) {
   if (!roundTrip(data, size, &m)) return;
   try {
     const cv::Mat bgr = decodeImageMessage(m, "CAMERA seq " + std::to_string(m.seq));
-    if (bgr.cols != m.width || bgr.rows != m.height) fail("decoded image of another size", "image_t");
+    if (bgr.cols != m.width || bgr.rows != m.height)
+      fail("decoded image of another size", "image_t");
   } catch (const ImageError&) {
   }
 }
@@ -85,19 +89,20 @@ void cameraInfo(const uint8_t* data, size_t size) {
   if (!roundTrip(data, size, &m)) return;
   CameraModel camera;
   std::string why;
-  if (!cameraFromMessage(m, &camera, &why) && why.empty()) fail("refused without a reason", "camera_info_t");
+  if (!cameraFromMessage(m, &camera, &why) && why.empty())
+    fail("refused without a reason", "camera_info_t");
 }
 
 using Decoder = void (*)(const uint8_t*, size_t);
 constexpr Decoder kDecoders[] = {
-    &decodeOnly<box_t>,           &cameraInfo,
-    &decodeOnly<detections_t>,    &image,
-    &decodeOnly<keyframe_t>,      &decodeOnly<object_detections_t>,
-    &decodeOnly<object_map_t>,    &decodeOnly<object_query_reply_t>,
-    &decodeOnly<object_query_t>,  &decodeOnly<object_t>,
-    &decodeOnly<point_cloud_t>,   &decodeOnly<pose_t>,
-    &decodeOnly<proc_command_t>,  &decodeOnly<proc_info_t>,
-    &decodeOnly<proc_status_t>,   &decodeOnly<proposals_t>,
+    &decodeOnly<box_t>,          &cameraInfo,
+    &decodeOnly<detections_t>,   &image,
+    &decodeOnly<keyframe_t>,     &decodeOnly<object_detections_t>,
+    &decodeOnly<object_map_t>,   &decodeOnly<object_query_reply_t>,
+    &decodeOnly<object_query_t>, &decodeOnly<object_t>,
+    &decodeOnly<point_cloud_t>,  &decodeOnly<pose_t>,
+    &decodeOnly<proc_command_t>, &decodeOnly<proc_info_t>,
+    &decodeOnly<proc_status_t>,  &decodeOnly<proposals_t>,
     &decodeOnly<status_t>,
 };
 

@@ -18,7 +18,8 @@ namespace slamaware::fuzz {
 inline const std::string& scratchPath() {
   static const std::string* const path = [] {
     const char* tmp = std::getenv("TMPDIR");
-    auto* p = new std::string(std::string(tmp && *tmp ? tmp : "/tmp") + "/slamaware-fuzz-" + std::to_string(::getpid()));
+    auto* p = new std::string(std::string(tmp && *tmp ? tmp : "/tmp") + "/slamaware-fuzz-" +
+                              std::to_string(::getpid()));
     std::atexit([] {
       std::error_code ec;
       std::filesystem::remove_all(scratchPath(), ec);

@@ -4,11 +4,11 @@
 // and dataset folders. Usage: fuzz-make-seeds SOURCE_DIR OUT_DIR (scripts/fuzz-seeds).
 #include <algorithm>
 #include <cstdio>
-#include <opencv2/core.hpp>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <lcm/lcm-cpp.hpp>
+#include <opencv2/core.hpp>
 #include <random>
 #include <string>
 #include <vector>
@@ -52,8 +52,23 @@ std::string encoded(const Msg& m) {
 
 // The order of fuzz_messages.cpp's kDecoders.
 enum TypeIndex : uint8_t {
-  kBox, kCameraInfo, kDetections, kImage, kKeyframe, kObjectDetections, kObjectMap, kQueryReply,
-  kQuery, kObject, kPointCloud, kPose, kProcCommand, kProcInfo, kProcStatus, kProposals, kStatus
+  kBox,
+  kCameraInfo,
+  kDetections,
+  kImage,
+  kKeyframe,
+  kObjectDetections,
+  kObjectMap,
+  kQueryReply,
+  kQuery,
+  kObject,
+  kPointCloud,
+  kPose,
+  kProcCommand,
+  kProcInfo,
+  kProcStatus,
+  kProposals,
+  kStatus
 };
 
 struct LoggedMessage {
@@ -91,7 +106,8 @@ void seedMapStore(const ObjectMapEngine& engine) {
   }
   seed("fuzz_map_store", "files", byteString(0) + fuzz::joinParts({content, ot}));
   const size_t begin = content.find("\n\"content\":") + 11;
-  seed("fuzz_map_store", "content", byteString(1) + fuzz::joinParts({content.substr(begin, content.size() - begin - 2), ot}));
+  seed("fuzz_map_store", "content",
+       byteString(1) + fuzz::joinParts({content.substr(begin, content.size() - begin - 2), ot}));
   fs::remove_all(dir);
 }
 
@@ -122,33 +138,40 @@ void seedModel() {
 // The shipped configs, each for its loader (fuzz_config.cpp's order), and a sequence.yaml.
 void seedConfigs(const std::string& source) {
   const std::vector<std::pair<std::string, uint8_t>> configs = {
-      {"system.yaml", 0}, {"system.yaml", 1}, {"camera.yaml", 2}, {"slam.yaml", 3}, {"proposals.yaml", 4},
-      {"recognizer.yaml", 5}, {"objectmap.yaml", 6}, {"train-quick.yaml", 7}, {"scenes/sample.yaml", 8},
-      {"objects/apple_ball.yaml", 9}};
+      {"system.yaml", 0},        {"system.yaml", 1},
+      {"camera.yaml", 2},        {"slam.yaml", 3},
+      {"proposals.yaml", 4},     {"recognizer.yaml", 5},
+      {"objectmap.yaml", 6},     {"train-quick.yaml", 7},
+      {"scenes/sample.yaml", 8}, {"objects/apple_ball.yaml", 9}};
   for (const auto& [file, loader] : configs) {
     std::string name = file;
     std::replace(name.begin(), name.end(), '/', '_');
-    seed("fuzz_config", std::to_string(loader) + "_" + name, byteString(loader) + readAll(source + "/config/" + file));
+    seed("fuzz_config", std::to_string(loader) + "_" + name,
+         byteString(loader) + readAll(source + "/config/" + file));
   }
   seed("fuzz_config", "10_sequence.yaml",
-       byteString(10) + "name: s\nsource: camera\nfps: 30\nframes: 2\ncamera:\n  width: 640\n  height: 480\n"
-                        "  fx: 525\n  fy: 525\n  cx: 319.5\n  cy: 239.5\n  distortion: [0, 0, 0, 0, 0]\n"
-                        "classes: [bowl, cap]\n");
+       byteString(10) +
+           "name: s\nsource: camera\nfps: 30\nframes: 2\ncamera:\n  width: 640\n  height: 480\n"
+           "  fx: 525\n  fy: 525\n  cx: 319.5\n  cy: 239.5\n  distortion: [0, 0, 0, 0, 0]\n"
+           "classes: [bowl, cap]\n");
 }
 
 // Dataset folders: a sequence (its sequence.yaml as seeded for fuzz_config) and an object set.
 void seedDatasets() {
   const std::string sequence_yaml = readAll(out_dir + "/fuzz_config/10_sequence.yaml").substr(1);
   seed("fuzz_datasets", "sequence",
-       byteString(0) + fuzz::joinParts({sequence_yaml, "frame,x,y,w,h,class,instance\n0,10,20,30,40,bowl,bowl_1\n",
-                                        "instance,class,cx,cy,cz,sx,sy,sz\nbowl_1,bowl,0,0,1,0.1,0.1,0.05\n",
-                                        "0.0 0 0 0 0 0 0 1\n0.033 0.01 0 0 0 0 0 1\n", "0 0.0\n1 0.033\n",
-                                        "000000.png\n000001.png\n"}));
+       byteString(0) +
+           fuzz::joinParts({sequence_yaml,
+                            "frame,x,y,w,h,class,instance\n0,10,20,30,40,bowl,bowl_1\n",
+                            "instance,class,cx,cy,cz,sx,sy,sz\nbowl_1,bowl,0,0,1,0.1,0.1,0.05\n",
+                            "0.0 0 0 0 0 0 0 1\n0.033 0.01 0 0 0 0 0 1\n", "0 0.0\n1 0.033\n",
+                            "000000.png\n000001.png\n"}));
   seed("fuzz_datasets", "object_set",
-       byteString(1) + fuzz::joinParts({"source: synth\n",
-                                        "bowl/bowl_1/bowl_1_1_1_crop.png\nbowl/bowl_1/bowl_1_1_1_maskcrop.png\n"
-                                        "bowl/bowl_1/bowl_1_1_1_loc.txt\nmug/mug_2/mug_2_2_5_crop.png\n",
-                                        "", "", "120,88\n", ""}));
+       byteString(1) +
+           fuzz::joinParts({"source: synth\n",
+                            "bowl/bowl_1/bowl_1_1_1_crop.png\nbowl/bowl_1/bowl_1_1_1_maskcrop.png\n"
+                            "bowl/bowl_1/bowl_1_1_1_loc.txt\nmug/mug_2/mug_2_2_5_crop.png\n",
+                            "", "", "120,88\n", ""}));
 }
 
 }  // namespace
@@ -161,7 +184,8 @@ int main(int argc, char** argv) {
   const std::string source = argv[1];
   out_dir = argv[2];
   std::vector<LoggedMessage> log;
-  auto message = [&](TypeIndex type, const std::string& name, const std::string& channel, const std::string& bytes) {
+  auto message = [&](TypeIndex type, const std::string& name, const std::string& channel,
+                     const std::string& bytes) {
     seed("fuzz_messages", name, byteString(type) + bytes);
     log.push_back({channel, bytes});
   };
@@ -217,16 +241,27 @@ int main(int argc, char** argv) {
   message(kStatus, "status", "SLAM_STATUS", encoded(status_t{}));
   cv::Mat image(12, 16, CV_8UC3);
   cv::randu(image, 0, 255);
-  message(kImage, "image_jpeg", "CAMERA", encoded(makeImageMessage(image, 1000000, 0, image_t::PIXEL_FORMAT_JPEG)));
-  message(kImage, "image_rgb8", "CAMERA", encoded(makeImageMessage(image, 1033333, 1, image_t::PIXEL_FORMAT_RGB8)));
-  message(kImage, "image_gray8", "CAMERA", encoded(makeImageMessage(image, 1066666, 2, image_t::PIXEL_FORMAT_GRAY8)));
+  message(kImage, "image_jpeg", "CAMERA",
+          encoded(makeImageMessage(image, 1000000, 0, image_t::PIXEL_FORMAT_JPEG)));
+  message(kImage, "image_rgb8", "CAMERA",
+          encoded(makeImageMessage(image, 1033333, 1, image_t::PIXEL_FORMAT_RGB8)));
+  message(kImage, "image_gray8", "CAMERA",
+          encoded(makeImageMessage(image, 1066666, 2, image_t::PIXEL_FORMAT_GRAY8)));
 
   seedLog(log);
   seedMapStore(engine);
   seedModel();
   seedConfigs(source);
-  seed("fuzz_image", "jpeg", byteString(0) + [&] { const auto b = encodeJpeg(image, 80); return std::string(b.begin(), b.end()); }());
-  seed("fuzz_image", "png", byteString(1) + [&] { const auto b = encodePng(image); return std::string(b.begin(), b.end()); }());
+  seed(
+      "fuzz_image", "jpeg", byteString(0) + [&] {
+        const auto b = encodeJpeg(image, 80);
+        return std::string(b.begin(), b.end());
+      }());
+  seed(
+      "fuzz_image", "png", byteString(1) + [&] {
+        const auto b = encodePng(image);
+        return std::string(b.begin(), b.end());
+      }());
 
   seedDatasets();
 

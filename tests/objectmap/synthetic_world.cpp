@@ -192,7 +192,8 @@ proposals_t SyntheticWorld::proposals(int frame, int32_t map_id, int32_t seq_off
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (const auto& p : object_points_[i]) centre += p;
     centre /= static_cast<double>(object_points_[i].size());
-    const Eigen::Vector3f to_camera = (pose(frame).translation() - centre).normalized().cast<float>();
+    const Eigen::Vector3f to_camera =
+        (pose(frame).translation() - centre).normalized().cast<float>();
     m.view_direction.push_back({to_camera.x(), to_camera.y(), to_camera.z()});
   }
   m.num_boxes = static_cast<int32_t>(m.boxes.size());

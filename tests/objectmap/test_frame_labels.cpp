@@ -1,6 +1,6 @@
 // What the object map publishes per frame (frame_labels.h, OBJECT_DETECTIONS): a box's score is its
-// object's posterior times the geometric mean of its own view's p(class | box), its candidate's mean
-// p(object | view) and its object's median; one box per object and frame stands for it, the
+// object's posterior times the geometric mean of its own view's p(class | box), its candidate's
+// mean p(object | view) and its object's median; one box per object and frame stands for it, the
 // others overlapping it are demoted as duplicates and those beside it are parts; a candidate in no
 // object keeps its own views' evidence; and the engine publishes them for every DETECTIONS.
 #include <gtest/gtest.h>
@@ -20,7 +20,8 @@ namespace {
 // Classes: cap, mug, background; a view sure of an object by 1 - p_background, split evenly.
 std::vector<float> view(double p_background) {
   const double o = (1 - p_background) / 2;
-  return {static_cast<float>(std::log(o)), static_cast<float>(std::log(o)), static_cast<float>(std::log(p_background))};
+  return {static_cast<float>(std::log(o)), static_cast<float>(std::log(o)),
+          static_cast<float>(std::log(p_background))};
 }
 
 std::vector<VoxelKey> voxels(int from, int to) {
@@ -47,7 +48,8 @@ TEST(FrameLabels, TheWeightIsTheBoxsViewWithItsCandidatesAndItsObjectsViews) {
   VotingOptions vo;
   ObjectTable t(0.01);
   for (int v = 0; v < 3; ++v)
-    t.addVotes(3, voxels(0, 20), vo), t.addVotes(5, voxels(0, 20), vo), t.addVotes(9, voxels(50, 70), vo);
+    t.addVotes(3, voxels(0, 20), vo), t.addVotes(5, voxels(0, 20), vo),
+        t.addVotes(9, voxels(50, 70), vo);
   const double bg3[] = {0.2, 0.9, 0.9}, bg9[] = {0.1, 0.95, 0.95, 0.95};
   for (int f = 0; f < 3; ++f) t.addView(3, View{100 * f, f, 2500, view(bg3[f])});
   t.addView(5, View{0, 0, 2500, view(0.2)});
@@ -59,8 +61,8 @@ TEST(FrameLabels, TheWeightIsTheBoxsViewWithItsCandidatesAndItsObjectsViews) {
   ASSERT_EQ(t.objectOfCandidate(3), t.objectOfCandidate(5));
   ASSERT_NE(t.objectOfCandidate(3), t.objectOfCandidate(9));
 
-  const std::vector<FrameBox> frame2{box(3, 0, 50, view(0.9)), box(5, 100, 50, view(0.4)), box(9, 200, 50, view(0.95)),
-                                     box(11, 300, 50, view(0.5))};
+  const std::vector<FrameBox> frame2{box(3, 0, 50, view(0.9)), box(5, 100, 50, view(0.4)),
+                                     box(9, 200, 50, view(0.95)), box(11, 300, 50, view(0.5))};
   const auto labels = labelFrameBoxes(frame2, t, 3, FusionOptions{});
   ASSERT_EQ(labels.size(), 4u);
   // Candidate 3: views 0.8, 0.1, 0.1 -> mean 1/3; candidate 5: 0.8, 0.6 -> 0.7; their object: 0.1,
@@ -79,7 +81,8 @@ TEST(FrameLabels, TheWeightIsTheBoxsViewWithItsCandidatesAndItsObjectsViews) {
   for (const auto& l : labels) {
     // The score: the posterior times the weight for each object class, the background the rest.
     EXPECT_NEAR(l.log_score[1], l.log_posterior[1] + l.log_weight[1], 1e-9);
-    EXPECT_NEAR(std::exp(l.log_score[0]) + std::exp(l.log_score[1]) + std::exp(l.log_score[2]), 1.0, 1e-9);
+    EXPECT_NEAR(std::exp(l.log_score[0]) + std::exp(l.log_score[1]) + std::exp(l.log_score[2]), 1.0,
+                1e-9);
     EXPECT_NE(l.role, BoxRole::kDuplicate);
   }
   EXPECT_LT(labels[2].log_score[1], labels[1].log_score[1])
@@ -95,7 +98,8 @@ TEST(FrameLabels, DuplicatesOfAnObjectInAFrameAreDemotedByTheirShareInsideItsBox
   for (int32_t c : {1, 2, 3, 4})
     for (int v = 0; v < 3; ++v) t.addVotes(c, voxels(0, 20), vo);
   for (int v = 0; v < 3; ++v) t.addVotes(7, voxels(50, 70), vo);
-  const std::vector<float> shifted = view(0.6), whole = view(0.1), beside = view(0.7), side = view(0.3);
+  const std::vector<float> shifted = view(0.6), whole = view(0.1), beside = view(0.7),
+                           side = view(0.3);
   t.addView(1, View{0, 0, 2500, shifted});
   t.addView(2, View{0, 0, 2500, whole});
   t.addView(3, View{0, 0, 1000, beside});
@@ -104,20 +108,27 @@ TEST(FrameLabels, DuplicatesOfAnObjectInAFrameAreDemotedByTheirShareInsideItsBox
   int32_t next = 1;
   t.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
   ASSERT_EQ(t.objectOfCandidate(1), t.objectOfCandidate(4));
-  auto at = [](int32_t c, double x, double w, const std::vector<float>& p) { return box(c, x, w, p); };
-  const std::vector<FrameBox> frame{at(1, 105, 50, shifted), at(2, 100, 50, whole), at(3, 150, 20, beside),
-                                    at(7, 100, 50, view(0.9)), at(4, 110, 10, side)};
+  auto at = [](int32_t c, double x, double w, const std::vector<float>& p) {
+    return box(c, x, w, p);
+  };
+  const std::vector<FrameBox> frame{at(1, 105, 50, shifted), at(2, 100, 50, whole),
+                                    at(3, 150, 20, beside), at(7, 100, 50, view(0.9)),
+                                    at(4, 110, 10, side)};
   const auto l = labelFrameBoxes(frame, t, 3, FusionOptions{});
   EXPECT_EQ(l[1].role, BoxRole::kPrimary) << "the most object-like box of the object";
   EXPECT_EQ(l[3].role, BoxRole::kPrimary) << "another object's box";
   EXPECT_EQ(l[0].role, BoxRole::kDuplicate);
-  EXPECT_EQ(l[4].role, BoxRole::kDuplicate) << "wholly inside the primary box: a duplicate, whatever its IoU (0.2)";
+  EXPECT_EQ(l[4].role, BoxRole::kDuplicate)
+      << "wholly inside the primary box: a duplicate, whatever its IoU (0.2)";
   EXPECT_EQ(l[2].role, BoxRole::kPart) << "beside the primary box";
   const double share = 45.0 * 50 / 2500;  // 90 % of the shifted box lies inside the whole one
   const auto undemoted = labelFrameBoxes({frame[0]}, t, 3, FusionOptions{});
-  EXPECT_NEAR(l[0].log_weight[1], undemoted[0].log_weight[1] - share * share / kDuplicateSigma, 1e-9);
-  EXPECT_NEAR(l[4].log_weight[1], labelFrameBoxes({frame[4]}, t, 3, FusionOptions{})[0].log_weight[1] - 1 / kDuplicateSigma,
+  EXPECT_NEAR(l[0].log_weight[1], undemoted[0].log_weight[1] - share * share / kDuplicateSigma,
               1e-9);
+  EXPECT_NEAR(
+      l[4].log_weight[1],
+      labelFrameBoxes({frame[4]}, t, 3, FusionOptions{})[0].log_weight[1] - 1 / kDuplicateSigma,
+      1e-9);
   EXPECT_EQ(l[2].log_weight, labelFrameBoxes({frame[2]}, t, 3, FusionOptions{})[0].log_weight);
   EXPECT_EQ(l[0].label, l[1].label) << "a duplicate keeps its object's label";
   EXPECT_LT(l[4].log_score[1], l[1].log_score[1] - 5);

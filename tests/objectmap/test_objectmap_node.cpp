@@ -4,9 +4,8 @@
 // over two replays, with saves going on.
 #include <gtest/gtest.h>
 
-#include <csignal>
-
 #include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -31,11 +30,12 @@ using namespace std::chrono_literals;
 
 namespace {
 
-std::string writeConfig(const std::string& dir, double save_period_s, double regroup_period_s = 0.5) {
+std::string writeConfig(const std::string& dir, double save_period_s,
+                        double regroup_period_s = 0.5) {
   const std::string path = dir + "/objectmap.yaml";
   std::ofstream f(path);
-  f << "objectmap:\n  regroup_period_s: " << regroup_period_s << "\n  persistence:\n    dir: " << dir
-    << "/map\n    save_period_s: " << save_period_s << "\n";
+  f << "objectmap:\n  regroup_period_s: " << regroup_period_s
+    << "\n  persistence:\n    dir: " << dir << "/map\n    save_period_s: " << save_period_s << "\n";
   return path;
 }
 
@@ -61,8 +61,8 @@ struct Client {
   std::optional<status_t> status;
   Client() {
     bus.subscribe<object_map_t>("OBJECT_MAP", [this](const object_map_t& m) { maps.push_back(m); });
-    bus.subscribe<object_detections_t>("OBJECT_DETECTIONS",
-                                       [this](const object_detections_t& m) { frames.push_back(m); });
+    bus.subscribe<object_detections_t>(
+        "OBJECT_DETECTIONS", [this](const object_detections_t& m) { frames.push_back(m); });
     bus.subscribe<object_query_reply_t>(
         "OBJECT_QUERY_REPLY", [this](const object_query_reply_t& r) { replies[r.request_id] = r; });
     bus.subscribe<status_t>("OBJECTMAP_STATUS", [this](const status_t& s) { status = s; });
@@ -243,12 +243,14 @@ TEST(ObjectMapNode, AUserLabelIsSavedAtOnceAndSurvivesASigkill) {
   Client c;
   const std::string config = writeConfig(dir, 60);
   auto node = std::make_unique<test::ChildProcess>(
-      std::vector<std::string>{test::binPath("slamaware-objectmap"), "--config", config, "--lcm-url", test::testUrl()},
+      std::vector<std::string>{test::binPath("slamaware-objectmap"), "--config", config,
+                               "--lcm-url", test::testUrl()},
       dir + "/node.log");
   ASSERT_TRUE(c.waitRunning()) << node->log();
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
   c.sendFrames(w, 30);
-  ASSERT_TRUE(c.pump([&] { return !c.maps.empty() && c.maps.back().num_objects == 3; }, 10s)) << node->log();
+  ASSERT_TRUE(c.pump([&] { return !c.maps.empty() && c.maps.back().num_objects == 3; }, 10s))
+      << node->log();
   object_query_t q = query(object_query_t::KIND_BY_LABEL);
   q.label = "coffee_mug";
   auto r = c.ask(q);
@@ -273,16 +275,22 @@ TEST(ObjectMapNode, AUserLabelIsSavedAtOnceAndSurvivesASigkill) {
   node->signal(SIGKILL);
   node->wait(5s);
   node = std::make_unique<test::ChildProcess>(
-      std::vector<std::string>{test::binPath("slamaware-objectmap"), "--config", config, "--lcm-url", test::testUrl()},
+      std::vector<std::string>{test::binPath("slamaware-objectmap"), "--config", config,
+                               "--lcm-url", test::testUrl()},
       dir + "/node2.log");
   c.status.reset();
-  ASSERT_TRUE(c.pump([&] { return c.status && c.status->pid == node->pid() && c.status->state == status_t::STATE_RUNNING; },
-                     10s))
+  ASSERT_TRUE(c.pump(
+      [&] {
+        return c.status && c.status->pid == node->pid() &&
+               c.status->state == status_t::STATE_RUNNING;
+      },
+      10s))
       << node->log();
   r = c.ask(query(object_query_t::KIND_ALL));
   ASSERT_TRUE(r) << node->log();
   ASSERT_EQ(r->num_objects, 3);
-  for (const auto& o : r->objects) EXPECT_EQ(o.user_label, o.id == mug ? "my_mug" : "") << "object " << o.id;
+  for (const auto& o : r->objects)
+    EXPECT_EQ(o.user_label, o.id == mug ? "my_mug" : "") << "object " << o.id;
 
   q = query(object_query_t::KIND_UNLABEL);
   q.object_id = mug;
@@ -296,7 +304,9 @@ TEST(ObjectMapNode, AUserLabelIsSavedAtOnceAndSurvivesASigkill) {
   ASSERT_TRUE(r && r->error.empty()) << (r ? r->error : "no reply");
   EXPECT_EQ(node->stop(), 0) << node->log();
 
-  out = run(test::binPath("slamaware-objectmap") + " --config " + config + " --export " + dir + "/export", &rc);
+  out = run(
+      test::binPath("slamaware-objectmap") + " --config " + config + " --export " + dir + "/export",
+      &rc);
   ASSERT_EQ(rc, 0) << out;
   std::ifstream f(dir + "/export/objects.json");
   const std::string table((std::istreambuf_iterator<char>(f)), {});
@@ -310,18 +320,20 @@ TEST(ObjectMapNode, AUserLabelIsSavedAtOnceAndSurvivesASigkill) {
 TEST(ObjectMapNode, RealTimeRegroupsAtMostEveryPeriodAndAQueryFirst) {
   const std::string dir = test::tempDir("objectmap_node_regroup");
   Client c;
-  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config", writeConfig(dir, 60, 60),
-                           "--lcm-url", test::testUrl()},
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config",
+                           writeConfig(dir, 60, 60), "--lcm-url", test::testUrl()},
                           dir + "/node.log");
   ASSERT_TRUE(c.waitRunning()) << node.log();
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
   c.sendFrames(w, 30);
-  ASSERT_TRUE(c.pump([&] { return c.status && c.status->frames_processed >= 30; }, 10s)) << node.log();
+  ASSERT_TRUE(c.pump([&] { return c.status && c.status->frames_processed >= 30; }, 10s))
+      << node.log();
   auto r = c.ask(query(object_query_t::KIND_ALL));
   ASSERT_TRUE(r) << "no reply\n" << node.log();
   ASSERT_EQ(r->num_objects, 3) << node.log();
   for (const auto& o : r->objects) EXPECT_EQ(o.num_views, 30) << o.label;
-  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "regroupings") >= 1; }, 5s)) << node.log();
+  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "regroupings") >= 1; }, 5s))
+      << node.log();
   EXPECT_LE(counter(*c.status, "regroupings"), 3) << "regrouped more often than once per period";
   EXPECT_TRUE(node.running()) << node.log();
 }
@@ -334,14 +346,16 @@ TEST(ObjectMapNode, TheHeartbeatGoesOnWhileALargeCloudIsInserted) {
   const std::string dir = test::tempDir("objectmap_node_heartbeat");
   {
     std::ofstream f(dir + "/objectmap.yaml");
-    f << "objectmap:\n  occupancy:\n    free_band: 0\n    max_range: 0\n  persistence:\n    dir: " << dir
-      << "/map\n    save_period_s: 600\n";
+    f << "objectmap:\n  occupancy:\n    free_band: 0\n    max_range: 0\n  persistence:\n    dir: "
+      << dir << "/map\n    save_period_s: 600\n";
   }
   Client c;
   std::vector<std::chrono::steady_clock::time_point> beats;
-  c.bus.subscribeRaw("OBJECTMAP_STATUS", [&](const Bus::RawMessage&) { beats.push_back(std::chrono::steady_clock::now()); });
-  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config", dir + "/objectmap.yaml",
-                           "--lcm-url", test::testUrl()},
+  c.bus.subscribeRaw("OBJECTMAP_STATUS", [&](const Bus::RawMessage&) {
+    beats.push_back(std::chrono::steady_clock::now());
+  });
+  test::ChildProcess node({test::binPath("slamaware-objectmap"), "--config",
+                           dir + "/objectmap.yaml", "--lcm-url", test::testUrl()},
                           dir + "/node.log");
   ASSERT_TRUE(c.waitRunning()) << node.log();
   test::SyntheticWorldOptions o;
@@ -355,18 +369,21 @@ TEST(ObjectMapNode, TheHeartbeatGoesOnWhileALargeCloudIsInserted) {
   beats.clear();
   const auto sent = std::chrono::steady_clock::now();
   c.bus.publish("SLAM_MAP", cloud);
-  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "clouds") >= 1; }, 120s)) << node.log();
-  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
-  ASSERT_GT(took, 3.0) << "the cloud must take longer than the heartbeat period several times over ("
-                       << cloud.num_points << " points)";
+  ASSERT_TRUE(c.pump([&] { return c.status && counter(*c.status, "clouds") >= 1; }, 120s))
+      << node.log();
+  const double took =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+  ASSERT_GT(took, 3.0)
+      << "the cloud must take longer than the heartbeat period several times over ("
+      << cloud.num_points << " points)";
   double longest = 0;
   auto previous = sent;
   for (const auto& b : beats) {
     longest = std::max(longest, std::chrono::duration<double>(b - previous).count());
     previous = b;
   }
-  EXPECT_LT(longest, 2.5) << "no heartbeat for " << longest << " s while a cloud of " << cloud.num_points
-                          << " points took " << took << " s";
+  EXPECT_LT(longest, 2.5) << "no heartbeat for " << longest << " s while a cloud of "
+                          << cloud.num_points << " points took " << took << " s";
   EXPECT_TRUE(node.running()) << node.log();
 }
 
@@ -439,8 +456,12 @@ std::vector<object_map_t> playLockstep(const std::string& dir, int frames,
                                        std::vector<object_detections_t>* labelled = nullptr,
                                        bool flood = false, int64_t* flooded = nullptr) {
   Client c;
-  std::vector<std::string> argv = {test::binPath("slamaware-objectmap"), "--config", writeConfig(dir, 0.005),
-                                   "--lcm-url", test::testUrl(), "--lockstep"};
+  std::vector<std::string> argv = {test::binPath("slamaware-objectmap"),
+                                   "--config",
+                                   writeConfig(dir, 0.005),
+                                   "--lcm-url",
+                                   test::testUrl(),
+                                   "--lockstep"};
   if (flood) {
     std::ofstream(dir + "/system.yaml") << "bus:\n  max_message_bytes: 65536\n";
     argv.insert(argv.end(), {"--system", dir + "/system.yaml"});
@@ -460,10 +481,11 @@ std::vector<object_map_t> playLockstep(const std::string& dir, int frames,
       std::vector<uint8_t> huge = good;                 // num_classes = 2^31 - 1
       huge[24] = 0x7f, huge[25] = huge[26] = huge[27] = 0xff;
       junk.push_back(huge);
-      junk.emplace_back(300, 0xA5);                     // random-looking
-      junk.push_back(encode(status_t{}));               // a type no input carries
-      junk.emplace_back(size_t{100} << 10, 0);          // over the size cap (64 kB here)
-      const std::vector<std::string> inputs = {"CAMERA_INFO", "SLAM_MAP", "SLAM_POSE", "PROPOSALS", "DETECTIONS"};
+      junk.emplace_back(300, 0xA5);             // random-looking
+      junk.push_back(encode(status_t{}));       // a type no input carries
+      junk.emplace_back(size_t{100} << 10, 0);  // over the size cap (64 kB here)
+      const std::vector<std::string> inputs = {"CAMERA_INFO", "SLAM_MAP", "SLAM_POSE", "PROPOSALS",
+                                               "DETECTIONS"};
       size_t i = 0;
       while (!stop) {
         for (int burst = 0; burst < 5; ++burst, ++i) {
@@ -516,8 +538,10 @@ TEST(ObjectMapNode, LockstepAnswersEachDetectionsOnceWithTheSameBytesEveryReplay
   std::vector<object_detections_t> labelled_a, labelled_b;
   const auto first = playLockstep(dir_a, frames, &labelled_a);
   ASSERT_EQ(first.size(), static_cast<size_t>(frames)) << "exactly one OBJECT_MAP per DETECTIONS";
-  ASSERT_EQ(labelled_a.size(), static_cast<size_t>(frames)) << "exactly one OBJECT_DETECTIONS per DETECTIONS";
-  for (int f = 0; f < frames; ++f) EXPECT_EQ(labelled_a[static_cast<size_t>(f)].seq, f) << "in order";
+  ASSERT_EQ(labelled_a.size(), static_cast<size_t>(frames))
+      << "exactly one OBJECT_DETECTIONS per DETECTIONS";
+  for (int f = 0; f < frames; ++f)
+    EXPECT_EQ(labelled_a[static_cast<size_t>(f)].seq, f) << "in order";
   EXPECT_EQ(labelled_a[5].num_boxes, 0);
   EXPECT_GT(labelled_a[7].num_boxes, 0) << "refused detections are answered with their boxes";
   for (int f = 0; f < frames; ++f) {
@@ -547,14 +571,16 @@ TEST(ObjectMapNode, AFloodOfMalformedMessagesNeitherStarvesNorChangesTheLockstep
   const auto noisy = playLockstep(dir, frames, &flooded_frames, true, &flooded);
   EXPECT_GT(flooded, 1000) << "the flood ran during the whole replay";
   ASSERT_EQ(noisy.size(), quiet.size()) << "every real input was answered in spite of the flood";
-  for (size_t i = 0; i < quiet.size(); ++i) EXPECT_EQ(encode(noisy[i]), encode(quiet[i])) << "OBJECT_MAP " << i;
+  for (size_t i = 0; i < quiet.size(); ++i)
+    EXPECT_EQ(encode(noisy[i]), encode(quiet[i])) << "OBJECT_MAP " << i;
   ASSERT_EQ(flooded_frames.size(), quiet_frames.size());
   for (size_t i = 0; i < quiet_frames.size(); ++i)
     EXPECT_EQ(encode(flooded_frames[i]), encode(quiet_frames[i])) << "OBJECT_DETECTIONS " << i;
   // The log names the problem, but at most once per channel per period, not once per message.
   std::ifstream log(dir + "/node.log");
   int lines = 0;
-  for (std::string line; std::getline(log, line);) lines += line.find("rejected message") != std::string::npos;
+  for (std::string line; std::getline(log, line);)
+    lines += line.find("rejected message") != std::string::npos;
   EXPECT_GE(lines, 1);
   EXPECT_LE(lines, 40) << "a flood must not flood the log";
 }

@@ -8,11 +8,11 @@
 
 #include <chrono>
 #include <cstring>
-#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <optional>
 #include <random>
 
@@ -403,12 +403,14 @@ TEST(MapFiles, ExportWritesTheNewestGoodMapAsMapOtAndAnObjectTable) {
       {test::binPath("slamaware-objectmap"), "--map-dir", dir + "/map", "--export", dir + "/out"},
       dir + "/export.log");
   ASSERT_EQ(exporter.wait(60s), 0) << exporter.log();
-  EXPECT_NE(exporter.log().find(damaged.json_path), std::string::npos) << "the refused file is named";
+  EXPECT_NE(exporter.log().find(damaged.json_path), std::string::npos)
+      << "the refused file is named";
   const std::string ot = readBytes(good.segment_paths.at(1));
   EXPECT_EQ(readBytes(dir + "/out/map.ot"), ot);
   const auto table = nlohmann::json::parse(readBytes(dir + "/out/objects.json"));
   EXPECT_EQ(table.at("source").get<std::string>(), good.json_path);
-  EXPECT_EQ(table.at("classes").get<std::vector<std::string>>(), test::SyntheticWorld::classNames());
+  EXPECT_EQ(table.at("classes").get<std::vector<std::string>>(),
+            test::SyntheticWorld::classNames());
   const Loaded loaded = loadFolder(dir + "/map");
   ASSERT_TRUE(loaded.engine);
   const object_map_t want = loaded.engine->objectMap();
@@ -422,9 +424,9 @@ TEST(MapFiles, ExportWritesTheNewestGoodMapAsMapOtAndAnObjectTable) {
   }
 
   // Nothing to export: a clear error, not an empty file.
-  test::ChildProcess empty({test::binPath("slamaware-objectmap"), "--map-dir", dir + "/none", "--export",
-                            dir + "/out2"},
-                           dir + "/export2.log");
+  test::ChildProcess empty(
+      {test::binPath("slamaware-objectmap"), "--map-dir", dir + "/none", "--export", dir + "/out2"},
+      dir + "/export2.log");
   EXPECT_EQ(empty.wait(60s), 1);
   EXPECT_NE(empty.log().find("no usable map to export"), std::string::npos) << empty.log();
   EXPECT_FALSE(fs::exists(dir + "/out2/map.ot"));
@@ -455,8 +457,10 @@ TEST(MapFiles, DamagedTreeBytesBehindAGoodChecksumAreRefusedQuickly) {
     return error;
   };
   std::string children_past_end = good;
-  children_past_end.back() = static_cast<char>(0xFF);  // the last leaf (depth 16) asks for 8 children
-  EXPECT_NE(errorOf(children_past_end).find("seg1.ot: not a valid OctoMap file: a node below the deepest level"),
+  children_past_end.back() =
+      static_cast<char>(0xFF);  // the last leaf (depth 16) asks for 8 children
+  EXPECT_NE(errorOf(children_past_end)
+                .find("seg1.ot: not a valid OctoMap file: a node below the deepest level"),
             std::string::npos)
       << errorOf(children_past_end);
   std::string root_asks_more = good;
@@ -465,7 +469,8 @@ TEST(MapFiles, DamagedTreeBytesBehindAGoodChecksumAreRefusedQuickly) {
   std::string first_leaf_deep = good;  // every node a chain of first children: deeper than 16
   for (size_t at = data + 7; at < first_leaf_deep.size(); at += 8) first_leaf_deep[at] = 1;
   EXPECT_NE(errorOf(first_leaf_deep).find("seg1.ot"), std::string::npos);
-  EXPECT_NE(errorOf(good.substr(0, good.size() - 3)).find("the data end inside node"), std::string::npos);
+  EXPECT_NE(errorOf(good.substr(0, good.size() - 3)).find("the data end inside node"),
+            std::string::npos);
   EXPECT_NE(errorOf(good + "xy").find("bytes after the last node"), std::string::npos);
   std::string nan_node = good;
   const float nan = std::numeric_limits<float>::quiet_NaN();

@@ -123,8 +123,10 @@ TEST(Fusion, ObjectnessWeightsLetViewsOfTheWholeObjectDecide) {
   for (int i = 0; i < 6; ++i) views.push_back(logs({0.02, 0.18, 0.8}));
   std::vector<const std::vector<float>*> ptrs;
   for (const auto& v : views) ptrs.push_back(&v);
-  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3)), 2) << "plain: the poor views win (background)";
-  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3, true)), 0) << "weighted: the whole-object views win";
+  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3)), 2)
+      << "plain: the poor views win (background)";
+  EXPECT_EQ(argmaxClass(sumLogProbabilities(ptrs, 3, true)), 0)
+      << "weighted: the whole-object views win";
   const auto one = sumLogProbabilities({ptrs.back()}, 3, true);
   EXPECT_NEAR(one[1], 0.2 * std::log(0.18), 1e-6);
   // Views that all say background keep background.
@@ -282,7 +284,8 @@ TEST(Occupancy, AnEmptyMapSerializesAndReadsBack) {
   EXPECT_FALSE(bytes.empty());
   const OccupancyMap back = OccupancyMap::deserialize(bytes, o, "empty");
   EXPECT_TRUE(back.occupied().empty());
-  // The engine: a pose in a map that never sent a cloud makes an empty segment; a snapshot saves it.
+  // The engine: a pose in a map that never sent a cloud makes an empty segment; a snapshot saves
+  // it.
   ObjectMapEngine e(ObjectMapOptions{});
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
   std::string why;
@@ -358,7 +361,8 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
   half.merge_size_ratio = 0.5;
   ObjectTable t(0.01);
   // Candidate 1: voxels 0..19, candidate 2: voxels 10..29 (the shared 10..19 are half of each).
-  for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
+  for (int v = 0; v < 3; ++v)
+    t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
   // A voxel voted once in three views is below the share and min_votes: not the candidate's.
   t.addVotes(1, lineOfVoxels(100, 101), vo);
   t.addView(1, View{100, 1, 50, logs({0.7, 0.2, 0.1})});
@@ -425,7 +429,8 @@ TEST(ObjectTable, AUserLabelStaysWithTheCandidatesThroughSplitsAndMerges) {
   half.merge_overlap = 0.5;
   half.merge_size_ratio = 0.5;
   ObjectTable t(0.01);
-  for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
+  for (int v = 0; v < 3; ++v)
+    t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
   t.addView(1, View{100, 1, 50, logs({0.7, 0.2, 0.1})});
   t.addView(2, View{200, 2, 80, logs({0.1, 0.8, 0.1})});
   int32_t next = 7;
@@ -458,7 +463,8 @@ TEST(ObjectTable, AUserLabelStaysWithTheCandidatesThroughSplitsAndMerges) {
 TEST(ObjectTable, AFrameBoxedByTwoCandidatesCountsTheMostObjectLikeBox) {
   VotingOptions vo;
   ObjectTable t(0.01);
-  for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(0, 20), vo);
+  for (int v = 0; v < 3; ++v)
+    t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(0, 20), vo);
   // Classes: can, mug, background.
   t.addView(1, View{100, 1, 50, logs({0.8, 0.1, 0.1})});   // the can alone
   t.addView(2, View{100, 1, 120, logs({0.3, 0.3, 0.4})});  // the can and the mug: larger, less sure
@@ -535,7 +541,8 @@ TEST(ObjectTable, APartCalledLikeTheWholeItLiesInIsMergedIntoIt) {
   const Object& mug = *by_group.at({1, 2, 5});
   EXPECT_EQ(mug.label, 0);
   EXPECT_EQ(mug.num_views, 4);
-  EXPECT_NEAR(mug.log_evidence[0], std::log(0.8) + std::log(0.7) + std::log(0.6) + std::log(0.6), 1e-5);
+  EXPECT_NEAR(mug.log_evidence[0], std::log(0.8) + std::log(0.7) + std::log(0.6) + std::log(0.6),
+              1e-5);
   EXPECT_EQ(mug.num_voxels, 100);
 
   GroupingOptions off;
@@ -642,7 +649,8 @@ TEST(ObjectMapEngine, ADeferredRegroupingGivesTheObjectsOfRegroupingEveryFrame) 
   EXPECT_EQ(deferred.regroupings(), before + 1);
   EXPECT_EQ(deferred.objectMap().num_objects, 3);
   feed(deferred, w, 1, 20, 40);
-  EXPECT_EQ(deferred.objectMap().objects.at(0).num_views, 20) << "views since the regrouping not shown yet";
+  EXPECT_EQ(deferred.objectMap().objects.at(0).num_views, 20)
+      << "views since the regrouping not shown yet";
   deferred.regroup();
 
   const auto summary = [](const ObjectMapEngine& e) {
@@ -809,7 +817,7 @@ TEST(ObjectMapEngine, ARepublishedKeyframeInsertsOnlyItsNewPoints) {
   ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;  // the full cloud held them all
   EXPECT_EQ(r.repeated, static_cast<size_t>(n));
   ASSERT_TRUE(e.onMap(firstPoints(full), &why, &r)) << why;  // a full cloud of the first points
-  ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;                // then the rest are new again
+  ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;              // then the rest are new again
   EXPECT_EQ(r.repeated, static_cast<size_t>(k));
   EXPECT_EQ(r.insert.points + r.insert.dropped, static_cast<size_t>(n - k));
 }
@@ -844,6 +852,7 @@ TEST(ObjectMapConfig, ShippedYamlEqualsDefaults) {
       loadConfig<ObjectMapOptions>(test::sourcePath("config/objectmap.yaml"), "objectmap", false);
   ObjectMapOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
-  EXPECT_EQ(test::readTextFile(test::sourcePath("config/objectmap.yaml")), defaultConfigFileText<ObjectMapOptions>("objectmap"))
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/objectmap.yaml")),
+            defaultConfigFileText<ObjectMapOptions>("objectmap"))
       << "config/objectmap.yaml is generated from the built-in defaults: make configs";
 }

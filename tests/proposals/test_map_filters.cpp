@@ -32,12 +32,15 @@ View viewOf(const SE3& T_world_camera) {
   return {T_world_camera.translation().cast<float>(), R.col(2), R.col(0), -R.col(1)};
 }
 
-// Cameras on a circle of `radius` at `height`, every `step_deg` over `arc_deg`, looking at `target`.
-std::vector<SE3> circle(double radius, double height, double arc_deg, double step_deg, const Eigen::Vector3d& target) {
+// Cameras on a circle of `radius` at `height`, every `step_deg` over `arc_deg`, looking at
+// `target`.
+std::vector<SE3> circle(double radius, double height, double arc_deg, double step_deg,
+                        const Eigen::Vector3d& target) {
   std::vector<SE3> out;
   for (double a = 0; a <= arc_deg + 1e-9; a += step_deg) {
     const double r = a * M_PI / 180;
-    out.push_back(lookAt(Eigen::Vector3d(radius * std::cos(r), radius * std::sin(r), height), target));
+    out.push_back(
+        lookAt(Eigen::Vector3d(radius * std::cos(r), radius * std::sin(r), height), target));
   }
   return out;
 }
@@ -61,7 +64,8 @@ TEST(DensityClustering, StrayPointsBetweenObjectsDoNotBridgeThem) {
   std::uniform_real_distribution<float> u(-0.02f, 0.02f);
   for (float cx : {-0.1f, 0.1f})
     for (int i = 0; i < 400; ++i) points.emplace_back(cx + u(rng), u(rng), u(rng));
-  for (float x = -0.1f; x <= 0.1f; x += 0.006f) points.emplace_back(x, 0, 0);  // the bridge, into both
+  for (float x = -0.1f; x <= 0.1f; x += 0.006f)
+    points.emplace_back(x, 0, 0);  // the bridge, into both
   // Whether some cluster holds points of both objects.
   auto joined = [&](const std::vector<int>& label, int count) {
     std::vector<std::array<bool, 2>> sides(static_cast<size_t>(count), {false, false});
@@ -166,7 +170,8 @@ TEST(DensityClustering, EqualsDbscanByDefinition) {
 TEST(ViewPriors, UpAndLookAtFromCamerasCirclingATable) {
   const Eigen::Vector3d table_centre(0.1, -0.05, 0.74);
   std::vector<View> views;
-  for (const SE3& T : circle(0.6, 1.6, 150, 10, table_centre)) views.push_back(viewOf(T));  // ~55 deg down
+  for (const SE3& T : circle(0.6, 1.6, 150, 10, table_centre))
+    views.push_back(viewOf(T));  // ~55 deg down
   const ViewPriors p = viewPriors(views);
   ASSERT_TRUE(p.up_known);
   EXPECT_GT(p.up.dot(Eigen::Vector3f::UnitZ()), std::cos(1.0 * M_PI / 180));
@@ -186,13 +191,15 @@ TEST(SceneStructure, TheSupportIsThePlaneTheViewsLookAt) {
   const auto floor = horizontalPatch(-1.5f, 1.5f, -1.5f, 1.5f, 0, 0.01f);  // 90k points
   std::vector<MapPoint> wall;
   for (float y = -1.5f; y <= 1.5f; y += 0.01f)
-    for (float z = 0; z <= 1.5f; z += 0.01f) wall.push_back({Eigen::Vector3f(2.1f, y, z), 90, 90, 90});
+    for (float z = 0; z <= 1.5f; z += 0.01f)
+      wall.push_back({Eigen::Vector3f(2.1f, y, z), 90, 90, 90});
   const auto table = horizontalPatch(-0.6f, 0.6f, -0.4f, 0.4f, 0.74f, 0.01f);  // 9.7k points
   auto object = cylinder(0.1f, 0.05f, 0.04f, 0.12f, 0.004f);
   for (auto& m : object) m.p.z() += 0.74f;
   const auto points = join(join(floor, wall), join(table, object));
   std::vector<View> views;
-  for (const SE3& T : circle(1.0, 1.3, 300, 10, Eigen::Vector3d(0, 0, 0.74))) views.push_back(viewOf(T));
+  for (const SE3& T : circle(1.0, 1.3, 300, 10, Eigen::Vector3d(0, 0, 0.74)))
+    views.push_back(viewOf(T));
   const StructureResult r = removeStructure(points, views, viewPriors(views), o);
   const Support& support = r.support;
   const std::vector<MapPoint>& rest = r.kept;
@@ -200,11 +207,13 @@ TEST(SceneStructure, TheSupportIsThePlaneTheViewsLookAt) {
   EXPECT_GT(support.plane.n.dot(Eigen::Vector3f::UnitZ()), 0.999f);
   EXPECT_NEAR(-support.plane.d, 0.74f, 0.005f) << "the support is not the table top";
   EXPECT_TRUE(support.over(Eigen::Vector3f(0.1f, 0.05f, 0.8f), 0.0f));
-  EXPECT_FALSE(support.over(Eigen::Vector3f(1.5f, 1.5f, 0.8f), 0.05f)) << "the support region spills over the floor";
+  EXPECT_FALSE(support.over(Eigen::Vector3f(1.5f, 1.5f, 0.8f), 0.05f))
+      << "the support region spills over the floor";
   size_t on_wall = 0, on_table = 0, of_object = 0;
   for (const auto& m : rest) {
     on_wall += m.p.x() > 2.05f;
-    on_table += std::abs(m.p.z() - 0.74f) < 0.002f && (m.p.head<2>() - Eigen::Vector2f(0.1f, 0.05f)).norm() > 0.05f;
+    on_table += std::abs(m.p.z() - 0.74f) < 0.002f &&
+                (m.p.head<2>() - Eigen::Vector2f(0.1f, 0.05f)).norm() > 0.05f;
     of_object += m.p.z() > 0.75f && (m.p.head<2>() - Eigen::Vector2f(0.1f, 0.05f)).norm() < 0.05f;
   }
   EXPECT_LT(on_wall, wall.size() / 20);
@@ -221,13 +230,16 @@ TEST(SceneStructure, ASparseTableOfAYoungMapIsTheSupport) {
   std::uniform_real_distribution<float> ux(-0.6f, 0.6f), uy(-0.4f, 0.4f), noise(-0.002f, 0.002f);
   std::vector<MapPoint> table;
   const ProposalOptions o = metricOptions();
-  const int points = static_cast<int>(1.2 * 0.8 / (o.structure_cell * o.structure_cell));  // one per cell
-  for (int i = 0; i < points; ++i) table.push_back({Eigen::Vector3f(ux(rng), uy(rng), 0.74f + noise(rng)), 90, 90, 90});
+  const int points =
+      static_cast<int>(1.2 * 0.8 / (o.structure_cell * o.structure_cell));  // one per cell
+  for (int i = 0; i < points; ++i)
+    table.push_back({Eigen::Vector3f(ux(rng), uy(rng), 0.74f + noise(rng)), 90, 90, 90});
   auto object = cylinder(0.1f, 0.05f, 0.04f, 0.12f, 0.004f);
   for (auto& m : object) m.p.z() += 0.74f;
   const auto all = join(table, object);
   std::vector<View> views;
-  for (const SE3& T : circle(1.0, 1.3, 4, 1, Eigen::Vector3d(0, 0, 0.74))) views.push_back(viewOf(T));
+  for (const SE3& T : circle(1.0, 1.3, 4, 1, Eigen::Vector3d(0, 0, 0.74)))
+    views.push_back(viewOf(T));
   const ViewPriors priors = viewPriors(views);
   ASSERT_FALSE(priors.up_known);
   ASSERT_FALSE(priors.has_look_at);
@@ -238,11 +250,13 @@ TEST(SceneStructure, ASparseTableOfAYoungMapIsTheSupport) {
     const std::vector<MapPoint>& rest = r.kept;
     *has_support = r.has_support;
     if (*has_support) {
-      EXPECT_NEAR(-support.plane.d / support.plane.n.z(), 0.74f, 0.005f) << "the support is not the table top";
+      EXPECT_NEAR(-support.plane.d / support.plane.n.z(), 0.74f, 0.005f)
+          << "the support is not the table top";
     }
     size_t on_table = 0, of_object = 0;
     for (const auto& m : rest) {
-      on_table += std::abs(m.p.z() - 0.74f) < 0.003f && (m.p.head<2>() - Eigen::Vector2f(0.1f, 0.05f)).norm() > 0.05f;
+      on_table += std::abs(m.p.z() - 0.74f) < 0.003f &&
+                  (m.p.head<2>() - Eigen::Vector2f(0.1f, 0.05f)).norm() > 0.05f;
       of_object += m.p.z() > 0.75f;
     }
     EXPECT_GT(of_object, object.size() * 8 / 10);
@@ -266,7 +280,8 @@ TEST(FreeSpace, PointsThatKeyframesSawThroughAreRemoved) {
   const auto wall = [] {
     std::vector<MapPoint> w;
     for (float x = -0.5f; x <= 0.5f; x += 0.005f)
-      for (float y = -0.4f; y <= 0.4f; y += 0.005f) w.push_back({Eigen::Vector3f(x, y, 0), 1, 1, 1});
+      for (float y = -0.4f; y <= 0.4f; y += 0.005f)
+        w.push_back({Eigen::Vector3f(x, y, 0), 1, 1, 1});
     return w;
   }();
   for (int k = 0; k < 6; ++k) {
@@ -276,10 +291,11 @@ TEST(FreeSpace, PointsThatKeyframesSawThroughAreRemoved) {
     centres[k] = eye.cast<float>();
     by_keyframe[k] = wall;  // every keyframe seeded the wall
   }
-  std::vector<MapPoint> test = {{Eigen::Vector3f(0.02f, 0.01f, 0.3f), 1, 1, 1},    // floating
-                                {Eigen::Vector3f(-0.1f, 0.05f, 0.6f), 1, 1, 1},    // floating
-                                {Eigen::Vector3f(0.01f, 0.02f, 0.0f), 1, 1, 1},    // on the wall
-                                {Eigen::Vector3f(0.2f, -0.1f, 0.002f), 1, 1, 1}};  // on the wall (noise)
+  std::vector<MapPoint> test = {
+      {Eigen::Vector3f(0.02f, 0.01f, 0.3f), 1, 1, 1},    // floating
+      {Eigen::Vector3f(-0.1f, 0.05f, 0.6f), 1, 1, 1},    // floating
+      {Eigen::Vector3f(0.01f, 0.02f, 0.0f), 1, 1, 1},    // on the wall
+      {Eigen::Vector3f(0.2f, -0.1f, 0.002f), 1, 1, 1}};  // on the wall (noise)
   FreeSpaceOptions o;
   int64_t removed = 0;
   const auto kept = removeSeenThrough(test, by_keyframe, centres, views, o, &removed);
@@ -296,12 +312,14 @@ TEST(CandidateMapFilters, PointsOnlyOneKeyframeSeededAreNoObject) {
   const auto a = cylinder(-0.15f, 0, 0.04f, 0.1f, 0.004f);
   const auto ghost = cylinder(0.15f, 0.1f, 0.03f, 0.08f, 0.004f);
   CandidateMap map(o);
-  for (int k = 0; k < 10; ++k) map.update(1, false, k, {}, join(tab, a));  // table and a: every keyframe
-  map.update(1, false, 10, {}, ghost);                                        // only keyframe 10
+  for (int k = 0; k < 10; ++k)
+    map.update(1, false, k, {}, join(tab, a));  // table and a: every keyframe
+  map.update(1, false, 10, {}, ghost);          // only keyframe 10
   map.addView(1, lookingDown(1.0));
   ASSERT_TRUE(map.recluster());
   EXPECT_GT(map.stats().single_view, static_cast<int64_t>(ghost.size() / 2));
-  for (const auto& c : map.candidates()) EXPECT_LT(c.centroid.x(), 0.0f) << "a candidate where only one keyframe saw something";
+  for (const auto& c : map.candidates())
+    EXPECT_LT(c.centroid.x(), 0.0f) << "a candidate where only one keyframe saw something";
   EXPECT_FALSE(map.candidates().empty());
 }
 
@@ -324,5 +342,6 @@ TEST(ProposalEngineMaps, CandidatesOfAnOlderMapAreKept) {
   ASSERT_EQ(back.num_boxes, first.num_boxes);
   EXPECT_EQ(back.candidate_ids, first.candidate_ids);
   for (int32_t id : other.candidate_ids)
-    for (int32_t id1 : first.candidate_ids) EXPECT_NE(id, id1) << "candidate ids are not unique across maps";
+    for (int32_t id1 : first.candidate_ids)
+      EXPECT_NE(id, id1) << "candidate ids are not unique across maps";
 }

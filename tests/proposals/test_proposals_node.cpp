@@ -7,9 +7,9 @@
 #include <map>
 
 #include "common/bus/bus.h"
+#include "procs/proposals/synthetic_map.h"
 #include "slamaware/proposals_t.hpp"
 #include "slamaware/status_t.hpp"
-#include "procs/proposals/synthetic_map.h"
 #include "tests/support/test_support.h"
 
 using namespace slamaware;
@@ -50,12 +50,13 @@ double columnOf(double x, double depth) { return 319.5 + 500 * x / depth; }
 TEST(ProposalsNode, ProposesObjectsAndSurvivesBadInput) {
   const std::string dir = tempDir("proposals_node");
   Listener l;
-  ChildProcess node({binPath("slamaware-proposals"), "--lcm-url", testUrl(), "--lockstep"}, dir + "/node.log");
+  ChildProcess node({binPath("slamaware-proposals"), "--lcm-url", testUrl(), "--lockstep"},
+                    dir + "/node.log");
   ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
 
   const SE3 T = lookingDown(1.0);
-  const auto scene = join(table(0.8f, 0.004f),
-                          join(cylinder(-0.12f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.12f, 0, 0.04f, 0.1f, 0.004f)));
+  const auto scene = join(table(0.8f, 0.004f), join(cylinder(-0.12f, 0, 0.04f, 0.12f, 0.004f),
+                                                    cylinder(0.12f, 0, 0.04f, 0.1f, 0.004f)));
   l.bus.publish("CAMERA_INFO", vgaInfo());
   l.bus.publish("SLAM_MAP", cloudMessage(1, scene));
   l.bus.publish("SLAM_POSE", poseMessage(0, pose_t::STATE_TRACKING, T));

@@ -4,11 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <thread>
-
 #include <cmath>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "common/config.h"
 #include "procs/proposals/candidate_map.h"
@@ -34,13 +33,15 @@ ProposalOptions metricOptions() {
 std::pair<bool, int> trackedPose(ProposalEngine& engine, int seq, const SE3& T) {
   std::string why;
   bool reclustered = false;
-  const proposals_t m = engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
+  const proposals_t m =
+      engine.onPose(poseMessage(seq, pose_t::STATE_TRACKING, T), &why, &reclustered);
   return {reclustered, m.num_boxes};
 }
 
 // Gives `engine` the camera and a map's first points: they are clustered at once, at the first
 // pose (seq 0, at T), into `boxes` boxes.
-void startWith(ProposalEngine& engine, const std::vector<MapPoint>& first, const SE3& T, int boxes) {
+void startWith(ProposalEngine& engine, const std::vector<MapPoint>& first, const SE3& T,
+               int boxes) {
   std::string why;
   ASSERT_TRUE(engine.onCameraInfo(vgaInfo(), &why)) << why;
   ASSERT_TRUE(engine.onMap(cloudMessage(1, first), &why)) << why;
@@ -70,7 +71,8 @@ std::vector<MapPoint> capBrim(bool right_half) {
   for (float x = -0.1f; x <= 0.1f; x += 0.004f)
     for (float y = -0.1f; y <= 0.1f; y += 0.004f) {
       const float r = std::hypot(x, y);
-      if ((x > 0 || !right_half) && r > 0.042f && r < 0.1f) brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
+      if ((x > 0 || !right_half) && r > 0.042f && r < 0.1f)
+        brim.push_back({Eigen::Vector3f(x, y, 0.004f), 40, 40, 40});
     }
   return brim;
 }
@@ -90,7 +92,8 @@ TEST(ProposalClustering, SeparatesTwoObjectsAtEveryScale) {
     const float gap = 1.5f * r;  // larger than the radius
     const float rad = 0.04f, step = static_cast<float>(base.radius / 2);
     const float left = -rad - gap / 2, right = rad + gap / 2;  // centres: surfaces `gap` apart
-    const auto points = join(cylinder(left, 0, rad, 0.1f, step), cylinder(right, 0, rad, 0.1f, step));
+    const auto points =
+        join(cylinder(left, 0, rad, 0.1f, step), cylinder(right, 0, rad, 0.1f, step));
     const std::vector<Candidate> found = clusterPoints(points, o);
     ASSERT_GE(found.size(), 2u) << "scale " << s;
     std::set<int> seen;
@@ -111,8 +114,8 @@ TEST(ProposalClustering, MergesObjectsCloserThanTheRadius) {
   o.radius = 0.064;
   o.max_extent = 1.0;
   const float rad = 0.04f, gap = 0.01f;
-  const auto points =
-      join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f), cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f));
+  const auto points = join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f),
+                           cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f));
   const std::vector<Candidate> found = clusterPoints(points, o);
   ASSERT_EQ(found.size(), 1u);
   EXPECT_EQ(sidesOf(found[0], 0.0f).size(), 2u);
@@ -145,7 +148,8 @@ TEST(ProposalClustering, TouchingObjectsOfDifferentColoursAreAlsoCandidatesAlone
 // one. With split_share over 0.5 no cluster can have two parts.
 TEST(ProposalClustering, TouchingObjectsJoinedAtACoarserScaleAreTwoParts) {
   const float rad = 0.04f, gap = 0.012f;  // between the radii 0.008 and 0.016
-  const auto points = join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f), cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f));
+  const auto points = join(cylinder(-rad - gap / 2, 0, rad, 0.1f, 0.004f),
+                           cylinder(rad + gap / 2, 0, rad, 0.1f, 0.004f));
   for (const double share : {0.35, 0.6}) {
     ProposalOptions o = metricOptions();
     o.scales = 2;
@@ -171,8 +175,8 @@ TEST(ProposalClustering, TouchingObjectsJoinedAtACoarserScaleAreTwoParts) {
 TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
   ProposalOptions o = metricOptions();
   CandidateMap map(o);
-  const auto points =
-      join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f)));
+  const auto points = join(table(0.8f, 0.004f), join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f),
+                                                     cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f)));
   map.update(1, true, 0, std::vector<int32_t>(points.size(), 0), points);
   ASSERT_TRUE(reclusterFromAbove(map));
   EXPECT_TRUE(map.stats().support);
@@ -183,14 +187,16 @@ TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
     EXPECT_LT(c.max.z(), 0.13f);
     EXPECT_TRUE(c.on_support) << "its box is trimmed as one on a support";
     if (c.min.x() > -0.15f && c.max.x() < -0.05f && c.max.z() > 0.11f && c.min.z() < 0.005f) ++tall;
-    if (c.min.x() > 0.05f && c.max.x() < 0.15f && c.max.z() > 0.07f && c.max.z() < 0.09f && c.min.z() < 0.005f)
+    if (c.min.x() > 0.05f && c.max.x() < 0.15f && c.max.z() > 0.07f && c.max.z() < 0.09f &&
+        c.min.z() < 0.005f)
       ++short_;
   }
   EXPECT_GE(tall, 1);
   EXPECT_GE(short_, 1);
   // The same objects without the table: no support, and candidates that do not stand on one.
   CandidateMap bare(o);
-  const auto objects = join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f));
+  const auto objects =
+      join(cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f), cylinder(0.1f, 0, 0.04f, 0.08f, 0.004f));
   bare.update(1, true, 0, std::vector<int32_t>(objects.size(), 0), objects);
   ASSERT_TRUE(reclusterFromAbove(bare));
   EXPECT_FALSE(bare.stats().support);
@@ -203,7 +209,8 @@ TEST(ProposalClustering, ObjectsOnATableAreCandidates) {
 // than young_map_points points, each is a candidate of its own; a map past that size is not young
 // and keeps min_points.
 TEST(ProposalClustering, AYoungMapsSparseObjectsAreCandidates) {
-  const auto a = cylinder(-0.1f, 0, 0.04f, 0.12f, 0.025f), b = cylinder(0.12f, 0, 0.04f, 0.1f, 0.025f);
+  const auto a = cylinder(-0.1f, 0, 0.04f, 0.12f, 0.025f),
+             b = cylinder(0.12f, 0, 0.04f, 0.1f, 0.025f);
   ASSERT_LT(a.size(), 60u);
   ASSERT_GT(a.size(), 30u);
   const auto points = join(table(0.8f, 0.02f), join(a, b));
@@ -233,7 +240,8 @@ TEST(ProposalClustering, AYoungMapsSparseObjectsAreCandidates) {
 // clustered at young_radius_scale times the radii: at 1.5 (12 cm) one candidate spans both pieces,
 // at 1 none does; the finer scales still give each piece alone.
 TEST(ProposalClustering, AYoungMapsPiecesOfOneObjectAreOneCandidate) {
-  const auto a = cylinder(-0.06f, 0, 0.02f, 0.1f, 0.02f), b = cylinder(0.06f, 0, 0.02f, 0.1f, 0.02f);
+  const auto a = cylinder(-0.06f, 0, 0.02f, 0.1f, 0.02f),
+             b = cylinder(0.06f, 0, 0.02f, 0.1f, 0.02f);
   ASSERT_GE(a.size(), 15u);
   ASSERT_LT(a.size(), 60u);
   const auto points = join(table(0.8f, 0.02f), join(a, b));
@@ -267,8 +275,10 @@ TEST(ProposalClustering, AnObjectsPartInTheSupportsBandIsTheObjects) {
   const std::vector<MapPoint> brim = capBrim(true);
   std::vector<MapPoint> towel;
   for (float x = 0.106f; x <= 0.2f; x += 0.004f)
-    for (float y = -0.05f; y <= 0.05f; y += 0.004f) towel.push_back({Eigen::Vector3f(x, y, 0.004f), 120, 60, 60});
-  const auto points = join(join(table(0.8f, 0.004f), cylinder(0, 0, 0.04f, 0.1f, 0.004f, 40)), join(brim, towel));
+    for (float y = -0.05f; y <= 0.05f; y += 0.004f)
+      towel.push_back({Eigen::Vector3f(x, y, 0.004f), 120, 60, 60});
+  const auto points =
+      join(join(table(0.8f, 0.004f), cylinder(0, 0, 0.04f, 0.1f, 0.004f, 40)), join(brim, towel));
   for (const double grow : {0.0, 0.06}) {
     ProposalOptions o = metricOptions();
     o.band_grow = grow;
@@ -278,8 +288,10 @@ TEST(ProposalClustering, AnObjectsPartInTheSupportsBandIsTheObjects) {
     ASSERT_TRUE(map.stats().support);
     float reach = 0;  // how far in +x the crown's candidates reach
     for (const auto& c : map.candidates()) {
-      for (const auto& p : c.points) EXPECT_LT(p.x(), 0.104f) << "the towel was taken (band_grow " << grow << ")";
-      EXPECT_LT((c.max - c.min).head<2>().maxCoeff(), 0.21f) << "the table was taken (band_grow " << grow << ")";
+      for (const auto& p : c.points)
+        EXPECT_LT(p.x(), 0.104f) << "the towel was taken (band_grow " << grow << ")";
+      EXPECT_LT((c.max - c.min).head<2>().maxCoeff(), 0.21f)
+          << "the table was taken (band_grow " << grow << ")";
       reach = std::max(reach, c.max.x());
     }
     if (grow > 0) {
@@ -309,7 +321,8 @@ TEST(ProposalClustering, ABrimThatIsMuchOfTheBandIsStillTheObjects) {
     ASSERT_TRUE(map.stats().support);
     float reach = 0;  // how far from the crown's axis the candidates reach
     for (const auto& c : map.candidates()) {
-      EXPECT_LT((c.max - c.min).head<2>().maxCoeff(), 0.21f) << "the table was taken (elsewhere " << elsewhere << ")";
+      EXPECT_LT((c.max - c.min).head<2>().maxCoeff(), 0.21f)
+          << "the table was taken (elsewhere " << elsewhere << ")";
       reach = std::max({reach, c.max.x(), -c.min.x()});
     }
     if (elsewhere) {
@@ -361,7 +374,8 @@ TEST(ProposalProjection, SmallBoxesAreDroppedAndOverlapsSuppressed) {
   auto boxes = projectCandidates({square(1, 0, 0.01f, 0)}, vga(), SE3::Identity(), o);
   EXPECT_TRUE(boxes.empty());
   // Two near-identical boxes: one survives, the finer scale.
-  boxes = projectCandidates({square(2, 0, 0.1f, 1), square(3, 0.005f, 0.1f, 0)}, vga(), SE3::Identity(), o);
+  boxes = projectCandidates({square(2, 0, 0.1f, 1), square(3, 0.005f, 0.1f, 0)}, vga(),
+                            SE3::Identity(), o);
   ASSERT_EQ(boxes.size(), 1u);
   EXPECT_EQ(boxes[0].candidate_id, 3);
   EXPECT_NEAR(boxes[0].w, 100, 3);
@@ -381,7 +395,8 @@ TEST(ProposalProjection, TrimmedBoxesGrowBackToTheOutlineButNotOverASmear) {
   for (float u = -0.1f; u <= 0.1001f; u += 0.005f)
     for (float v = -0.1f; v <= 0.1001f; v += 0.005f) c.points.emplace_back(u, v, 1.0f);
   // ...with a smear running 0.3 m off its right side.
-  for (int i = 1; i <= 30; ++i) c.points.emplace_back(0.1f + 0.01f * static_cast<float>(i), 0.0f, 1.0f);
+  for (int i = 1; i <= 30; ++i)
+    c.points.emplace_back(0.1f + 0.01f * static_cast<float>(i), 0.0f, 1.0f);
   const CameraModel cam = vga();
   const double left = cam.cx() - 50, right = cam.cx() + 50;
   auto box = [&](double trim, double gap) {
@@ -392,10 +407,10 @@ TEST(ProposalProjection, TrimmedBoxesGrowBackToTheOutlineButNotOverASmear) {
     return boxes.empty() ? ProposalBox() : boxes[0];
   };
   const ProposalBox all = box(0, 0), trimmed = box(3, 0), grown = box(3, 10);
-  EXPECT_GT(all.x + all.w, right + 100);  // the smear
-  EXPECT_GT(trimmed.x, left + 1);         // the square's own left edge trimmed away
+  EXPECT_GT(all.x + all.w, right + 100);        // the smear
+  EXPECT_GT(trimmed.x, left + 1);               // the square's own left edge trimmed away
   EXPECT_LT(trimmed.x + trimmed.w, right + 2);  // the smear too
-  EXPECT_NEAR(grown.x, left, 1.5);  // its edges back, the smear still out
+  EXPECT_NEAR(grown.x, left, 1.5);              // its edges back, the smear still out
   EXPECT_NEAR(grown.x + grown.w, right, 1.5);
   EXPECT_NEAR(grown.y, cam.cy() - 50, 1.5);
   EXPECT_NEAR(grown.y + grown.h, cam.cy() + 50, 1.5);
@@ -424,9 +439,11 @@ TEST(ProposalProjection, APairOfTouchingObjectsRanksAfterAnObjectAlone) {
   };
   for (const int pair_parts : {1, 2}) {
     const auto boxes =
-        projectCandidates({square(1, 0, 0.1f, 3, pair_parts), square(2, -0.02f, 0.085f, 1, 1)}, vga(), SE3::Identity(), o);
+        projectCandidates({square(1, 0, 0.1f, 3, pair_parts), square(2, -0.02f, 0.085f, 1, 1)},
+                          vga(), SE3::Identity(), o);
     ASSERT_EQ(boxes.size(), 1u) << "the two boxes overlap by IoU > 0.5";
-    EXPECT_EQ(boxes[0].candidate_id, pair_parts == 2 ? 2 : 1) << "pair of " << pair_parts << " parts";
+    EXPECT_EQ(boxes[0].candidate_id, pair_parts == 2 ? 2 : 1)
+        << "pair of " << pair_parts << " parts";
   }
 }
 
@@ -447,7 +464,8 @@ TEST(ProposalIds, StableAcrossIncrementalUpdatesOfAGrowingMap) {
   auto idNear = [&](float x) {
     std::set<int32_t> ids;
     for (const auto& c : map.candidates())
-      if (std::abs(0.5f * (c.min.x() + c.max.x()) - x) < 0.02f && c.max.x() - c.min.x() > 0.05f) ids.insert(c.id);
+      if (std::abs(0.5f * (c.min.x() + c.max.x()) - x) < 0.02f && c.max.x() - c.min.x() > 0.05f)
+        ids.insert(c.id);
     return ids;
   };
   auto shared = [](const std::set<int32_t>& a, const std::set<int32_t>& b) {
@@ -495,7 +513,8 @@ TEST(ProposalIds, ALostCandidateIsKeptForKeepLostSeconds) {
     }
     return c;
   };
-  const auto a = cylinder(-0.15f, 0, 0.04f, 0.1f, 0.004f), b = cylinder(0.15f, 0, 0.04f, 0.1f, 0.004f);
+  const auto a = cylinder(-0.15f, 0, 0.04f, 0.1f, 0.004f),
+             b = cylinder(0.15f, 0, 0.04f, 0.1f, 0.004f);
   auto clustering = [&](std::vector<Candidate> found) {
     Clustering c;
     c.map_id = 1;
@@ -522,15 +541,18 @@ TEST(ProposalIds, ALostCandidateIsKeptForKeepLostSeconds) {
   ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 500000));
   EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}, {id_b, 500000}}));
   ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 1500000));
-  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}, {id_b, 500000}})) << "lost 1 s ago: still kept";
+  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}, {id_b, 500000}}))
+      << "lost 1 s ago: still kept";
   // Ranked after the candidate found, though found at more scales.
-  const auto boxes = projectCandidates(map.candidates(), vga(), lookAt({0, -0.5, 0.3}, {0, 0, 0.05}), o);
+  const auto boxes =
+      projectCandidates(map.candidates(), vga(), lookAt({0, -0.5, 0.3}, {0, 0, 0.05}), o);
   ASSERT_EQ(boxes.size(), 2u);
   EXPECT_EQ(boxes[0].candidate_id, id_a);
   EXPECT_EQ(boxes[1].candidate_id, id_b);
   EXPECT_TRUE(boxes[1].lost);
   ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 1500001));
-  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}})) << "lost more than 1 s ago: dropped";
+  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}}))
+      << "lost more than 1 s ago: dropped";
   // Found again: a new candidate in its place.
   ASSERT_TRUE(map.adopt(clustering({candidate(a), candidate(b)}), 1600000));
   ASSERT_EQ(map.candidates().size(), 2u);
@@ -570,7 +592,8 @@ TEST(ProposalEngineInput, DegenerateInputGivesNoBoxes) {
   proposals_t m = engine.onPose(poseMessage(3, pose_t::STATE_TRACKING, T), &why);
   ASSERT_GE(m.num_boxes, 1);
   EXPECT_EQ(m.seq, 3);
-  for (const auto& b : m.boxes) EXPECT_TRUE(std::isfinite(b.x) && std::isfinite(b.w) && b.w >= 20 && b.h >= 20);
+  for (const auto& b : m.boxes)
+    EXPECT_TRUE(std::isfinite(b.x) && std::isfinite(b.w) && b.w >= 20 && b.h >= 20);
   // The same map, but SLAM is lost, initialising, or on another map: no boxes.
   EXPECT_EQ(engine.onPose(poseMessage(4, pose_t::STATE_LOST, T), &why).num_boxes, 0);
   EXPECT_EQ(engine.onPose(poseMessage(5, pose_t::STATE_INITIALIZING, T), &why).num_boxes, 0);
@@ -605,7 +628,8 @@ TEST(ProposalEngineInput, DegenerateInputGivesNoBoxes) {
 TEST(ProposalEngineInput, TheReferenceKeyframeGetsItsProposalsLate) {
   ProposalOptions o = metricOptions();
   o.late_keyframe_delay_s = 0.005;  // 5 poses (1 ms apart)
-  const SE3 T0 = makeSE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.05, 0, 0)) * lookingDown(1.0);
+  const SE3 T0 =
+      makeSE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.05, 0, 0)) * lookingDown(1.0);
   const SE3 T = lookingDown(1.0);
   const auto scene = join(join(table(0.8f, 0.004f), cylinder(-0.1f, 0, 0.04f, 0.12f, 0.004f)),
                           cylinder(0.15f, 0.05f, 0.04f, 0.12f, 0.004f));
@@ -650,7 +674,8 @@ TEST(ProposalEngineInput, TheReferenceKeyframeGetsItsProposalsLate) {
     EXPECT_FLOAT_EQ(late[0].boxes[i].w, there.boxes[i].w);
   }
   const proposals_t at_T = engine.onPose(poseMessage(7, pose_t::STATE_TRACKING, T), &why);
-  EXPECT_NE(late[0].boxes[0].x, at_T.boxes[0].x) << "the keyframe's moved pose is used, not its first one";
+  EXPECT_NE(late[0].boxes[0].x, at_T.boxes[0].x)
+      << "the keyframe's moved pose is used, not its first one";
   EXPECT_TRUE(engine.takeLateProposals().empty()) << "once only";
   // Bundle adjustment moves the keyframe again: it has had its proposals.
   engine.onKeyframe(keyframe(0, T));
@@ -784,6 +809,7 @@ TEST(ShippedConfig, ProposalsYamlEqualsDefaults) {
       loadConfig<ProposalOptions>(test::sourcePath("config/proposals.yaml"), "proposals", false);
   ProposalOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
-  EXPECT_EQ(test::readTextFile(test::sourcePath("config/proposals.yaml")), defaultConfigFileText<ProposalOptions>("proposals"))
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/proposals.yaml")),
+            defaultConfigFileText<ProposalOptions>("proposals"))
       << "config/proposals.yaml is generated from the built-in defaults: make configs";
 }

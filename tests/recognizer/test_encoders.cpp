@@ -131,8 +131,8 @@ TEST(Encoders, OnlyTheCellsOfTheBoxesAreCodedAndTheVectorsAreThoseOfAFullCoding)
   Fixture& fx = fixture();
   FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
   PyramidBox a, b, all;
-  ASSERT_TRUE(enc.snap(16, 16, 96, 64, 640, 480, &a));     // cells 2..14 x 2..10
-  ASSERT_TRUE(enc.snap(480, 360, 80, 96, 640, 480, &b));   // cells 60..70 x 45..57
+  ASSERT_TRUE(enc.snap(16, 16, 96, 64, 640, 480, &a));    // cells 2..14 x 2..10
+  ASSERT_TRUE(enc.snap(480, 360, 80, 96, 640, 480, &b));  // cells 60..70 x 45..57
   ASSERT_TRUE(enc.snap(0, 0, 640, 480, 640, 480, &all));
   for (const EncoderKind kind : {EncoderKind::kDirect, EncoderKind::kFlair}) {
     SCOPED_TRACE(encoderName(kind));
@@ -149,7 +149,8 @@ TEST(Encoders, OnlyTheCellsOfTheBoxesAreCodedAndTheVectorsAreThoseOfAFullCoding)
     double max_abs = 0;
     for (int r = 0; r < 2; ++r)
       for (int64_t k = 0; k < some.cols(); ++k)
-        max_abs = std::max(max_abs, static_cast<double>(std::fabs(some.row(r)[k] - full.row(r)[k])));
+        max_abs =
+            std::max(max_abs, static_cast<double>(std::fabs(some.row(r)[k] - full.row(r)[k])));
     // The direct encoder sums the same codes; FLAIR's tables over another span round otherwise.
     EXPECT_LT(max_abs, kind == EncoderKind::kDirect ? 1e-6 : 2e-4) << max_abs;
   }
@@ -162,10 +163,12 @@ TEST(Encoders, FeaturesAreComputedInBlocksThatHoldEveryBoxCell) {
   const CellRect all = ex.imageCells();  // 80 x 60 cells of 8 px
   // Overlapping rectangles are one block; far apart ones stay apart; near ones are joined when
   // their bounding block costs no more than the two with their margins.
-  EXPECT_EQ(ex.blocks({{2, 2, 10, 10}, {8, 8, 14, 12}}, all), (std::vector<CellRect>{{2, 2, 14, 12}}));
+  EXPECT_EQ(ex.blocks({{2, 2, 10, 10}, {8, 8, 14, 12}}, all),
+            (std::vector<CellRect>{{2, 2, 14, 12}}));
   EXPECT_EQ(ex.blocks({{60, 45, 70, 57}, {2, 2, 14, 10}}, all),
             (std::vector<CellRect>{{2, 2, 14, 10}, {60, 45, 70, 57}}));
-  EXPECT_EQ(ex.blocks({{2, 2, 12, 12}, {13, 2, 23, 12}}, all), (std::vector<CellRect>{{2, 2, 23, 12}}));
+  EXPECT_EQ(ex.blocks({{2, 2, 12, 12}, {13, 2, 23, 12}}, all),
+            (std::vector<CellRect>{{2, 2, 23, 12}}));
   EXPECT_EQ(ex.blocks({{-5, 50, 4, 70}}, all), (std::vector<CellRect>{{0, 50, 4, 60}}));  // clipped
   // The features of the boxes' cells are those of the whole frame.
   FeatureGrid whole, some;
@@ -181,8 +184,10 @@ TEST(Encoders, FeaturesAreComputedInBlocksThatHoldEveryBoxCell) {
       for (int j = r.v0 * s; j < r.v1 * s; ++j)
         for (int i = r.u0 * s; i < r.u1 * s; ++i, ++compared)
           for (int c = 0; c < kFeatureDims; ++c)
-            max_abs = std::max(max_abs, static_cast<double>(std::fabs(some.features.row(some.rowOf(i, j, t))[c] -
-                                                                      whole.features.row(whole.rowOf(i, j, t))[c])));
+            max_abs = std::max(
+                max_abs,
+                static_cast<double>(std::fabs(some.features.row(some.rowOf(i, j, t))[c] -
+                                              whole.features.row(whole.rowOf(i, j, t))[c])));
   EXPECT_EQ(compared, int64_t{(12 * 8 + 10 * 12 + 1) * 4} * whole.scales);
   EXPECT_LT(max_abs, 1e-6);
 }
@@ -223,7 +228,8 @@ TEST(Encoders, WarmingUpForAFrameSizeChangesNoVector) {
   std::vector<PyramidBox> boxes(3);
   ASSERT_TRUE(cold.snap(37, 51, 90, 70, fx.frame.cols, fx.frame.rows, &boxes[0]));
   ASSERT_TRUE(cold.snap(300, 200, 150, 120, fx.frame.cols, fx.frame.rows, &boxes[1]));
-  ASSERT_TRUE(cold.snap(560, 400, 80, 80, fx.frame.cols, fx.frame.rows, &boxes[2]));  // at the border
+  ASSERT_TRUE(
+      cold.snap(560, 400, 80, 80, fx.frame.cols, fx.frame.rows, &boxes[2]));  // at the border
   for (const EncoderKind kind : {EncoderKind::kDirect, EncoderKind::kFlair}) {
     ReusableMatrix a, b;
     cold.encode(fx.frame, boxes, kind, &a);
@@ -231,7 +237,8 @@ TEST(Encoders, WarmingUpForAFrameSizeChangesNoVector) {
     ASSERT_EQ(a.rows(), b.rows());
     for (int64_t r = 0; r < a.rows(); ++r)
       for (int64_t c = 0; c < a.cols(); ++c)
-        ASSERT_EQ(a.row(r)[c], b.row(r)[c]) << encoderName(kind) << " box " << r << " element " << c;
+        ASSERT_EQ(a.row(r)[c], b.row(r)[c])
+            << encoderName(kind) << " box " << r << " element " << c;
   }
 }
 
@@ -276,8 +283,8 @@ TEST(Encoders, CodesEqualProjectingAndAssigningEveryDescriptor) {
         got[k] = codes.counts[static_cast<size_t>(e)];
         if (got[k] != n[k]) continue;
         for (int d = 0; d < D; ++d)
-          max_err = std::max(max_err, static_cast<double>(std::fabs(codes.residuals.row(e)[d] -
-                                                                    sum(k, d))));
+          max_err = std::max(max_err,
+                             static_cast<double>(std::fabs(codes.residuals.row(e)[d] - sum(k, d))));
       }
       for (int k = 0; k < K; ++k) moved += static_cast<int64_t>(std::fabs(got[k] - n[k]));
     }

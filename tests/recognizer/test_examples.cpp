@@ -22,7 +22,9 @@ std::vector<float> rowOf(int64_t i, int64_t dims) {
   for (int64_t d = 0; d < dims; ++d) {
     const int64_t b = d / kBlock;
     x[static_cast<size_t>(d)] =
-        (b + i) % 3 == 0 ? 0.f : static_cast<float>(std::sin(0.37 * static_cast<double>(i * 131 + d)) * (1 + b % 4));
+        (b + i) % 3 == 0
+            ? 0.f
+            : static_cast<float>(std::sin(0.37 * static_cast<double>(i * 131 + d)) * (1 + b % 4));
   }
   return x;
 }
@@ -33,7 +35,8 @@ void expectRow(const ExampleSet& s, int64_t at, int64_t i) {
   s.get(at, got.data());
   for (int64_t b = 0; b < s.dims() / kBlock; ++b) {
     float m = 0;
-    for (int64_t d = b * kBlock; d < (b + 1) * kBlock; ++d) m = std::max(m, std::fabs(want[static_cast<size_t>(d)]));
+    for (int64_t d = b * kBlock; d < (b + 1) * kBlock; ++d)
+      m = std::max(m, std::fabs(want[static_cast<size_t>(d)]));
     for (int64_t d = b * kBlock; d < (b + 1) * kBlock; ++d) {
       if (m == 0) {
         ASSERT_EQ(got[static_cast<size_t>(d)], 0.f) << "row " << at << " value " << d;
@@ -50,8 +53,8 @@ void expectRow(const ExampleSet& s, int64_t at, int64_t i) {
 }
 
 void addRow(ExampleSet* s, int64_t i) {
-  s->add(rowOf(i, s->dims()).data(), static_cast<int>(i % 5), static_cast<int>(i), static_cast<int>(i % 2),
-          static_cast<float>(1 + i % 3));
+  s->add(rowOf(i, s->dims()).data(), static_cast<int>(i % 5), static_cast<int>(i),
+         static_cast<int>(i % 2), static_cast<float>(1 + i % 3));
 }
 
 // Rows of 4,000 values fill a chunk with about 16 MB / 3 kB rows: n rows span several chunks.
@@ -103,7 +106,9 @@ TEST(ExampleSet, AppendFilterAndSelectKeepTheRightRows) {
     }
   // Filtering releases the chunks it emptied.
   EXPECT_LT(a.allocatedBytes(), before);
-  EXPECT_LE(a.allocatedBytes(), a.bytes() + ExampleSet::kChunkBytes + (a.allocatedBytes() / ExampleSet::kChunkBytes) * a.maxRowBytes());
+  EXPECT_LE(a.allocatedBytes(),
+            a.bytes() + ExampleSet::kChunkBytes +
+                (a.allocatedBytes() / ExampleSet::kChunkBytes) * a.maxRowBytes());
 
   a.append(a);  // appending a set to itself doubles it
   ASSERT_EQ(a.size(), 2 * k);

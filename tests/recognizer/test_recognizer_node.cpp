@@ -11,13 +11,13 @@
 #include "common/bus/bus.h"
 #include "common/bus/image_msg.h"
 #include "procs/recognizer/model.h"
-#include "tools/train/trainer.h"
 #include "slamaware/detections_t.hpp"
 #include "slamaware/image_t.hpp"
 #include "slamaware/proposals_t.hpp"
 #include "slamaware/status_t.hpp"
 #include "tests/recognizer/synthetic_data.h"
 #include "tests/support/test_support.h"
+#include "tools/train/trainer.h"
 
 using namespace slamaware;
 using namespace slamaware::recognizer;
@@ -36,8 +36,10 @@ std::string writeConfig(const std::string& dir, const std::string& model,
 
 // PROPOSALS of frame `seq`: every candidate seen from `degrees` round the vertical axis; by default
 // 34 degrees further round at every seq, so that every frame is a new view of every candidate.
-proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxes, float degrees = NAN) {
-  const float a = (std::isnan(degrees) ? 34.4f * static_cast<float>(seq) : degrees) * static_cast<float>(M_PI) / 180.f;
+proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxes,
+                      float degrees = NAN) {
+  const float a = (std::isnan(degrees) ? 34.4f * static_cast<float>(seq) : degrees) *
+                  static_cast<float>(M_PI) / 180.f;
   proposals_t p;
   p.utime = 1000000 + seq * 33333;
   p.seq = seq;
@@ -263,14 +265,15 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
   cv::Mat frame = test::texturedFrame(5);
   test::syntheticObjectView("disc", 1, 3, 96).copyTo(frame(cv::Rect(200, 150, 96, 96)));
   const auto send = [&](Bus& bus, int32_t seq) {
-    bus.publish("CAMERA", makeImageMessage(frame, 1000000 + seq * 33333, seq, image_t::PIXEL_FORMAT_JPEG));
+    bus.publish("CAMERA",
+                makeImageMessage(frame, 1000000 + seq * 33333, seq, image_t::PIXEL_FORMAT_JPEG));
     bus.handle(20);
     bus.publish("PROPOSALS", proposals(seq, {{200, 150, 96, 96}, {60, 40, 120, 90}}));
   };
   const auto start = [&](const std::string& config, const std::string& log) {
     return std::make_unique<test::ChildProcess>(
-        std::vector<std::string>{test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url",
-                                 test::testUrl(), "--lockstep"},
+        std::vector<std::string>{test::binPath("slamaware-recognizer"), "--config", config,
+                                 "--lcm-url", test::testUrl(), "--lockstep"},
         log);
   };
 
@@ -291,7 +294,8 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
 
   // A damaged replacement: refused, named, and the new model goes on answering.
   replaceFile(model, b_bytes.substr(0, b_bytes.size() / 2));
-  ASSERT_TRUE(l.pump([&] { return counter(l.last_status, "reload_failures") >= 1; }, 10s)) << node->log();
+  ASSERT_TRUE(l.pump([&] { return counter(l.last_status, "reload_failures") >= 1; }, 10s))
+      << node->log();
   EXPECT_NE(l.last_status.message.find("model.bin"), std::string::npos) << l.last_status.message;
   EXPECT_NE(l.last_status.message.find("previous model keeps running"), std::string::npos)
       << l.last_status.message;
@@ -302,8 +306,9 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
   // On demand: the damaged file is refused again (exit 1, the reason printed); once it is good
   // again, reloaded (exit 0).
   const auto ctl = [&](const std::string& log) {
-    test::ChildProcess c({test::binPath("slamaware-ctl"), "--lcm-url", test::testUrl(), "reload", "recognizer"},
-                         log);
+    test::ChildProcess c(
+        {test::binPath("slamaware-ctl"), "--lcm-url", test::testUrl(), "reload", "recognizer"},
+        log);
     return c.wait(30s);
   };
   EXPECT_EQ(ctl(dir + "/ctl-bad.log"), 1);
@@ -325,13 +330,16 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
   const std::map<int32_t, detections_t> live = l.detections;
   l.detections.clear();
   l.answers = 0;
-  std::ofstream(dir + "/b.yaml") << "recognizer:\n  model: " << dir + "/b.model" << "\n";
+  std::ofstream(dir + "/b.yaml") << "recognizer:\n  model: " << dir + "/b.model"
+                                 << "\n";
   auto fresh = start(dir + "/b.yaml", dir + "/fresh.log");
-  ASSERT_TRUE(l.pump([&] { return l.have_status && l.last_status.pid == fresh->pid(); }, 10s)) << fresh->log();
+  ASSERT_TRUE(l.pump([&] { return l.have_status && l.last_status.pid == fresh->pid(); }, 10s))
+      << fresh->log();
   for (int32_t seq = 0; seq <= 4; ++seq) send(l.bus, seq);
   ASSERT_TRUE(l.pump([&] { return l.answers >= 5; }, 10s)) << fresh->log();
   EXPECT_NE(bytesOf(live.at(0)), bytesOf(l.detections.at(0))) << "models a and b answer alike";
-  for (int32_t seq : {2, 3, 4}) EXPECT_EQ(bytesOf(live.at(seq)), bytesOf(l.detections.at(seq))) << "seq " << seq;
+  for (int32_t seq : {2, 3, 4})
+    EXPECT_EQ(bytesOf(live.at(seq)), bytesOf(l.detections.at(seq))) << "seq " << seq;
   EXPECT_EQ(fresh->stop(), 0) << fresh->log();
 }
 
@@ -360,8 +368,8 @@ TEST(RecognizerNode, ARepeatedViewCarriesItsResultAndANewViewIsClassified) {
   };
   const auto run = [&](const std::string& cfg, const std::string& log) {
     Listener l;
-    test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", cfg, "--lcm-url", test::testUrl(),
-                             "--lockstep"},
+    test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", cfg, "--lcm-url",
+                             test::testUrl(), "--lockstep"},
                             log);
     EXPECT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
     // The view of candidate 100 (the disc) is 0, 3, 40, 42 degrees; 101 is out of view in frame 2.
@@ -374,7 +382,13 @@ TEST(RecognizerNode, ARepeatedViewCarriesItsResultAndANewViewIsClassified) {
       l.bus.publish("PROPOSALS", proposals(s, boxes, deg[s]));
       EXPECT_TRUE(l.pump([&] { return l.answers >= s + 1; }, 10s)) << node.log();
     }
-    EXPECT_TRUE(l.pump([&] { return counter(l.last_status, "boxes_classified") + counter(l.last_status, "boxes_carried") >= 7; }, 5s));
+    EXPECT_TRUE(l.pump(
+        [&] {
+          return counter(l.last_status, "boxes_classified") +
+                     counter(l.last_status, "boxes_carried") >=
+                 7;
+        },
+        5s));
     EXPECT_EQ(node.stop(), 0) << node.log();
     return Run{l.detections, l.last_status};
   };
@@ -385,7 +399,7 @@ TEST(RecognizerNode, ARepeatedViewCarriesItsResultAndANewViewIsClassified) {
   EXPECT_EQ(d.at(0).classified_seq, (std::vector<int32_t>{0, 0}));
   EXPECT_EQ(d.at(1).classified_seq, (std::vector<int32_t>{0, 0}));  // 3 degrees on: both carried
   EXPECT_EQ(d.at(1).log_prob, d.at(0).log_prob);
-  EXPECT_FLOAT_EQ(d.at(1).boxes[0].x, 208.f);  // in this frame's box
+  EXPECT_FLOAT_EQ(d.at(1).boxes[0].x, 208.f);                       // in this frame's box
   EXPECT_EQ(d.at(2).classified_seq, (std::vector<int32_t>{2}));     // 40 degrees: a new view
   EXPECT_EQ(d.at(3).classified_seq, (std::vector<int32_t>{2, 3}));  // 101 came back: classified
   EXPECT_EQ(counter(on.last_status, "boxes_carried"), 3);
@@ -410,8 +424,8 @@ TEST(RecognizerNode, LateProposalsAreClassifiedWithoutChangingWhatIsCarried) {
   saveModel(model, dir + "/model.bin");
   const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
   Listener l;
-  test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url", test::testUrl(),
-                           "--lockstep"},
+  test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url",
+                           test::testUrl(), "--lockstep"},
                           dir + "/node.log");
   ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
   for (int32_t s = 0; s < 4; ++s)
@@ -421,7 +435,8 @@ TEST(RecognizerNode, LateProposalsAreClassifiedWithoutChangingWhatIsCarried) {
   const std::array<float, 4> box{200, 150, 96, 96};
   for (int32_t s : {0, 2, 1, 3}) {  // 1 comes late
     l.bus.publish("PROPOSALS", proposals(s, {box}, 0.f));
-    ASSERT_TRUE(l.pump([&] { return l.detections.count(s) > 0; }, 10s)) << "seq " << s << "\n" << node.log();
+    ASSERT_TRUE(l.pump([&] { return l.detections.count(s) > 0; }, 10s)) << "seq " << s << "\n"
+                                                                        << node.log();
   }
   EXPECT_EQ(l.detections.at(0).classified_seq, (std::vector<int32_t>{0}));
   EXPECT_EQ(l.detections.at(2).classified_seq, (std::vector<int32_t>{0}));

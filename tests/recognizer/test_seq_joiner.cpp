@@ -130,11 +130,13 @@ TEST(ShippedConfig, RecognizerYamlEqualsDefaults) {
                                                          "recognizer", false);
   RecognizerOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
-  EXPECT_EQ(test::readTextFile(test::sourcePath("config/recognizer.yaml")), defaultConfigFileText<RecognizerOptions>("recognizer"))
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/recognizer.yaml")),
+            defaultConfigFileText<RecognizerOptions>("recognizer"))
       << "config/recognizer.yaml is generated from the built-in defaults: make configs";
 }
 
-TEST(RecognizerConfig, AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSizeIsRefusedNamingTheKey) {
+TEST(RecognizerConfig,
+     AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSizeIsRefusedNamingTheKey) {
   RecognizerOptions o;
   EXPECT_NO_THROW(checkOptions(o, "recognizer.yaml"));
   o.nms_iou = 1.0;  // no suppression
@@ -145,7 +147,8 @@ TEST(RecognizerConfig, AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSiz
       checkOptions(o, "my.yaml");
       ADD_FAILURE() << "nms_iou " << bad << " accepted";
     } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("my.yaml: key 'recognizer.nms_iou'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("my.yaml: key 'recognizer.nms_iou'"), std::string::npos)
+          << e.what();
     }
   }
   o = RecognizerOptions{};
@@ -163,14 +166,17 @@ TEST(RecognizerConfig, AnUnknownEncoderANonPositiveSuppressionIoUOrABadWarmUpSiz
   o = RecognizerOptions{};
   o.warm_up_width = o.warm_up_height = 0;
   EXPECT_NO_THROW(checkOptions(o, "my.yaml"));
-  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{-640, 480}, {640, 0}, {0, 480}, {64000, 48000}}) {
+  for (const auto& [w, h] :
+       std::vector<std::pair<int, int>>{{-640, 480}, {640, 0}, {0, 480}, {64000, 48000}}) {
     o.warm_up_width = w;
     o.warm_up_height = h;
     try {
       checkOptions(o, "my.yaml");
       ADD_FAILURE() << "warm-up " << w << " x " << h << " accepted";
     } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("my.yaml: keys 'recognizer.warm_up_width'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("my.yaml: keys 'recognizer.warm_up_width'"),
+                std::string::npos)
+          << e.what();
     }
   }
 }

@@ -3,8 +3,8 @@
 // bit-flipped or otherwise wrong model file is refused with a message that names it.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -16,11 +16,11 @@
 #include "common/dataset.h"
 #include "common/image_codec.h"
 #include "procs/recognizer/recognizer.h"
-#include "tools/train/trainer.h"
-#include "tools/synth/synth_options.h"
-#include "tools/synth/writers.h"
 #include "tests/recognizer/synthetic_data.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/synth_options.h"
+#include "tools/synth/writers.h"
+#include "tools/train/trainer.h"
 
 using namespace slamaware;
 using namespace slamaware::recognizer;
@@ -52,8 +52,9 @@ const Trained& synthetic() {
   static Trained t = [] {
     Trained t;
     // A folder per test: each test of this file runs in a process of its own, in parallel.
-    const std::string dir = test::tempDir(std::string("recognizer_training_") +
-                                          ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    const std::string dir =
+        test::tempDir(std::string("recognizer_training_") +
+                      ::testing::UnitTest::GetInstance()->current_test_info()->name());
     t.objects = test::makeSyntheticObjectSet(dir + "/objects", 3, 14);
     t.scenes = test::makeSyntheticScenes(dir + "/scenes", 6);
     t.model = trainModel({t.objects}, {t.scenes}, testOptions(), &t.report);
@@ -148,7 +149,8 @@ TEST(Training, PartialBoxesCutOrOverhangTheirObjectAndNoOtherObject) {
   };
   const cv::Rect2d image(0, 0, 640, 480);
   // Two neighbours: a part of one must not be a whole of the other.
-  const std::vector<cv::Rect2d> objects{cv::Rect2d(200, 150, 120, 90), cv::Rect2d(330, 160, 60, 80)};
+  const std::vector<cv::Rect2d> objects{cv::Rect2d(200, 150, 120, 90),
+                                        cv::Rect2d(330, 160, 60, 80)};
   const auto boxes = partialBoxes(objects, 0, 640, 480, 30, 0.1, 0.4, 42);
   ASSERT_EQ(boxes.size(), 30u);
   int inside = 0, overhanging = 0;
@@ -163,7 +165,8 @@ TEST(Training, PartialBoxesCutOrOverhangTheirObjectAndNoOtherObject) {
   EXPECT_GT(inside, 0) << "no box on a part of the object";
   EXPECT_GT(overhanging, 0) << "no box overhanging the object";
   EXPECT_EQ(boxes, partialBoxes(objects, 0, 640, 480, 30, 0.1, 0.4, 42)) << "not deterministic";
-  EXPECT_TRUE(partialBoxes(objects, 2, 640, 480, 5, 0.1, 0.4, 42).empty()) << "an object index out of range";
+  EXPECT_TRUE(partialBoxes(objects, 2, 640, 480, 5, 0.1, 0.4, 42).empty())
+      << "an object index out of range";
 }
 
 TEST(Training, ProposalBoxesAreLabelledByTheirOverlapWithTheGroundTruth) {
@@ -191,13 +194,16 @@ TEST(Training, ProposalBoxesAreLabelledByTheirOverlapWithTheGroundTruth) {
 TEST(Training, ProposalBoxFilesAreReadPerFrameAndAMalformedLineIsNamed) {
   const std::string dir = test::tempDir("recognizer_proposal_boxes");
   {
-    std::ofstream(dir + "/scene.csv") << "frame,rank,x,y,w,h\n0,0,10,20,30,40\n0,1,1.5,2,3,4\n7,0,5,5,50,60\n";
+    std::ofstream(dir + "/scene.csv")
+        << "frame,rank,x,y,w,h\n0,0,10,20,30,40\n0,1,1.5,2,3,4\n7,0,5,5,50,60\n";
   }
   const auto boxes = readProposalBoxes(dir + "/scene.csv");
   ASSERT_EQ(boxes.size(), 2u);
-  EXPECT_EQ(boxes.at(0), (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2, 3, 4)}));
+  EXPECT_EQ(boxes.at(0),
+            (std::vector<cv::Rect2d>{cv::Rect2d(10, 20, 30, 40), cv::Rect2d(1.5, 2, 3, 4)}));
   EXPECT_EQ(boxes.at(7), (std::vector<cv::Rect2d>{cv::Rect2d(5, 5, 50, 60)}));
-  for (const char* bad : {"0,0,10,20,30\n", "0,0,10,20,x,40\n", "0,0,10,20,0,40\n", "0,0,10,20,nan,40\n"}) {
+  for (const char* bad :
+       {"0,0,10,20,30\n", "0,0,10,20,x,40\n", "0,0,10,20,0,40\n", "0,0,10,20,nan,40\n"}) {
     std::ofstream(dir + "/bad.csv") << "frame,rank,x,y,w,h\n" << bad;
     try {
       readProposalBoxes(dir + "/bad.csv");
@@ -245,12 +251,15 @@ TEST(Recognizer, CarriedBoxesTakeTheirResultAndTheOthersAreClassifiedAsAlways) {
   test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
   const FrameDetections all = rec.recognize(frame, {{100, 100, 72, 72, 1}, {400, 250, 72, 72, 2}});
   ASSERT_EQ(all.boxes.size(), 2u);
-  CarriedView earlier{41, std::vector<float>(all.classes.size(), std::log(1.f / static_cast<float>(all.classes.size())))};
+  CarriedView earlier{41,
+                      std::vector<float>(all.classes.size(),
+                                         std::log(1.f / static_cast<float>(all.classes.size())))};
   CarriedView foreign{40, {-0.1f, -2.5f}};  // two classes: another model's
-  const FrameDetections d = rec.recognize(frame, {{-30, 100, 72, 72, 1, &earlier},   // clipped, carried
-                                                  {400, 250, 72, 72, 2},
-                                                  {700, 10, 50, 50, 3, &earlier},    // outside: rejected
-                                                  {100, 100, 72, 72, 4, &foreign}}); // classified
+  const FrameDetections d =
+      rec.recognize(frame, {{-30, 100, 72, 72, 1, &earlier},  // clipped, carried
+                            {400, 250, 72, 72, 2},
+                            {700, 10, 50, 50, 3, &earlier},     // outside: rejected
+                            {100, 100, 72, 72, 4, &foreign}});  // classified
   ASSERT_EQ(d.boxes.size(), 3u);
   EXPECT_EQ(d.carried, 1);
   EXPECT_EQ(d.rejected_outside, 1);
@@ -279,7 +288,8 @@ TEST(Recognizer, SuppressionKeepsTheSurerOfTwoOverlappingBoxes) {
   auto box = [](float x, float y, float w, float h, float p_object) {
     BoxDetection b;
     b.x = x, b.y = y, b.w = w, b.h = h;
-    b.log_prob = {std::log(p_object), std::log(0.01f), std::log(0.99f - p_object)};  // a, b, background
+    b.log_prob = {std::log(p_object), std::log(0.01f),
+                  std::log(0.99f - p_object)};  // a, b, background
     return b;
   };
   FrameDetections d;
@@ -408,9 +418,10 @@ TEST(Training, ObjectsOfOtherCategoriesAreBackground) {
   TrainReport report;
   const RecognizerModel model = trainModel({objects}, {}, o, &report, "", {others});
   ASSERT_EQ(model.classifier.classes, (std::vector<std::string>{"disc", "background"}));
-  EXPECT_EQ(report.train_crops, 3 * 10 * 2);      // the discs of --objects, mirrored
-  EXPECT_EQ(report.train_negatives, 3 * 6 * 2);   // the bars: 6 views per instance, mirrored
-  EXPECT_NE(model.provenance.find("\"role\":\"background\""), std::string::npos) << model.provenance;
+  EXPECT_EQ(report.train_crops, 3 * 10 * 2);     // the discs of --objects, mirrored
+  EXPECT_EQ(report.train_negatives, 3 * 6 * 2);  // the bars: 6 views per instance, mirrored
+  EXPECT_NE(model.provenance.find("\"role\":\"background\""), std::string::npos)
+      << model.provenance;
 
   // Instances neither set holds.
   const std::string unseen = test::makeSyntheticObjectSet(dir + "/unseen", 5, 10);
@@ -445,7 +456,7 @@ TEST(Training, CategoriesOutsideTheClassesOptionAreBackground) {
   TrainReport report;
   const RecognizerModel model = trainModel({objects}, {}, o, &report);
   ASSERT_EQ(model.classifier.classes, (std::vector<std::string>{"disc", "background"}));
-  EXPECT_EQ(report.train_crops, 3 * 10 * 2);     // the discs, mirrored
+  EXPECT_EQ(report.train_crops, 3 * 10 * 2);      // the discs, mirrored
   EXPECT_EQ(report.train_negatives, 3 * 10 * 2);  // the bars, mirrored
   o.classes = {"disc", "cap"};
   EXPECT_THROW(trainModel({objects}, {}, o, nullptr), DatasetError) << "no crops of cap";
@@ -578,7 +589,8 @@ TEST(Training, RenderedApplesAndBallsTeachTheUwBallCategory) {
   SKIP_WITHOUT_SHARED_DATA(uw);
   const std::string dir = test::tempDir("recognizer_uw_rendered");
   const std::string rendered = dir + "/apple_ball";
-  const auto set_options = synth::loadObjectSetOptions(test::sourcePath("config/objects/apple_ball.yaml"));
+  const auto set_options =
+      synth::loadObjectSetOptions(test::sourcePath("config/objects/apple_ball.yaml"));
   synth::writeObjectSet(set_options, rendered, -1, false);
   const TrainOptions o;  // as make eval trains each fold
   const HeldOutResult plain = leaveOneInstanceOut(uw, o, {}, {}, {"ball_1"});
@@ -586,7 +598,8 @@ TEST(Training, RenderedApplesAndBallsTeachTheUwBallCategory) {
   ASSERT_EQ(with.instance_accuracy.count("ball_1"), 1u);
   EXPECT_EQ(with.crops, 72);
   EXPECT_EQ(with.extra_crops, 2 * 30 * 72);
-  EXPECT_GE(with.instance_accuracy.at("ball_1"), 61.0) << "without the rendered ones: " << plain.accuracy() << " %";
+  EXPECT_GE(with.instance_accuracy.at("ball_1"), 61.0)
+      << "without the rendered ones: " << plain.accuracy() << " %";
   EXPECT_GE(with.instance_accuracy.at("ball_1"), plain.instance_accuracy.at("ball_1") + 20.0);
   EXPECT_THROW(leaveOneInstanceOut(uw, o, {}, {}, {"ball_9"}), DatasetError);
 }
@@ -598,17 +611,19 @@ TEST(EvalObjectsCommandLine, SequenceFoldersAfterARepeatableOptionAreSequences) 
   const std::string dir = test::tempDir("eval_objects_cli");
   const std::string scene = dir + "/kitchen";
   const std::string synth = test::binPath("slamaware-synth") + " scene --quiet --config " +
-                            test::sourcePath("config/scenes/kitchen_wood.yaml") + " --frames 5 --out " + scene +
-                            " > " + dir + "/synth.log 2>&1";
+                            test::sourcePath("config/scenes/kitchen_wood.yaml") +
+                            " --frames 5 --out " + scene + " > " + dir + "/synth.log 2>&1";
   ASSERT_EQ(std::system(synth.c_str()), 0);
   const std::string out = dir + "/objects.json";
-  const std::string cmd = test::binPath("slamaware-eval-objects") + " --out " + out + " --no-object-sets --model " +
-                          test::sourcePath("models/recognizer.model") + " --hold-out ball_1 --hold-out cap_1" +
-                          " --extra-training " + dir + "/extra " + scene + " > " + dir + "/eval.log 2>&1";
+  const std::string cmd =
+      test::binPath("slamaware-eval-objects") + " --out " + out + " --no-object-sets --model " +
+      test::sourcePath("models/recognizer.model") + " --hold-out ball_1 --hold-out cap_1" +
+      " --extra-training " + dir + "/extra " + scene + " > " + dir + "/eval.log 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << "see " << dir << "/eval.log";
   std::ifstream in(out);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("\"kitchen\""), std::string::npos) << "the scene was not evaluated as a sequence: " << text;
+  EXPECT_NE(text.find("\"kitchen\""), std::string::npos)
+      << "the scene was not evaluated as a sequence: " << text;
   EXPECT_NE(text.find("\"gt_boxes\""), std::string::npos) << text;
 }
 
@@ -618,24 +633,27 @@ TEST(EvalObjectsCommandLine, EveryBoxedFrameOfASequenceOfSeparateViewsIsClassifi
   const std::string dir = test::tempDir("eval_objects_views");
   const std::string video = dir + "/kitchen", views = dir + "/kitchen_views";
   const std::string synth = test::binPath("slamaware-synth") + " scene --quiet --config " +
-                            test::sourcePath("config/scenes/kitchen_wood.yaml") + " --frames 7 --out " + video +
-                            " > " + dir + "/synth.log 2>&1";
+                            test::sourcePath("config/scenes/kitchen_wood.yaml") +
+                            " --frames 7 --out " + video + " > " + dir + "/synth.log 2>&1";
   ASSERT_EQ(std::system(synth.c_str()), 0);
   fs::copy(video, views, fs::copy_options::recursive);
   fs::remove(views + "/groundtruth.txt");
-  // Taken for a photographed sequence (no depth, another source), so selective search runs on it too.
+  // Taken for a photographed sequence (no depth, another source), so selective search runs on it
+  // too.
   fs::remove_all(views + "/depth");
   SequenceInfo info = readSequenceInfo(views + "/sequence.yaml");
   info.source = "frames copied by a test";
   writeSequenceInfo(views + "/sequence.yaml", info);
   const std::vector<GroundTruthBox> boxes = readBoxes(video + "/boxes.csv");
   const int64_t all = static_cast<int64_t>(boxes.size());
-  const int64_t first = std::count_if(boxes.begin(), boxes.end(), [](const GroundTruthBox& b) { return b.frame % 5 == 0; });
+  const int64_t first = std::count_if(boxes.begin(), boxes.end(),
+                                      [](const GroundTruthBox& b) { return b.frame % 5 == 0; });
   ASSERT_GT(all, first) << "the test needs boxes on frames other than 0 and 5";
   const std::string out = dir + "/objects.json";
-  const std::string cmd = test::binPath("slamaware-eval-objects") + " --out " + out + " --no-object-sets --model " +
-                          test::sourcePath("models/recognizer.model") + " --ss-boxes 50 " + video + " " + views +
-                          " > " + dir + "/eval.log 2>&1";
+  const std::string cmd = test::binPath("slamaware-eval-objects") + " --out " + out +
+                          " --no-object-sets --model " +
+                          test::sourcePath("models/recognizer.model") + " --ss-boxes 50 " + video +
+                          " " + views + " > " + dir + "/eval.log 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << "see " << dir << "/eval.log";
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(out));
   EXPECT_EQ(j["sequences"]["kitchen"]["gt_boxes"]["boxes"].get<int64_t>(), first);
@@ -644,7 +662,8 @@ TEST(EvalObjectsCommandLine, EveryBoxedFrameOfASequenceOfSeparateViewsIsClassifi
   for (const auto& [c, v] : j["sequences"]["kitchen_views"]["gt_boxes"]["per_class"].items())
     per_class += v["boxes"].get<int64_t>();
   EXPECT_EQ(per_class, all);
-  EXPECT_FALSE(j["sequences"]["kitchen"].contains("single_view_ss")) << "a rendered video has the pipeline's mAP";
+  EXPECT_FALSE(j["sequences"]["kitchen"].contains("single_view_ss"))
+      << "a rendered video has the pipeline's mAP";
   ASSERT_TRUE(j["sequences"]["kitchen_views"].contains("single_view_ss"));
   EXPECT_EQ(j["sequences"]["kitchen_views"]["single_view_ss"]["frames_evaluated"].get<int>(), 7);
 }
@@ -659,17 +678,21 @@ std::string writeCheckerSet(const std::string& dir, int first_instance, int inst
     for (int v = 0; v < views; ++v) {
       std::mt19937 rng(static_cast<uint32_t>(7000 * i + v));
       std::uniform_real_distribution<double> u(0, 1);
-      cv::Mat img(72, 72, CV_8UC3, cv::Scalar(150 + 20 * u(rng), 150 + 20 * u(rng), 150 + 20 * u(rng)));
+      cv::Mat img(72, 72, CV_8UC3,
+                  cv::Scalar(150 + 20 * u(rng), 150 + 20 * u(rng), 150 + 20 * u(rng)));
       const int cell = 7 + (i % 3) + static_cast<int>(3 * u(rng));
-      const cv::Scalar a(30 + 20 * u(rng), 200 + 30 * u(rng), 220), b(160, 40 + 30 * u(rng), 120 + 40 * u(rng));
+      const cv::Scalar a(30 + 20 * u(rng), 200 + 30 * u(rng), 220),
+          b(160, 40 + 30 * u(rng), 120 + 40 * u(rng));
       const int x0 = 8 + static_cast<int>(8 * u(rng)), y0 = 8 + static_cast<int>(8 * u(rng));
       for (int y = 0; y * cell + y0 < 64; ++y)
         for (int x = 0; x * cell + x0 < 64; ++x)
-          cv::rectangle(img, cv::Rect(x0 + x * cell, y0 + y * cell, cell, cell), (x + y) % 2 ? a : b, cv::FILLED);
+          cv::rectangle(img, cv::Rect(x0 + x * cell, y0 + y * cell, cell, cell),
+                        (x + y) % 2 ? a : b, cv::FILLED);
       cv::Mat noise(72, 72, CV_8UC3);
       cv::randn(noise, 0, 6);
       img += noise;
-      cv::imwrite(folder + "/checker_" + std::to_string(i) + "_1_" + std::to_string(v) + "_crop.png", img);
+      cv::imwrite(
+          folder + "/checker_" + std::to_string(i) + "_1_" + std::to_string(v) + "_crop.png", img);
     }
   }
   return dir;
@@ -679,20 +702,23 @@ std::string writeCheckerSet(const std::string& dir, int first_instance, int inst
 double calledAs(Recognizer& r, const std::vector<cv::Mat>& images, const std::string& want) {
   int right = 0;
   for (const cv::Mat& img : images) {
-    const FrameDetections d = r.recognize(img, {{0, 0, static_cast<float>(img.cols), static_cast<float>(img.rows), 0}});
+    const FrameDetections d =
+        r.recognize(img, {{0, 0, static_cast<float>(img.cols), static_cast<float>(img.rows), 0}});
     if (d.boxes.empty()) continue;
     const auto& lp = d.boxes[0].log_prob;
-    right += d.classes[static_cast<size_t>(std::max_element(lp.begin(), lp.end()) - lp.begin())] == want;
+    right +=
+        d.classes[static_cast<size_t>(std::max_element(lp.begin(), lp.end()) - lp.begin())] == want;
   }
   return 100.0 * right / static_cast<double>(images.size());
 }
 
 }  // namespace
 
-// slamaware-train --base: a class is added from its views alone (the base model's exemplars stand in
-// for its training data as negatives). The new class is recognised on unseen instances, the old
-// classifiers are kept as they were (and their classes recognised as well as before), a class the base has is refused without --replace, and a model without
-// exemplars (an older file) is refused with what to do.
+// slamaware-train --base: a class is added from its views alone (the base model's exemplars stand
+// in for its training data as negatives). The new class is recognised on unseen instances, the old
+// classifiers are kept as they were (and their classes recognised as well as before), a class the
+// base has is refused without --replace, and a model without exemplars (an older file) is refused
+// with what to do.
 TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
   const Trained& t = synthetic();
   ASSERT_GT(t.model.exemplars.size(), 0);
@@ -701,7 +727,8 @@ TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
   AddClassesReport report;
   TrainOptions o = testOptions();
   const RecognizerModel added = addClasses(t.model, {dir + "/new"}, o, false, &report);
-  EXPECT_EQ(added.classifier.classes, (std::vector<std::string>{"bar", "disc", "checker", "background"}));
+  EXPECT_EQ(added.classifier.classes,
+            (std::vector<std::string>{"bar", "disc", "checker", "background"}));
   EXPECT_EQ(report.added, (std::vector<std::string>{"checker"}));
   EXPECT_EQ(report.positives, 60);  // 30 views, mirrored
   EXPECT_GT(added.exemplars.size(), t.model.exemplars.size());
@@ -711,11 +738,13 @@ TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
   }
   EXPECT_EQ(added.classifier.weights.row(3), t.model.classifier.weights.row(2)) << "background";
   saveModel(added, dir + "/added.model");
-  EXPECT_NE(provenanceText(loadModel(dir + "/added.model")).find("classes checker added"), std::string::npos);
+  EXPECT_NE(provenanceText(loadModel(dir + "/added.model")).find("classes checker added"),
+            std::string::npos);
 
   std::vector<cv::Mat> checkers, bars, discs;
   writeCheckerSet(dir + "/unseen", 11, 3, 6);
-  for (const auto& c : collectNamedCrops(dir + "/unseen", 0)) checkers.push_back(cv::imread(c.path));
+  for (const auto& c : collectNamedCrops(dir + "/unseen", 0))
+    checkers.push_back(cv::imread(c.path));
   for (int i = 4; i < 6; ++i)  // instances the base model did not see (it has 1-3)
     for (int v = 0; v < 9; ++v) {
       bars.push_back(test::syntheticObjectView("bar", i, v, 72));
@@ -726,7 +755,8 @@ TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
   EXPECT_GE(calledAs(after, checkers, "checker"), 90.0);
   for (const auto& [name, views] : {std::pair{"bar", &bars}, std::pair{"disc", &discs}}) {
     const double was = calledAs(before, *views, name), is = calledAs(after, *views, name);
-    std::printf("%s: %.1f %% before, %.1f %% after; checker %.1f %%\n", name, was, is, calledAs(after, checkers, "checker"));
+    std::printf("%s: %.1f %% before, %.1f %% after; checker %.1f %%\n", name, was, is,
+                calledAs(after, checkers, "checker"));
     EXPECT_GE(is, was - 10.0) << name;
     EXPECT_GE(is, 80.0) << name;
   }
@@ -736,7 +766,8 @@ TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
     addClasses(added, {again}, o, false, nullptr);
     ADD_FAILURE() << "a class the model has was added again";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("already in the base model"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("already in the base model"), std::string::npos)
+        << e.what();
   }
   RecognizerModel old = t.model;
   old.exemplars = ExampleSet(old.params.vladDims(), old.params.pca_dims);

@@ -190,7 +190,7 @@ TEST(DepthFilter, SeedsAreSearchedInMinFramesEvenWhenEveryFrameIsAKeyframe) {
   const cv::Mat texture = makeTexture(2048, 5);
   DepthFilterOptions options;
   options.max_keyframes = 3;
-  options.min_frames = 3;  // as max_keyframes: the keyframe count alone decides
+  options.min_frames = 3;               // as max_keyframes: the keyframe count alone decides
   options.young_convergence_ratio = 0;  // converged seeds only
   DepthFilter by_keyframes(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
   EXPECT_EQ(frameThatFinishesTheFirstKeyframe(by_keyframes, texture, cam, 0.05), 3);
@@ -236,7 +236,7 @@ TEST(DepthFilter, AYoungMapsKeyframesStartFromTheirMapPoints) {
                             float((px.y() - cam.cy) / cam.fy * kPlaneZ), float(kPlaneZ));
     kf.sparse.push_back({px, p});
   }
-  kf.sparse.push_back({Eigen::Vector2i(100, 100), Eigen::Vector3f(0, 0, -1)});  // behind
+  kf.sparse.push_back({Eigen::Vector2i(100, 100), Eigen::Vector3f(0, 0, -1)});     // behind
   kf.sparse.push_back({Eigen::Vector2i(cam.width, 5), Eigen::Vector3f(0, 0, 2)});  // outside
   filter.process(first);
   const SemiDenseKeyframe seeded = filter.keyframe(7);
@@ -245,8 +245,8 @@ TEST(DepthFilter, AYoungMapsKeyframesStartFromTheirMapPoints) {
   const uint8_t grey = kf.grey.at<uint8_t>(30, 20);
   EXPECT_EQ(seeded.points[0].rgb[0], grey);
   EXPECT_NEAR(seeded.points[0].p_camera.z(), kPlaneZ, 1e-6);
-  EXPECT_NEAR(seeded.points[0].depth_std, options.sparse_depth_std * seeded.points[0].p_camera.norm(),
-              1e-6);
+  EXPECT_NEAR(seeded.points[0].depth_std,
+              options.sparse_depth_std * seeded.points[0].p_camera.norm(), 1e-6);
   const auto live = filter.liveKeyframes(1);
   ASSERT_EQ(live.size(), 1u);
   EXPECT_EQ(live[0].from_features, 40u);
@@ -267,7 +267,8 @@ TEST(DepthFilter, AYoungMapsKeyframesStartFromTheirMapPoints) {
   other.map_id = 2;
   other.new_keyframes.front().map_id = 2;
   other.new_keyframes.front().sparse = kf.sparse;
-  const size_t before = filter.keyframe(7).points.size(), provisional = filter.keyframe(7).provisional;
+  const size_t before = filter.keyframe(7).points.size(),
+               provisional = filter.keyframe(7).provisional;
   filter.process(other);
   EXPECT_EQ(filter.keyframe(17).points.size(), 40u);
   // Map 1's keyframes are finished by the new map: keyframe 7 keeps only its converged seeds
@@ -326,7 +327,8 @@ TEST(DepthFilter, AYoungMapsSeedsStandInProvisionallyUntilItsKeyframeFinishes) {
   }
   const SemiDenseKeyframe early = filter.keyframe(7);
   ASSERT_EQ(strict.keyframe(7).provisional, 0u);
-  const size_t converged_strict = strict.keyframe(7).points.size() - strict.keyframe(7).from_features;
+  const size_t converged_strict =
+      strict.keyframe(7).points.size() - strict.keyframe(7).from_features;
   EXPECT_EQ(early.provisional, countProvisional(early));
   EXPECT_GT(early.provisional, 1000u);
   EXPECT_GT(early.provisional, 4 * converged_strict + 500);
@@ -345,7 +347,8 @@ TEST(DepthFilter, AYoungMapsSeedsStandInProvisionallyUntilItsKeyframeFinishes) {
     filter.process(young(k));
     strict.process(young(k));
   }
-  ASSERT_GE(filter.keyframe(7).points.size() - filter.keyframe(7).from_features - filter.keyframe(7).provisional,
+  ASSERT_GE(filter.keyframe(7).points.size() - filter.keyframe(7).from_features -
+                filter.keyframe(7).provisional,
             1000u);
   DepthFrameInput later = slidingFrame(texture, cam, 41, 0.01, true);
   filter.process(later);

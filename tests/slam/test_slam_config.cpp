@@ -15,7 +15,8 @@ TEST(SlamConfig, ShippedFileEqualsTheDefaults) {
   SlamOptions file = loadConfig<SlamOptions>(test::sourcePath("config/slam.yaml"), "slam", false);
   SlamOptions defaults;
   EXPECT_TRUE(optionsEqual(file, defaults)) << describeOptions(optionListOf(file));
-  EXPECT_EQ(test::readTextFile(test::sourcePath("config/slam.yaml")), defaultConfigFileText<SlamOptions>("slam"))
+  EXPECT_EQ(test::readTextFile(test::sourcePath("config/slam.yaml")),
+            defaultConfigFileText<SlamOptions>("slam"))
       << "config/slam.yaml is generated from the built-in defaults: make configs";
 }
 

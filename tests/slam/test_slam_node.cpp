@@ -16,13 +16,13 @@
 #include "common/bus/log_reader.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
-#include "tools/synth/scene.h"
 #include "slamaware/camera_info_t.hpp"
 #include "slamaware/pose_t.hpp"
 #include "slamaware/status_t.hpp"
 #include "tests/support/test_support.h"
 #include "tools/eval/pipeline_run.h"
 #include "tools/eval/slam_metrics.h"
+#include "tools/synth/scene.h"
 
 using namespace slamaware;
 using namespace std::chrono_literals;

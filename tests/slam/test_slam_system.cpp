@@ -2,7 +2,6 @@
 // mapping and depth filtering on their own threads give exactly what they give inline — and on a
 // rendered tabletop video it tracks every frame after initialisation with a small error.
 #include <gtest/gtest.h>
-
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -17,8 +16,8 @@
 
 #include "common/geometry.h"
 #include "procs/slam/slam_system.h"
-#include "tools/synth/scene.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/scene.h"
 
 using namespace slamaware;
 using namespace slamaware::slam;
@@ -182,7 +181,8 @@ TEST(SlamSystem, KeyframesArePublishedWhileTheirSeedsConverge) {
   int republished = 0;
   for (const auto& [id, sizes] : sizes_live) {
     republished += sizes.size() > 1;
-    for (size_t i = 1; i + 1 < sizes.size(); ++i) EXPECT_GE(sizes[i], 1.5 * sizes[i - 1]) << "keyframe " << id;
+    for (size_t i = 1; i + 1 < sizes.size(); ++i)
+      EXPECT_GE(sizes[i], 1.5 * sizes[i - 1]) << "keyframe " << id;
   }
   EXPECT_GT(republished, 0);
   // The last incremental cloud of each keyframe finished in both runs holds the same points.

@@ -62,30 +62,30 @@ std::string arg(const char* name) {
 TEST(LcmSpy, EveryTypeLoadsFromTheJarWithTheCppFingerprint) {
   const std::string jar = std::string(SLAMAWARE_BIN_DIR) + "/../lcmtypes/slamaware_lcmtypes.jar";
   ASSERT_TRUE(std::filesystem::exists(jar)) << jar;
-  const std::vector<std::string> types = {
-      arg<box_t>("box_t"),
-      arg<camera_info_t>("camera_info_t"),
-      arg<detections_t>("detections_t"),
-      arg<image_t>("image_t"),
-      arg<keyframe_t>("keyframe_t"),
-      arg<object_detections_t>("object_detections_t"),
-      arg<object_map_t>("object_map_t"),
-      arg<object_query_reply_t>("object_query_reply_t"),
-      arg<object_query_t>("object_query_t"),
-      arg<object_t>("object_t"),
-      arg<point_cloud_t>("point_cloud_t"),
-      arg<pose_t>("pose_t"),
-      arg<proc_command_t>("proc_command_t"),
-      arg<proc_info_t>("proc_info_t"),
-      arg<proc_status_t>("proc_status_t"),
-      arg<proposals_t>("proposals_t"),
-      arg<status_t>("status_t")};
+  const std::vector<std::string> types = {arg<box_t>("box_t"),
+                                          arg<camera_info_t>("camera_info_t"),
+                                          arg<detections_t>("detections_t"),
+                                          arg<image_t>("image_t"),
+                                          arg<keyframe_t>("keyframe_t"),
+                                          arg<object_detections_t>("object_detections_t"),
+                                          arg<object_map_t>("object_map_t"),
+                                          arg<object_query_reply_t>("object_query_reply_t"),
+                                          arg<object_query_t>("object_query_t"),
+                                          arg<object_t>("object_t"),
+                                          arg<point_cloud_t>("point_cloud_t"),
+                                          arg<pose_t>("pose_t"),
+                                          arg<proc_command_t>("proc_command_t"),
+                                          arg<proc_info_t>("proc_info_t"),
+                                          arg<proc_status_t>("proc_status_t"),
+                                          arg<proposals_t>("proposals_t"),
+                                          arg<status_t>("status_t")};
   // The class path of our lcm-spy wrapper, so that this tests what users run.
   const std::string classpath = run("BUILD=" + std::string(SLAMAWARE_BIN_DIR) + "/.. " +
                                     test::sourcePath("scripts/lcm-spy") + " --classpath");
   ASSERT_NE(classpath.find("slamaware_lcmtypes.jar"), std::string::npos) << classpath;
-  std::string cmd = "java -Djava.awt.headless=true -cp " + classpath.substr(0, classpath.find('\n')) + ":" +
-                    SLAMAWARE_SPY_CLASSES + " CheckTypes";
+  std::string cmd = "java -Djava.awt.headless=true -cp " +
+                    classpath.substr(0, classpath.find('\n')) + ":" + SLAMAWARE_SPY_CLASSES +
+                    " CheckTypes";
   for (const auto& t : types) cmd += " " + t;
   int rc = 0;
   const std::string out = run(cmd, &rc);
@@ -111,7 +111,8 @@ TEST(LcmSpy, WrapperScriptAvoidsRemovedJvmFlags) {
   EXPECT_NE(text.find("jchart2d.jar"), std::string::npos);
   EXPECT_NE(text.find("slamaware_lcmtypes.jar"), std::string::npos);
   // The JVM that runs lcm-spy must accept the flags the script uses.
-  EXPECT_EQ(std::system("java -Djava.net.preferIPv4Stack=true -Xmx256m -ea "
-                        "--add-exports java.desktop/sun.swing=ALL-UNNAMED -version > /dev/null 2>&1"),
-            0);
+  EXPECT_EQ(
+      std::system("java -Djava.net.preferIPv4Stack=true -Xmx256m -ea "
+                  "--add-exports java.desktop/sun.swing=ALL-UNNAMED -version > /dev/null 2>&1"),
+      0);
 }

@@ -71,8 +71,10 @@ std::string errorOf(const std::string& text) {
 
 TEST(SupervisorConfig, LoadsProcessesInOrder) {
   const auto cfg = loadSupervisorConfig(writeSystem(
-      "ok", "supervisor:\n  host: robot\nprocesses:\n  - name: camera\n    command: [a, b]\n    host: robot\n"
-            "  - name: slam\n    command: [c]\n    restart: always\n    stop_signal: TERM\n"));
+      "ok",
+      "supervisor:\n  host: robot\nprocesses:\n  - name: camera\n    command: [a, b]\n    host: "
+      "robot\n"
+      "  - name: slam\n    command: [c]\n    restart: always\n    stop_signal: TERM\n"));
   EXPECT_EQ(cfg.options.host, "robot");
   ASSERT_EQ(cfg.processes.size(), 2u);
   EXPECT_EQ(cfg.processes[0].command, (std::vector<std::string>{"a", "b"}));
@@ -82,11 +84,14 @@ TEST(SupervisorConfig, LoadsProcessesInOrder) {
 
 TEST(SupervisorConfig, BadEntriesNamed) {
   EXPECT_NE(errorOf("processes:\n  - name: a\n").find("'command' is required"), std::string::npos);
-  EXPECT_NE(errorOf("processes:\n  - name: a\n    command: [x]\n  - name: a\n    command: [y]\n").find("duplicate"),
+  EXPECT_NE(errorOf("processes:\n  - name: a\n    command: [x]\n  - name: a\n    command: [y]\n")
+                .find("duplicate"),
             std::string::npos);
-  EXPECT_NE(errorOf("processes:\n  - name: a\n    command: [x]\n    restart: sometimes\n").find("key 'restart'"),
+  EXPECT_NE(errorOf("processes:\n  - name: a\n    command: [x]\n    restart: sometimes\n")
+                .find("key 'restart'"),
             std::string::npos);
-  EXPECT_NE(errorOf("processes:\n  - name: a\n    command: [x]\n    stop_signal: NOPE\n").find("unknown signal"),
+  EXPECT_NE(errorOf("processes:\n  - name: a\n    command: [x]\n    stop_signal: NOPE\n")
+                .find("unknown signal"),
             std::string::npos);
   const std::string e = errorOf("processes:\n  - name: a\n    command: [x]\n    restrat: always\n");
   EXPECT_NE(e.find("unknown key 'restrat'"), std::string::npos) << e;
@@ -130,7 +135,8 @@ TEST(ProcStats, SamplesThisProcess) {
 TEST(SupervisorConfig, EnvironmentExpansion) {
   setenv("SLAMAWARE_TEST_X", "value", 1);
   unsetenv("SLAMAWARE_TEST_UNSET");
-  const auto out = expandEnvironment({"a${SLAMAWARE_TEST_X}b", "${SLAMAWARE_TEST_UNSET:-dflt}", "${SLAMAWARE_TEST_UNSET}",
-                                      "plain", "${SLAMAWARE_TEST_X:-no}", "${broken"});
+  const auto out = expandEnvironment({"a${SLAMAWARE_TEST_X}b", "${SLAMAWARE_TEST_UNSET:-dflt}",
+                                      "${SLAMAWARE_TEST_UNSET}", "plain", "${SLAMAWARE_TEST_X:-no}",
+                                      "${broken"});
   EXPECT_EQ(out, (std::vector<std::string>{"avalueb", "dflt", "", "plain", "value", "${broken"}));
 }

@@ -8,23 +8,24 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <sstream>
+#include <lcm/lcm-cpp.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 #include <thread>
 
-#include <lcm/lcm-cpp.hpp>
-
 #include "common/dataset.h"
-#include "common/spawn.h"
 #include "common/image_codec.h"
+#include "common/spawn.h"
 
 namespace fs = std::filesystem;
 
 namespace slamaware::test {
 
 std::string binPath(const std::string& name) { return std::string(SLAMAWARE_BIN_DIR) + "/" + name; }
-std::string sourcePath(const std::string& relative) { return std::string(SLAMAWARE_SOURCE_DIR) + "/" + relative; }
+std::string sourcePath(const std::string& relative) {
+  return std::string(SLAMAWARE_SOURCE_DIR) + "/" + relative;
+}
 
 std::string sharedData(const std::string& relative) {
   const fs::path p = fs::path(SLAMAWARE_SHARED_DATA) / relative;
@@ -47,7 +48,8 @@ std::string readTextFile(const std::string& path) {
 
 std::string testUrl() { return "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"; }
 
-ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& log_path) : log_path_(log_path) {
+ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& log_path)
+    : log_path_(log_path) {
   pid_ = spawnWithOutput(argv, log_path, false);
 }
 
@@ -133,7 +135,8 @@ BusRecorder::BusRecorder(const std::string& path, const std::string& channels)
   // nothing published after the constructor returns can be missed by a logger still starting.
   std::error_code ec;
   if (!publishProbesUntil([&] { return fs::exists(path, ec) && fs::file_size(path, ec) > 0; }))
-    ADD_FAILURE() << "lcm-logger recording " << path << " did not start within 20 s: " << logger_.log();
+    ADD_FAILURE() << "lcm-logger recording " << path
+                  << " did not start within 20 s: " << logger_.log();
 }
 
 BusRecorder::~BusRecorder() { stop(); }

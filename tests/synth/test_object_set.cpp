@@ -11,11 +11,11 @@
 
 #include "common/dataset.h"
 #include "common/image_codec.h"
+#include "tests/support/test_support.h"
+#include "tests/synth/synth_test_util.h"
 #include "tools/synth/categories.h"
 #include "tools/synth/synth_options.h"
 #include "tools/synth/writers.h"
-#include "tests/support/test_support.h"
-#include "tests/synth/synth_test_util.h"
 
 using namespace slamaware;
 using namespace slamaware::synth;

@@ -7,10 +7,10 @@
 
 #include "common/bus/log_reader.h"
 #include "common/image_codec.h"
-#include "tools/synth/scene.h"
 #include "slamaware/camera_info_t.hpp"
 #include "slamaware/image_t.hpp"
 #include "tests/support/test_support.h"
+#include "tools/synth/scene.h"
 
 using namespace slamaware;
 

@@ -17,11 +17,11 @@
 #include "common/config.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
+#include "tests/support/test_support.h"
+#include "tests/synth/synth_test_util.h"
 #include "tools/synth/random_scene.h"
 #include "tools/synth/scene.h"
 #include "tools/synth/writers.h"
-#include "tests/support/test_support.h"
-#include "tests/synth/synth_test_util.h"
 
 using namespace slamaware;
 using namespace slamaware::synth;
@@ -119,7 +119,8 @@ TEST(SynthScene, SameSeedSameBytesOtherSeedOtherBytes) {
   const auto a = synth_test::treeHashes(base + "/a"), b = synth_test::treeHashes(base + "/b"),
              c = synth_test::treeHashes(base + "/c");
   ASSERT_EQ(a.size(),
-            2u + 5u + 5u + 4u);  // sequence.yaml, scene.yaml, 5 frames, 5 depth maps, 4 ground-truth files
+            2u + 5u + 5u +
+                4u);  // sequence.yaml, scene.yaml, 5 frames, 5 depth maps, 4 ground-truth files
   EXPECT_EQ(a, b);
   for (const auto& f :
        {"rgb/000000.jpg", "depth/000004.png", "groundtruth.txt", "objects.csv", "boxes.csv"})
@@ -147,7 +148,8 @@ TEST(SynthScene, RandomScenesSpanTheRangesAndReproduceFromTheirYaml) {
     largest = std::max(largest, o.table.size[0]);
     EXPECT_GE(o.objects.count - o.objects.distractors, 2);
     EXPECT_LE(o.objects.distractors, 4);
-    EXPECT_GT(o.trajectory.radius_min, 0.5 * o.table.size[0]) << "camera over the table, seed " << seed;
+    EXPECT_GT(o.trajectory.radius_min, 0.5 * o.table.size[0])
+        << "camera over the table, seed " << seed;
   }
   EXPECT_GT(round, 40);
   EXPECT_GT(low_camera, 20);
@@ -158,19 +160,20 @@ TEST(SynthScene, RandomScenesSpanTheRangesAndReproduceFromTheirYaml) {
   // A random scene written by the tool re-renders byte for byte from the scene.yaml it wrote.
   const std::string base = test::tempDir("synth_random");
   auto run = [&](const std::string& args, const std::string& out) {
-    const std::string cmd = test::binPath("slamaware-synth") + " scene --quiet " + args + " --frames 3 --out " +
-                            out + " > " + out + ".log 2>&1";
+    const std::string cmd = test::binPath("slamaware-synth") + " scene --quiet " + args +
+                            " --frames 3 --out " + out + " > " + out + ".log 2>&1";
     return std::system(cmd.c_str());
   };
   ASSERT_EQ(run("--random 4", base + "/a"), 0);
   ASSERT_EQ(run("--config " + base + "/a/scene.yaml", base + "/b"), 0);
   const auto a = synth_test::treeHashes(base + "/a"), b = synth_test::treeHashes(base + "/b");
-  for (const auto& f : {"rgb/000002.jpg", "depth/000002.png", "groundtruth.txt", "objects.csv", "boxes.csv",
-                        "scene.yaml"})
+  for (const auto& f : {"rgb/000002.jpg", "depth/000002.png", "groundtruth.txt", "objects.csv",
+                        "boxes.csv", "scene.yaml"})
     EXPECT_EQ(a.at(f), b.at(f)) << f;
   const SceneOptions back = loadSceneOptions(base + "/a/scene.yaml");
   EXPECT_EQ(back.name, "random_4");
-  EXPECT_NE(run("--random 4 --config " + base + "/a/scene.yaml", base + "/c"), 0) << "either, not both";
+  EXPECT_NE(run("--random 4 --config " + base + "/a/scene.yaml", base + "/c"), 0)
+      << "either, not both";
 }
 
 TEST(SynthScene, ProjectedObjectBoxesMatchTheBoxesOfAxisAlignedCuboids) {

@@ -6,10 +6,10 @@
 #include <iterator>
 
 #include "common/frame_source.h"
+#include "tests/support/test_support.h"
 #include "tools/synth/scene.h"
 #include "tools/synth/synth_source.h"
 #include "tools/synth/writers.h"
-#include "tests/support/test_support.h"
 
 using namespace slamaware;
 

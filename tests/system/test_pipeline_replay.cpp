@@ -2,12 +2,12 @@
 // process) replayed lockstep on the bundled recording logs/sample.lcm, twice, in a private network
 // namespace: every frame gets its DETECTIONS, OBJECT_DETECTIONS and OBJECT_MAP (and the frame the
 // SLAM map was initialised from, not located when it came, gets a second, late set with its boxes),
-// the two runs publish byte-identical payloads on the three channels, and the recognised objects are
-// there (not only empty messages); no two published boxes of a frame that are surest of the same
-// object class overlap by IoU > 0.5 (docs/architecture.md §3, suppressed per class), though the
-// proposals did. The object map re-run on the recording's inputs gives the node's messages byte for
-// byte, and on the first half of them the same messages for that half: a fused label never depends
-// on a later frame.
+// the two runs publish byte-identical payloads on the three channels, and the recognised objects
+// are there (not only empty messages); no two published boxes of a frame that are surest of the
+// same object class overlap by IoU > 0.5 (docs/architecture.md §3, suppressed per class), though
+// the proposals did. The object map re-run on the recording's inputs gives the node's messages byte
+// for byte, and on the first half of them the same messages for that half: a fused label never
+// depends on a later frame.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -46,8 +46,10 @@ Recording record(const std::string& log_path, const Channels& ch) {
     if (m->channel == ch.object_map) r.object_maps.push_back(m->data);
     if (m->channel == ch.object_detections) r.object_detections.push_back(m->data);
     proposals_t p;
-    if (m->channel == ch.proposals && p.decode(m->data.data(), 0, static_cast<int>(m->data.size())) > 0) {
-      if (!r.proposal_seqs.empty() && p.seq < *std::max_element(r.proposal_seqs.begin(), r.proposal_seqs.end())) {
+    if (m->channel == ch.proposals &&
+        p.decode(m->data.data(), 0, static_cast<int>(m->data.size())) > 0) {
+      if (!r.proposal_seqs.empty() &&
+          p.seq < *std::max_element(r.proposal_seqs.begin(), r.proposal_seqs.end())) {
         r.late_seqs.push_back(p.seq);
         EXPECT_GT(p.num_boxes, 0) << "late proposals for seq " << p.seq << " without boxes";
       }
@@ -107,7 +109,8 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
     options.objectmap_dir = dir + "/map" + std::to_string(run);
     const PipelineRun result = runPipeline(sample, log, sys, options);
     ASSERT_TRUE(result.ok) << result.error << " (process outputs: " << log << ".<stage>.txt)";
-    ASSERT_EQ(result.stages, (std::vector<std::string>{"slam", "proposals", "recognizer", "objectmap"}));
+    ASSERT_EQ(result.stages,
+              (std::vector<std::string>{"slam", "proposals", "recognizer", "objectmap"}));
     runs.push_back(record(log, sys.channels));
   }
   const int frames = record(sample, sys.channels).camera_frames;
@@ -115,11 +118,13 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
   for (const Recording& r : runs) {
     EXPECT_EQ(r.camera_frames, frames);
     EXPECT_EQ(r.late_seqs, std::vector<int32_t>{0}) << "the first map is initialised from frame 0";
-    EXPECT_EQ(static_cast<int>(r.proposal_seqs.size()), frames + static_cast<int>(r.late_seqs.size()))
+    EXPECT_EQ(static_cast<int>(r.proposal_seqs.size()),
+              frames + static_cast<int>(r.late_seqs.size()))
         << "one PROPOSALS per frame, and the late ones";
     EXPECT_EQ(r.detections.size(), r.proposal_seqs.size()) << "one DETECTIONS per PROPOSALS";
     EXPECT_EQ(r.object_maps.size(), r.detections.size()) << "one OBJECT_MAP per DETECTIONS";
-    EXPECT_EQ(r.object_detections.size(), r.detections.size()) << "one OBJECT_DETECTIONS per DETECTIONS";
+    EXPECT_EQ(r.object_detections.size(), r.detections.size())
+        << "one OBJECT_DETECTIONS per DETECTIONS";
   }
   ASSERT_EQ(runs[0].detections.size(), runs[1].detections.size());
   for (size_t i = 0; i < runs[0].detections.size(); ++i)
@@ -129,31 +134,38 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
     ASSERT_EQ(runs[0].object_maps[i], runs[1].object_maps[i]) << "OBJECT_MAP #" << i << " differs";
   ASSERT_EQ(runs[0].object_detections.size(), runs[1].object_detections.size());
   for (size_t i = 0; i < runs[0].object_detections.size(); ++i)
-    ASSERT_EQ(runs[0].object_detections[i], runs[1].object_detections[i]) << "OBJECT_DETECTIONS #" << i << " differs";
+    ASSERT_EQ(runs[0].object_detections[i], runs[1].object_detections[i])
+        << "OBJECT_DETECTIONS #" << i << " differs";
 
   // The object map re-run on the recorded inputs publishes what the node did, byte for byte...
   const std::string log0 = dir + "/run0.lcm";
-  const objectmap::ObjectMapOptions map_options;  // config/objectmap.yaml equals the defaults (tested)
+  const objectmap::ObjectMapOptions
+      map_options;  // config/objectmap.yaml equals the defaults (tested)
   const ObjectMapOutputs again = rerunObjectMap(log0, sys.channels, map_options);
   const ObjectMapOutputs recorded = readObjectMapOutputs(log0, sys.channels);
   ASSERT_EQ(again.frames.size(), recorded.frames.size());
-  for (const auto& [seq, m] : recorded.frames) ASSERT_EQ(bytes(again.frames.at(seq)), bytes(m)) << "seq " << seq;
+  for (const auto& [seq, m] : recorded.frames)
+    ASSERT_EQ(bytes(again.frames.at(seq)), bytes(m)) << "seq " << seq;
   EXPECT_EQ(bytes(again.last_map), bytes(recorded.last_map));
   // ...and on the first half of the recording, the same for that half: what a frame's boxes were
   // labelled depends on nothing later.
   const std::string half = dir + "/half.lcm";
-  const int64_t kept = truncateLog(log0, half, sys.channels, static_cast<int>(recorded.frames.size() / 2));
+  const int64_t kept =
+      truncateLog(log0, half, sys.channels, static_cast<int>(recorded.frames.size() / 2));
   ASSERT_GT(kept, 10);
   const ObjectMapOutputs early = rerunObjectMap(half, sys.channels, map_options);
-  ASSERT_EQ(static_cast<int64_t>(early.frames.size()), kept - 1) << "frame 0 is answered twice (late)";
+  ASSERT_EQ(static_cast<int64_t>(early.frames.size()), kept - 1)
+      << "frame 0 is answered twice (late)";
   for (const auto& [seq, m] : early.frames)
-    ASSERT_EQ(bytes(m), bytes(recorded.frames.at(seq))) << "seq " << seq << " changed by later frames";
+    ASSERT_EQ(bytes(m), bytes(recorded.frames.at(seq)))
+        << "seq " << seq << " changed by later frames";
 
   // What was replayed is the real thing: boxes were classified, and the map holds objects.
   int64_t boxes = 0;
   for (const auto& bytes : runs[0].detections) {
     detections_t d;
-    ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+    ASSERT_EQ(d.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
+              static_cast<int>(bytes.size()));
     boxes += d.num_boxes;
     // Suppression is per class (config/recognizer.yaml): two published boxes that overlap by more
     // than 0.5 are surest of different object classes (background last, not an object class).
@@ -166,7 +178,8 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
         const box_t& a = d.boxes[static_cast<size_t>(i)];
         const box_t& b = d.boxes[static_cast<size_t>(j)];
         if (rectIou(a.x, a.y, a.w, a.h, b.x, b.y, b.w, b.h) > 0.5) {
-          EXPECT_NE(surest(i), surest(j)) << "DETECTIONS seq " << d.seq << ": boxes " << i << " and " << j;
+          EXPECT_NE(surest(i), surest(j))
+              << "DETECTIONS seq " << d.seq << ": boxes " << i << " and " << j;
         }
       }
   }
@@ -176,6 +189,7 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
   EXPECT_LT(boxes, runs[0].proposal_boxes);
   object_map_t last;
   const auto& bytes = runs[0].object_maps.back();
-  ASSERT_EQ(last.decode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  ASSERT_EQ(last.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
   EXPECT_GE(last.num_objects, 1);
 }

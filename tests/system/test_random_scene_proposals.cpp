@@ -13,12 +13,12 @@
 
 #include "common/bus/system_config.h"
 #include "common/dataset.h"
-#include "tools/synth/random_scene.h"
-#include "tools/synth/writers.h"
 #include "tests/support/test_support.h"
 #include "tests/system/lockstep_pipeline.h"
 #include "tools/eval/pipeline_run.h"
 #include "tools/eval/proposal_metrics.h"
+#include "tools/synth/random_scene.h"
+#include "tools/synth/writers.h"
 
 using namespace slamaware;
 
@@ -40,8 +40,8 @@ double recallOfRandomScene(uint64_t seed) {
   ProposalEvalOptions eval;
   eval.stride = 2;
   eval.baseline = false;
-  const ProposalScores scores =
-      scoreProposals(readProposalRecording(log, sys.channels), SequenceFolder::open(dir + "/sequence"), eval);
+  const ProposalScores scores = scoreProposals(readProposalRecording(log, sys.channels),
+                                               SequenceFolder::open(dir + "/sequence"), eval);
   return proposalSection(scores)["recall_iou50"].get<double>();
 }
 
@@ -62,10 +62,12 @@ TEST_P(RandomSceneProposals, ObjectsOfARandomTableAreProposed) {
   const Floor f = GetParam();
   const double recall = recallOfRandomScene(static_cast<uint64_t>(f.seed));
   std::cout << "random scene " << f.seed << ": proposals recall " << recall << " %\n";
-  EXPECT_GE(recall, f.recall) << "random scene " << f.seed << " (slamaware-synth scene --random " << f.seed
-                              << " --frames " << kFrames << "): proposals recall at IoU 0.5 " << recall << " %";
+  EXPECT_GE(recall, f.recall) << "random scene " << f.seed << " (slamaware-synth scene --random "
+                              << f.seed << " --frames " << kFrames
+                              << "): proposals recall at IoU 0.5 " << recall << " %";
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, RandomSceneProposals,
-                         ::testing::Values(Floor{4, 88.0}, Floor{5, 75.0}, Floor{7, 75.0}, Floor{9, 70.0}),
+                         ::testing::Values(Floor{4, 88.0}, Floor{5, 75.0}, Floor{7, 75.0},
+                                           Floor{9, 70.0}),
                          [](const auto& info) { return "seed" + std::to_string(info.param.seed); });

@@ -29,7 +29,8 @@ TEST(TempleProposals, TheTempleIsProposedInNineOfTenLocalisedViews) {
   ProposalEvalOptions eval;
   eval.stride = 1;
   eval.baseline = false;
-  const ProposalScores scores = scoreProposals(readProposalRecording(log, sys.channels), sequence, eval);
+  const ProposalScores scores =
+      scoreProposals(readProposalRecording(log, sys.channels), sequence, eval);
   // The report's figure, as make eval writes it (the temple has one ground-truth box per frame).
   const nlohmann::json section = proposalSection(scores);
   ASSERT_GE(scores.rank50_localized.size(), 40u) << "SLAM localised too few of the 47 views";

@@ -15,9 +15,9 @@
 #include "common/bus/image_msg.h"
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
-#include "tools/train/trainer.h"
 #include "tests/objectmap/synthetic_world.h"
 #include "tests/support/test_support.h"
+#include "tools/train/trainer.h"
 
 using namespace slamaware;
 using namespace slamaware::objectmap;
@@ -29,9 +29,9 @@ cv::Rect projectedBox(const test::SyntheticWorld& w, const test::SyntheticObject
   const SE3 T_cw = w.pose(frame).inverse();
   double lo_x = 1e9, lo_y = 1e9, hi_x = -1e9, hi_y = -1e9;
   for (int k = 0; k < 8; ++k) {
-    const Eigen::Vector3d corner =
-        o.centre + Eigen::Vector3d((k & 1 ? 1 : -1) * o.half_size.x(), (k & 2 ? 1 : -1) * o.half_size.y(),
-                                   (k & 4 ? 1 : -1) * o.half_size.z());
+    const Eigen::Vector3d corner = o.centre + Eigen::Vector3d((k & 1 ? 1 : -1) * o.half_size.x(),
+                                                              (k & 2 ? 1 : -1) * o.half_size.y(),
+                                                              (k & 4 ? 1 : -1) * o.half_size.z());
     const Eigen::Vector2d px = w.camera().project(T_cw * corner);
     lo_x = std::min(lo_x, px.x()), lo_y = std::min(lo_y, px.y());
     hi_x = std::max(hi_x, px.x()), hi_y = std::max(hi_y, px.y());
@@ -88,12 +88,13 @@ TEST(Harvest, TheLabelledObjectsViewsAreCutWithTheirMasksAndReadBackAsAnObjectSe
     cv::randu(img, 0, 255);
     for (int f = 0; f < frames; ++f) {
       test::writeEvent(log, "SLAM_POSE", w.poseMessage(f, 1), n++);
-      test::writeEvent(log, "CAMERA", makeImageMessage(img, w.utime(f), f, image_t::PIXEL_FORMAT_JPEG), n++);
+      test::writeEvent(log, "CAMERA",
+                       makeImageMessage(img, w.utime(f), f, image_t::PIXEL_FORMAT_JPEG), n++);
     }
   }
   const std::string out = dir + "/harvested";
-  const std::string cmd = test::binPath("slamaware-harvest") + " " + dir + "/session.lcm --map " + dir + "/map --out " +
-                          out + " 2>&1";
+  const std::string cmd = test::binPath("slamaware-harvest") + " " + dir + "/session.lcm --map " +
+                          dir + "/map --out " + out + " 2>&1";
   std::string printed;
   FILE* p = popen(cmd.c_str(), "r");
   char buf[4096];
@@ -117,19 +118,21 @@ TEST(Harvest, TheLabelledObjectsViewsAreCutWithTheirMasksAndReadBackAsAnObjectSe
     std::string name = std::filesystem::path(c.path).filename().string();
     name = name.substr(0, name.size() - std::string("_crop.png").size());
     const int seq = std::stoi(name.substr(name.rfind('_') + 1));
-    std::ifstream loc(c.path.substr(0, c.path.size() - std::string("_crop.png").size()) + "_loc.txt");
+    std::ifstream loc(c.path.substr(0, c.path.size() - std::string("_crop.png").size()) +
+                      "_loc.txt");
     int x = -1, y = -1;
     char comma;
     ASSERT_TRUE(loc >> x >> comma >> y) << c.path;
     const cv::Rect box(x, y, crop.cols, crop.rows);
-    EXPECT_GE(iou(box, projectedBox(w, truth, seq)), 0.5) << c.path << " " << box << " vs "
-                                                          << projectedBox(w, truth, seq);
+    EXPECT_GE(iou(box, projectedBox(w, truth, seq)), 0.5)
+        << c.path << " " << box << " vs " << projectedBox(w, truth, seq);
   }
   EXPECT_GE(mugs, frames * 3 / 4) << printed;
   // Every 4th frame of the recording: a quarter of the views (frames 0, 4, ..., 36).
   const std::string sparse = dir + "/every4";
-  ASSERT_EQ(std::system((test::binPath("slamaware-harvest") + " " + dir + "/session.lcm --map " + dir + "/map --out " +
-                         sparse + " --every 4 > /dev/null 2>&1").c_str()),
+  ASSERT_EQ(std::system((test::binPath("slamaware-harvest") + " " + dir + "/session.lcm --map " +
+                         dir + "/map --out " + sparse + " --every 4 > /dev/null 2>&1")
+                            .c_str()),
             0);
   int sparse_mugs = 0;
   for (const LabeledCrop& c : collectNamedCrops(sparse, 0)) sparse_mugs += c.category == "my_mug";

@@ -19,9 +19,9 @@
 #include <optional>
 
 #include "common/bus/image_msg.h"
-#include "common/bus/object_detections_msg.h"
 #include "common/bus/log_reader.h"
 #include "common/bus/node.h"
+#include "common/bus/object_detections_msg.h"
 #include "common/image_codec.h"
 #include "slamaware/detections_t.hpp"
 #include "slamaware/object_detections_t.hpp"
@@ -44,10 +44,14 @@ std::optional<T> decodeAs(const LogRecord& ev) {
 
 const char* stateName(int s) {
   switch (s) {
-    case pose_t::STATE_INITIALIZING: return "INITIALIZING";
-    case pose_t::STATE_TRACKING: return "TRACKING";
-    case pose_t::STATE_LOST: return "LOST";
-    case pose_t::STATE_RELOCALIZED: return "RELOCALIZED";
+    case pose_t::STATE_INITIALIZING:
+      return "INITIALIZING";
+    case pose_t::STATE_TRACKING:
+      return "TRACKING";
+    case pose_t::STATE_LOST:
+      return "LOST";
+    case pose_t::STATE_RELOCALIZED:
+      return "RELOCALIZED";
   }
   return "?";
 }
@@ -75,14 +79,16 @@ cv::Rect putLabel(cv::Mat& img, const std::string& text, cv::Point at, const cv:
   r.x = std::clamp(r.x, 0, std::max(0, img.cols - r.width));
   r.y = std::clamp(r.y, 0, std::max(0, img.rows - r.height));
   cv::rectangle(img, r, colour, cv::FILLED);
-  cv::putText(img, text, {r.x + 1, r.y + r.height - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0}, 1, cv::LINE_AA);
+  cv::putText(img, text, {r.x + 1, r.y + r.height - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0},
+              1, cv::LINE_AA);
   return r;
 }
 
 // A place for a label of an object drawn at `box` that covers none of `taken`: above the box, below
 // it, then further out in steps; the first free one (else above the box). The place is added to
 // `taken`.
-cv::Point freeLabelPlace(const std::string& text, const cv::Rect& box, std::vector<cv::Rect>* taken) {
+cv::Point freeLabelPlace(const std::string& text, const cv::Rect& box,
+                         std::vector<cv::Rect>* taken) {
   const cv::Rect size = labelRect(text, {0, 0});
   std::vector<cv::Point> candidates;
   for (int step = 0; step < 12; ++step) {
@@ -93,7 +99,8 @@ cv::Point freeLabelPlace(const std::string& text, const cv::Rect& box, std::vect
   }
   for (const cv::Point& c : candidates) {
     const cv::Rect r = labelRect(text, c);
-    if (std::none_of(taken->begin(), taken->end(), [&](const cv::Rect& t) { return (t & r).area() > 0; })) {
+    if (std::none_of(taken->begin(), taken->end(),
+                     [&](const cv::Rect& t) { return (t & r).area() > 0; })) {
       taken->push_back(r);
       return c;
     }
@@ -112,7 +119,8 @@ struct FrameAnnotations {
 struct DrawOptions {
   bool single_view = false;  ///< the recognizer's labels of every box instead of the map's
   bool background = false;   ///< also the background candidates and the objects' other boxes, faint
-  /// Objects a user labelled (slamaware-ctl label), by id, as the session's last OBJECT_MAP has them.
+  /// Objects a user labelled (slamaware-ctl label), by id, as the session's last OBJECT_MAP has
+  /// them.
   std::map<int32_t, std::string> user_labels;
 };
 
@@ -160,8 +168,10 @@ Session readSession(const std::string& log, const Channels& ch) {
       if (ev->channel == ch.slam_pose) {
         if (auto m = decodeAs<pose_t>(*ev)) {
           s.by_seq[m->seq].pose = *m;
-          if ((m->state == pose_t::STATE_TRACKING || m->state == pose_t::STATE_RELOCALIZED) && m->map_id == s.map_id)
-            s.path.emplace_back(static_cast<float>(m->position[0]), static_cast<float>(m->position[1]),
+          if ((m->state == pose_t::STATE_TRACKING || m->state == pose_t::STATE_RELOCALIZED) &&
+              m->map_id == s.map_id)
+            s.path.emplace_back(static_cast<float>(m->position[0]),
+                                static_cast<float>(m->position[1]),
                                 static_cast<float>(m->position[2]));
         } else {
           ok = false;
@@ -228,7 +238,8 @@ int drawObjects(cv::Mat& img, const object_detections_t& d, const DrawOptions& o
 
 void drawFrame(cv::Mat& img, int32_t seq, const FrameAnnotations& a, const DrawOptions& options) {
   std::string state = "no pose";
-  if (a.pose) state = std::string(stateName(a.pose->state)) + " map " + std::to_string(a.pose->map_id);
+  if (a.pose)
+    state = std::string(stateName(a.pose->state)) + " map " + std::to_string(a.pose->map_id);
   int boxes = 0;
   const char* what = "boxes";
   if (a.objects && !options.single_view) {
@@ -245,8 +256,8 @@ void drawFrame(cv::Mat& img, int32_t seq, const FrameAnnotations& a, const DrawO
       cv::rectangle(img, cv::Rect(cvRound(b.x), cvRound(b.y), cvRound(b.w), cvRound(b.h)), colour,
                     label == "background" ? 1 : 2);
       char text[96];
-      std::snprintf(text, sizeof(text), "#%d %s %.2f", d.candidate_ids[static_cast<size_t>(i)], label.c_str(),
-                    std::exp(lp[static_cast<size_t>(best)]));
+      std::snprintf(text, sizeof(text), "#%d %s %.2f", d.candidate_ids[static_cast<size_t>(i)],
+                    label.c_str(), std::exp(lp[static_cast<size_t>(best)]));
       putLabel(img, text, {cvRound(b.x), cvRound(b.y)}, colour);
       ++boxes;
     }
@@ -254,16 +265,18 @@ void drawFrame(cv::Mat& img, int32_t seq, const FrameAnnotations& a, const DrawO
     const proposals_t& p = *a.proposals;
     for (int i = 0; i < p.num_boxes; ++i) {
       const box_t& b = p.boxes[static_cast<size_t>(i)];
-      cv::rectangle(img, cv::Rect(cvRound(b.x), cvRound(b.y), cvRound(b.w), cvRound(b.h)), {255, 255, 255}, 1);
-      putLabel(img, "#" + std::to_string(p.candidate_ids[static_cast<size_t>(i)]), {cvRound(b.x), cvRound(b.y)},
-               {255, 255, 255});
+      cv::rectangle(img, cv::Rect(cvRound(b.x), cvRound(b.y), cvRound(b.w), cvRound(b.h)),
+                    {255, 255, 255}, 1);
+      putLabel(img, "#" + std::to_string(p.candidate_ids[static_cast<size_t>(i)]),
+               {cvRound(b.x), cvRound(b.y)}, {255, 255, 255});
       ++boxes;
     }
   }
   char text[128];
   std::snprintf(text, sizeof(text), "frame %d  SLAM %s  %s %d", seq, state.c_str(), what, boxes);
   cv::rectangle(img, {0, img.rows - 22}, {img.cols, img.rows}, {0, 0, 0}, cv::FILLED);
-  cv::putText(img, text, {6, img.rows - 7}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
+  cv::putText(img, text, {6, img.rows - 7}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1,
+              cv::LINE_AA);
 }
 
 // The map from above: the plane spanned by the two main directions of the points.
@@ -283,7 +296,9 @@ bool drawTopDown(const Session& s, const std::string& path) {
   for (const auto& p : pts) cov += (p - mean) * (p - mean).transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   const Eigen::Vector3d u = eig.eigenvectors().col(2), v = eig.eigenvectors().col(1);
-  auto plane = [&](const Eigen::Vector3d& p) { return Eigen::Vector2d((p - mean).dot(u), (p - mean).dot(v)); };
+  auto plane = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector2d((p - mean).dot(u), (p - mean).dot(v));
+  };
   // Extent: the 1st..99th percentile of the points, plus the camera path.
   std::vector<double> us, vs;
   for (const auto& p : pts) {
@@ -308,30 +323,35 @@ bool drawTopDown(const Session& s, const std::string& path) {
   cv::Mat img(size, size, CV_8UC3, cv::Scalar(255, 255, 255));
   auto px = [&](const Eigen::Vector3d& p) {
     const auto q = plane(p);
-    return cv::Point(cvRound(margin + (q.x() - u0) * scale), cvRound(size - margin - (q.y() - v0) * scale));
+    return cv::Point(cvRound(margin + (q.x() - u0) * scale),
+                     cvRound(size - margin - (q.y() - v0) * scale));
   };
   for (size_t i = 0; i < pts.size(); ++i) {
     const cv::Point q = px(pts[i]);
     if (q.x >= 0 && q.y >= 0 && q.x < size && q.y < size) img.at<cv::Vec3b>(q) = cols[i];
   }
   for (size_t i = 1; i < s.path.size(); ++i)
-    cv::line(img, px({s.path[i - 1].x, s.path[i - 1].y, s.path[i - 1].z}), px({s.path[i].x, s.path[i].y, s.path[i].z}),
-             {200, 90, 0}, 2, cv::LINE_AA);
+    cv::line(img, px({s.path[i - 1].x, s.path[i - 1].y, s.path[i - 1].z}),
+             px({s.path[i].x, s.path[i].y, s.path[i].z}), {200, 90, 0}, 2, cv::LINE_AA);
   std::vector<cv::Rect> taken;
   if (s.last_objects) {
     for (const auto& o : s.last_objects->objects) {
       // The labelled objects only: background candidates (most of them) would hide the map.
-      if (o.map_id != s.map_id || ((o.label == "background" || o.label.empty()) && o.user_label.empty())) continue;
+      if (o.map_id != s.map_id ||
+          ((o.label == "background" || o.label.empty()) && o.user_label.empty()))
+        continue;
       // An object with evidence but no position yet (NaN centroid, object_t.lcm): not drawn.
       bool placed = true;
-      for (int k = 0; k < 3; ++k) placed = placed && std::isfinite(o.centroid[k]) && std::isfinite(o.extent[k]);
+      for (int k = 0; k < 3; ++k)
+        placed = placed && std::isfinite(o.centroid[k]) && std::isfinite(o.extent[k]);
       if (!placed) continue;
       const Eigen::Vector3d c(o.centroid[0], o.centroid[1], o.centroid[2]);
       const Eigen::Vector3d half(o.extent[0] / 2, o.extent[1] / 2, o.extent[2] / 2);
       cv::Point lo(size, size), hi(0, 0);
       for (int k = 0; k < 8; ++k) {
-        const Eigen::Vector3d corner = c + Eigen::Vector3d((k & 1 ? 1 : -1) * half.x(), (k & 2 ? 1 : -1) * half.y(),
-                                                           (k & 4 ? 1 : -1) * half.z());
+        const Eigen::Vector3d corner =
+            c + Eigen::Vector3d((k & 1 ? 1 : -1) * half.x(), (k & 2 ? 1 : -1) * half.y(),
+                                (k & 4 ? 1 : -1) * half.z());
         const cv::Point q = px(corner);
         lo = {std::min(lo.x, q.x), std::min(lo.y, q.y)};
         hi = {std::max(hi.x, q.x), std::max(hi.y, q.y)};
@@ -339,18 +359,22 @@ bool drawTopDown(const Session& s, const std::string& path) {
       const cv::Scalar colour = labelColour(o.label);
       const cv::Rect box(lo, hi);
       cv::rectangle(img, box, colour, 2);
-      const std::string text = "#" + std::to_string(o.id) + " " + (o.user_label.empty() ? "" : "[" + o.user_label + "] ") +
-                               o.label + " (" + std::to_string(o.num_views) + " views)";
+      const std::string text = "#" + std::to_string(o.id) + " " +
+                               (o.user_label.empty() ? "" : "[" + o.user_label + "] ") + o.label +
+                               " (" + std::to_string(o.num_views) + " views)";
       const cv::Point at = freeLabelPlace(text, box, &taken);
       const cv::Rect label = putLabel(img, text, at, colour);
       // A label moved away from its box gets a line to it.
       const cv::Rect next_to(box.x - 4, box.y - label.height - 4, box.width + label.width + 8,
                              box.height + 2 * label.height + 8);
       if ((label & next_to).area() == 0)
-        cv::line(img, {label.x, label.y + label.height / 2}, {box.x, box.y}, colour, 1, cv::LINE_AA);
+        cv::line(img, {label.x, label.y + label.height / 2}, {box.x, box.y}, colour, 1,
+                 cv::LINE_AA);
     }
   }
-  cv::putText(img, "map " + std::to_string(s.map_id) + ": " + std::to_string(pts.size()) + " points, camera path in blue",
+  cv::putText(img,
+              "map " + std::to_string(s.map_id) + ": " + std::to_string(pts.size()) +
+                  " points, camera path in blue",
               {10, 20}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
   writeImage(path, img);
   return true;
@@ -359,17 +383,21 @@ bool drawTopDown(const Session& s, const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-annotate: annotated video and top-down map picture of a recorded session"};
+  CLI::App app{
+      "slamaware-annotate: annotated video and top-down map picture of a recorded session"};
   NodeArgs node;
   std::string log, out_dir = "build/demo";
   double fps = 30;
   DrawOptions draw;
   addNodeOptions(app, node, false);
-  app.add_flag("--single-view", draw.single_view,
-               "draw every box with the recognizer's own label (DETECTIONS) instead of the object map's");
+  app.add_flag(
+      "--single-view", draw.single_view,
+      "draw every box with the recognizer's own label (DETECTIONS) instead of the object map's");
   app.add_flag("--background", draw.background,
                "also draw the background candidates and the objects' other boxes (faint)");
-  app.add_option("log", log, "LCM log of a session (lcm-logger format)")->required()->check(CLI::ExistingFile);
+  app.add_option("log", log, "LCM log of a session (lcm-logger format)")
+      ->required()
+      ->check(CLI::ExistingFile);
   app.add_option("--out-dir", out_dir, "folder for annotated.mp4 and topdown.png");
   app.add_option("--fps", fps, "frame rate of the video")->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
@@ -400,7 +428,8 @@ int main(int argc, char** argv) {
           continue;
         }
         if (!writer.isOpened()) {
-          if (!writer.open(video, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps, img.size())) {
+          if (!writer.open(video, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps,
+                           img.size())) {
             spdlog::error("{}: cannot open a video writer (OpenCV without FFmpeg?)", video);
             return 1;
           }

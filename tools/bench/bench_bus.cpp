@@ -21,7 +21,9 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[v.size() / 2];
 }
-double ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+double ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
 
 // A textured VGA test frame: smooth colour gradients plus noise at several scales (JPEG cost
 // depends on texture; a flat frame would flatter the codec).
@@ -66,10 +68,13 @@ int main(int argc, char** argv) {
     Bus bus(BusOptions().url);
     Clock::time_point sent;
     bool got = false;
-    bus.subscribe<image_t>("BENCH_CAMERA", [&](const image_t&) {
-      bus_ms.push_back(ms(sent, Clock::now()));
-      got = true;
-    }, 16 << 20);
+    bus.subscribe<image_t>(
+        "BENCH_CAMERA",
+        [&](const image_t&) {
+          bus_ms.push_back(ms(sent, Clock::now()));
+          got = true;
+        },
+        16 << 20);
     const image_t msg = makeImageMessage(frame, 0, 0, image_t::PIXEL_FORMAT_JPEG, 90);
     for (int i = 0; i < n; ++i) {
       got = false;

@@ -36,7 +36,8 @@ int main(int argc, char** argv) {
   std::string out = "build/bench/parts/proposals.json", config;
   int repeats = 5, frames = 200;
   app.add_option("--out", out, "JSON fragment to write");
-  app.add_option("--config", config, "proposals options (default: built-in, as config/proposals.yaml)");
+  app.add_option("--config", config,
+                 "proposals options (default: built-in, as config/proposals.yaml)");
   app.add_option("--repeats", repeats, "re-clusterings timed");
   app.add_option("--frames", frames, "frames projected");
   CLI11_PARSE(app, argc, argv);
@@ -49,8 +50,8 @@ int main(int argc, char** argv) {
     std::uniform_real_distribution<float> u(0, 1);
     for (int i = 0; i < 12; ++i) {
       const float a = static_cast<float>(2 * M_PI * i / 12), rr = 0.2f + 0.25f * (i % 2);
-      map = join(map, cylinder(rr * std::cos(a), rr * std::sin(a), 0.03f + 0.03f * u(rng), 0.06f + 0.14f * u(rng),
-                               0.003f, static_cast<uint8_t>(40 + 15 * i)));
+      map = join(map, cylinder(rr * std::cos(a), rr * std::sin(a), 0.03f + 0.03f * u(rng),
+                               0.06f + 0.14f * u(rng), 0.003f, static_cast<uint8_t>(40 + 15 * i)));
     }
     std::normal_distribution<float> noise(0, 0.002f);
     for (auto& p : map) p.p += Eigen::Vector3f(noise(rng), noise(rng), noise(rng));
@@ -61,7 +62,8 @@ int main(int argc, char** argv) {
       candidates.update(1, true, 0, std::vector<int32_t>(map.size(), 0), map);
       for (int v = 0; v < 36; ++v) {  // views circling the table
         const double a = 2 * M_PI * v / 36;
-        candidates.addView(1, lookAt(Eigen::Vector3d(0.8 * std::cos(a), 0.8 * std::sin(a), 0.55), Eigen::Vector3d::Zero()));
+        candidates.addView(1, lookAt(Eigen::Vector3d(0.8 * std::cos(a), 0.8 * std::sin(a), 0.55),
+                                     Eigen::Vector3d::Zero()));
       }
       const auto t0 = std::chrono::steady_clock::now();
       candidates.recluster();
@@ -74,7 +76,8 @@ int main(int argc, char** argv) {
     size_t boxes = 0;
     for (int f = 0; f < frames; ++f) {
       const double a = 2 * M_PI * f / frames;
-      const SE3 T = lookAt(Eigen::Vector3d(0.8 * std::cos(a), 0.8 * std::sin(a), 0.55), Eigen::Vector3d::Zero());
+      const SE3 T = lookAt(Eigen::Vector3d(0.8 * std::cos(a), 0.8 * std::sin(a), 0.55),
+                           Eigen::Vector3d::Zero());
       const auto t0 = std::chrono::steady_clock::now();
       boxes += projectCandidates(candidates.candidates(), camera, T, options).size();
       project_ms.push_back(msSince(t0));
@@ -82,18 +85,23 @@ int main(int argc, char** argv) {
     nlohmann::json j;
     j["proposals_cluster_ms_100k"] = median(cluster_ms);
     j["proposals_cluster_points"] = static_cast<int64_t>(map.size());
-    j["proposals_cluster_points_after_downsampling"] = st.clustered_points + st.plane_points + st.seen_through;
+    j["proposals_cluster_points_after_downsampling"] =
+        st.clustered_points + st.plane_points + st.seen_through;
     j["proposals_candidates"] = st.clusters;
-    j["proposals_cluster_parts_ms"] = {{"filter", st.filter_ms}, {"structure", st.structure_ms}, {"clustering", st.cluster_ms}};
+    j["proposals_cluster_parts_ms"] = {
+        {"filter", st.filter_ms}, {"structure", st.structure_ms}, {"clustering", st.cluster_ms}};
     j["proposals_project_ms_per_frame"] = median(project_ms);
     j["proposals_boxes_per_frame_mean"] = static_cast<double>(boxes) / std::max(1, frames);
     std::ofstream(out) << j.dump(2) << "\n";
-    spdlog::info("last recluster: filter {:.0f} ms, structure {:.0f} ms, clustering {:.0f} ms", st.filter_ms,
-                 st.structure_ms, st.cluster_ms);
-    spdlog::info("{} points ({} after downsampling): clustering at {} scales {:.1f} ms median -> {} candidates; "
-                 "projection {:.3f} ms per frame median, {:.1f} boxes per frame",
-                 map.size(), st.clustered_points + st.plane_points + st.seen_through, options.scales, median(cluster_ms),
-                 st.clusters, median(project_ms), static_cast<double>(boxes) / std::max(1, frames));
+    spdlog::info("last recluster: filter {:.0f} ms, structure {:.0f} ms, clustering {:.0f} ms",
+                 st.filter_ms, st.structure_ms, st.cluster_ms);
+    spdlog::info(
+        "{} points ({} after downsampling): clustering at {} scales {:.1f} ms median -> {} "
+        "candidates; "
+        "projection {:.3f} ms per frame median, {:.1f} boxes per frame",
+        map.size(), st.clustered_points + st.plane_points + st.seen_through, options.scales,
+        median(cluster_ms), st.clusters, median(project_ms),
+        static_cast<double>(boxes) / std::max(1, frames));
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

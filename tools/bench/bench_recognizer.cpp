@@ -9,9 +9,10 @@
 //   flair_speedup_vs_direct_1000_boxes direct time / FLAIR time (table build included) for 1000
 //                                      boxes of uniformly random size from 20x20 px to the image
 //   flair_area_ratio_full_vs_32px      FLAIR time per box: whole-image box / 32x32 box
-//   classes_runtime_ratio_51_vs_5      recognizer_ms_per_frame with 51 (+ background) classes over 5
-//   flair_table_mb                     FLAIR table memory for a whole 640x480 frame (MB = 1e6 bytes)
-//   flair_crossover_boxes              box count (of the 1000-box distribution) above which FLAIR is
+//   classes_runtime_ratio_51_vs_5      recognizer_ms_per_frame with 51 (+ background) classes over
+//   5 flair_table_mb                     FLAIR table memory for a whole 640x480 frame (MB = 1e6
+//   bytes) flair_crossover_boxes              box count (of the 1000-box distribution) above which
+//   FLAIR is
 //                                      cheaper than the direct encoder
 // plus the parts these come from. Frames: the shared real sequences when present, else textured
 // synthetic frames; PCA and vocabulary are fitted on the frames' own features and the classifier
@@ -41,7 +42,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -56,7 +59,8 @@ cv::Mat syntheticFrame(int seed) {
   cv::resize(coarse, img, cv::Size(640, 480), 0, 0, cv::INTER_CUBIC);
   std::uniform_int_distribution<int> x(0, 639), y(0, 479), r(5, 80), c(0, 255);
   for (int k = 0; k < 60; ++k)
-    cv::rectangle(img, cv::Rect(x(rng), y(rng), r(rng), r(rng)), cv::Scalar(c(rng), c(rng), c(rng)), cv::FILLED);
+    cv::rectangle(img, cv::Rect(x(rng), y(rng), r(rng), r(rng)), cv::Scalar(c(rng), c(rng), c(rng)),
+                  cv::FILLED);
   cv::Mat noise(480, 640, CV_8UC3);
   cv::randn(noise, 0, 8);
   return img + noise;
@@ -65,7 +69,8 @@ cv::Mat syntheticFrame(int seed) {
 // 640x480 frames: every 8th frame of the shared sequences, or synthetic ones.
 std::vector<cv::Mat> benchFrames(const std::string& shared, int count) {
   std::vector<cv::Mat> frames;
-  for (const char* name : {"sequences/tum_fr3_cabinet_keyframes", "sequences/middlebury_temple_ring"}) {
+  for (const char* name :
+       {"sequences/tum_fr3_cabinet_keyframes", "sequences/middlebury_temple_ring"}) {
     const fs::path dir = fs::path(shared) / name;
     if (!fs::exists(dir / "sequence.yaml")) continue;
     const SequenceFolder seq = SequenceFolder::open(dir.string());
@@ -111,7 +116,8 @@ std::shared_ptr<RecognizerModel> benchModel(const std::vector<cv::Mat>& frames, 
     ex.setImage(frames[f]);
     ex.extract(ex.imageCells(), &g);
     for (int k = 0; k < 10000 && row < sample.rows(); ++k, ++row) {
-      const float* src = g.features.row(static_cast<int64_t>(rng() % static_cast<uint32_t>(g.features.rows())));
+      const float* src =
+          g.features.row(static_cast<int64_t>(rng() % static_cast<uint32_t>(g.features.rows())));
       std::copy(src, src + kFeatureDims, sample.row(row).data());
     }
   }
@@ -127,8 +133,9 @@ std::shared_ptr<RecognizerModel> benchModel(const std::vector<cv::Mat>& frames, 
 
 // 1. Frames with 30 object-sized boxes (20x20 up to a quarter of the image), 5, 10 and 51 classes;
 // then about 12 boxes of 20 to 128 px, as many as a frame publishes.
-void benchPerFrame(const std::vector<cv::Mat>& frames, const std::shared_ptr<RecognizerModel>& model5,
-                   std::mt19937& rng, nlohmann::json& j) {
+void benchPerFrame(const std::vector<cv::Mat>& frames,
+                   const std::shared_ptr<RecognizerModel>& model5, std::mt19937& rng,
+                   nlohmann::json& j) {
   // The same encoding with 10 and 51 classes (+ background): only the classifier grows.
   auto withClasses = [&](int classes) {
     auto m = std::make_shared<RecognizerModel>(*model5);
@@ -184,9 +191,10 @@ void benchPerFrame(const std::vector<cv::Mat>& frames, const std::shared_ptr<Rec
 
 // 2. FLAIR against the direct encoder on 1000 boxes (both after the shared features and codes).
 // Returns the median time to build FLAIR's tables for a frame (ms).
-double benchFlairVsDirect(const std::vector<cv::Mat>& frames, const RecognizerModel& model, FrameEncoder& encoder,
-                          std::mt19937& rng, int reps, nlohmann::json& j) {
-  std::vector<double> flair_ms, direct_ms, build_ms, per_box_flair, per_box_direct, descriptors_per_box;
+double benchFlairVsDirect(const std::vector<cv::Mat>& frames, const RecognizerModel& model,
+                          FrameEncoder& encoder, std::mt19937& rng, int reps, nlohmann::json& j) {
+  std::vector<double> flair_ms, direct_ms, build_ms, per_box_flair, per_box_direct,
+      descriptors_per_box;
   std::vector<double> crossover;
   ReusableMatrix out_rows;
   FlairEncoder flair_alone;
@@ -198,7 +206,8 @@ double benchFlairVsDirect(const std::vector<cv::Mat>& frames, const RecognizerMo
       PyramidBox pb;
       encoder.snap(b.x, b.y, b.w, b.h, 640, 480, &pb);
       boxes.push_back(pb);
-      descriptors += static_cast<double>(pb.cells().area()) * model.params.features.descriptorsPerCell();
+      descriptors +=
+          static_cast<double>(pb.cells().area()) * model.params.features.descriptorsPerCell();
     }
     FrameEncoder::Stats sd, sf;
     encoder.encode(f, boxes, EncoderKind::kDirect, &out_rows, &sd);
@@ -231,8 +240,8 @@ double benchFlairVsDirect(const std::vector<cv::Mat>& frames, const RecognizerMo
 
 // 3. FLAIR time per box against box area (tables built once; each box encoded many times), and
 // the direct encoder's time model from the same two boxes.
-void benchCostModel(const cv::Mat& f, const RecognizerModel& model, FrameEncoder& encoder, double build_ms,
-                    nlohmann::json& j) {
+void benchCostModel(const cv::Mat& f, const RecognizerModel& model, FrameEncoder& encoder,
+                    double build_ms, nlohmann::json& j) {
   ReusableMatrix out_rows;
   PyramidBox full, small;
   encoder.snap(0, 0, 640, 480, 640, 480, &full);
@@ -293,11 +302,13 @@ int main(int argc, char** argv) {
   std::string out, shared = "../shared/data";
   int frames_n = 8, reps = 5;
   app.add_option("--out", out, "JSON file to write")->required();
-  app.add_option("--shared", shared, "the shared data folder (frames of its sequences are used if present)");
+  app.add_option("--shared", shared,
+                 "the shared data folder (frames of its sequences are used if present)");
   app.add_option("--frames", frames_n, "frames to average over");
   app.add_option("--reps", reps, "repetitions of the FLAIR/direct comparisons");
   bool classes_only = false;
-  app.add_flag("--classes-only", classes_only, "only the time per frame against the number of classes (for make eval)");
+  app.add_flag("--classes-only", classes_only,
+               "only the time per frame against the number of classes (for make eval)");
   CLI11_PARSE(app, argc, argv);
   cv::setNumThreads(1);  // one thread, as the benchmark is defined
   spdlog::set_level(spdlog::level::warn);
@@ -311,9 +322,10 @@ int main(int argc, char** argv) {
       FrameEncoder encoder(model5->params, model5->pca, model5->vocabulary);
       const double build_ms = benchFlairVsDirect(frames, *model5, encoder, rng, reps, j);
       benchCostModel(frames[0], *model5, encoder, build_ms, j);
-      j["flair_table_mb"] = FlairEncoder::tableBytesFor(CellRect{0, 0, 80, 60}, model5->params.vocabulary_size,
-                                                        model5->params.pca_dims) /
-                            1e6;
+      j["flair_table_mb"] =
+          FlairEncoder::tableBytesFor(CellRect{0, 0, 80, 60}, model5->params.vocabulary_size,
+                                      model5->params.pca_dims) /
+          1e6;
       j["recognizer_bench_frames"] = frames.size();
     }
     writeJson(j, out);

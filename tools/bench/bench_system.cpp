@@ -22,8 +22,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "common/bus/log_reader.h"
 #include "common/bus/system_config.h"
@@ -42,10 +42,12 @@ namespace {
 /// What the recording of one run says, on the logger's clock (µs).
 struct RunTimes {
   std::map<int32_t, int64_t> camera, pose, proposals, detections;  ///< seq -> first receive time
-  std::map<int32_t, int64_t> new_views;  ///< seq -> receive time, DETECTIONS with a box classified in it
-  int64_t proposals_with_boxes = 0;      ///< PROPOSALS messages with at least one box
-  int64_t labelled = 0;                  ///< of them, frames whose DETECTIONS came
-  int64_t boxes_classified = 0, boxes_carried = 0;  ///< published boxes classified in their frame / carried
+  std::map<int32_t, int64_t>
+      new_views;  ///< seq -> receive time, DETECTIONS with a box classified in it
+  int64_t proposals_with_boxes = 0;  ///< PROPOSALS messages with at least one box
+  int64_t labelled = 0;              ///< of them, frames whose DETECTIONS came
+  int64_t boxes_classified = 0,
+          boxes_carried = 0;  ///< published boxes classified in their frame / carried
   int64_t poses_located = 0;  ///< SLAM_POSE in TRACKING or RELOCALIZED
   int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
   std::map<std::string, int64_t> slam_counters;  ///< of SLAM's last SLAM_STATUS
@@ -61,7 +63,8 @@ RunTimes readRun(const std::string& log_path, const Channels& ch) {
       status_t m;
       if (!decodeRecord(*r, &m)) continue;
       for (int i = 0; i < m.num_counters; ++i)
-        t.slam_counters[m.counter_names[static_cast<size_t>(i)]] = m.counter_values[static_cast<size_t>(i)];
+        t.slam_counters[m.counter_names[static_cast<size_t>(i)]] =
+            m.counter_values[static_cast<size_t>(i)];
       continue;
     }
     if (r->channel == ch.camera) {
@@ -99,7 +102,8 @@ RunTimes readRun(const std::string& log_path, const Channels& ch) {
 }
 
 /// Per frame answered by both stages: ms from `from`'s message to `to`'s.
-std::vector<double> delays(const std::map<int32_t, int64_t>& from, const std::map<int32_t, int64_t>& to) {
+std::vector<double> delays(const std::map<int32_t, int64_t>& from,
+                           const std::map<int32_t, int64_t>& to) {
   std::vector<double> ms;
   for (const auto& [seq, t] : to) {
     auto f = from.find(seq);
@@ -141,7 +145,8 @@ int main(int argc, char** argv) {
   app.add_option("--source", source, "recording (.lcm with CAMERA) or sequence folder");
   app.add_option("--bin-dir", bin_dir, "where the slamaware-* binaries are");
   app.add_option("--config-dir", config_dir, "the processes' <name>.yaml");
-  app.add_option("--system", system_path, "system.yaml of every process (default: <config-dir>/system.yaml)");
+  app.add_option("--system", system_path,
+                 "system.yaml of every process (default: <config-dir>/system.yaml)");
   app.add_option("--stages", stages, "comma-separated stages to run (default: every built stage)");
   app.add_option("--work-dir", work, "recordings of the runs (default: beside --out)");
   CLI11_PARSE(app, argc, argv);
@@ -197,19 +202,24 @@ int main(int argc, char** argv) {
   const std::vector<double> latency = delays(rt.camera, rt.detections);
   j["realtime_camera_fps"] = stream_s > 0 ? n / stream_s : 0;
   j["realtime_slam_fps"] = stream_s > 0 ? static_cast<double>(rt.pose.size()) / stream_s : 0;
-  j["realtime_slam_frames_missed"] = static_cast<int64_t>(rt.camera.size()) - static_cast<int64_t>(rt.pose.size());
+  j["realtime_slam_frames_missed"] =
+      static_cast<int64_t>(rt.camera.size()) - static_cast<int64_t>(rt.pose.size());
   // Keeping up is not enough: starved of CPU, local mapping falls behind and tracking thins out
   // until it is lost (the same recording lockstep is located throughout).
-  j["realtime_slam_located_pct"] =
-      rt.pose.empty() ? 0 : 100.0 * static_cast<double>(rt.poses_located) / static_cast<double>(rt.pose.size());
+  j["realtime_slam_located_pct"] = rt.pose.empty() ? 0
+                                                   : 100.0 * static_cast<double>(rt.poses_located) /
+                                                         static_cast<double>(rt.pose.size());
   j["realtime_slam_work"] = slamWork(rt);
-  j["realtime_recognizer_hz"] = stream_s > 0 ? static_cast<double>(rt.detections.size()) / stream_s : 0;
+  j["realtime_recognizer_hz"] =
+      stream_s > 0 ? static_cast<double>(rt.detections.size()) / stream_s : 0;
   j["latency_ms_p95"] = percentile(latency, 0.95);
   j["latency_ms_median"] = percentile(latency, 0.5);
   // Every frame with boxes should get its labels (classified or carried), and a new view its
   // classification promptly.
   j["realtime_frames_labelled_pct"] =
-      rt.proposals_with_boxes > 0 ? 100.0 * static_cast<double>(rt.labelled) / static_cast<double>(rt.proposals_with_boxes) : 0;
+      rt.proposals_with_boxes > 0
+          ? 100.0 * static_cast<double>(rt.labelled) / static_cast<double>(rt.proposals_with_boxes)
+          : 0;
   j["realtime_boxes_classified_pct"] = classifiedPct(rt);
   j["latency_ms_p95_new_views"] = percentile(delays(rt.camera, rt.new_views), 0.95);
   // Where the latency goes (median and p95 of each hop).
@@ -218,7 +228,8 @@ int main(int argc, char** argv) {
       {"slam_pose_to_proposals", delays(rt.pose, rt.proposals)},
       {"proposals_to_detections", delays(rt.proposals, rt.detections)}};
   for (const auto& [name, ms] : hops) {
-    j["latency_breakdown_ms"][name] = {{"median", percentile(ms, 0.5)}, {"p95", percentile(ms, 0.95)}};
+    j["latency_breakdown_ms"][name] = {{"median", percentile(ms, 0.5)},
+                                       {"p95", percentile(ms, 0.95)}};
   }
   j["rss_mb_total"] = run.rss_mb_total;
   // CPU each process used in the real-time run (start-up included) per second of stream: where

@@ -31,8 +31,9 @@ void printTable(const std::map<std::string, ChannelStats>& stats, double elapsed
   for (const auto& [name, s] : stats) {
     // The rate of a channel's last 2 s of messages, however long ago its last one came.
     const auto at = s.rate.lastTick();
-    std::printf("%-22s %-30s %8lld %7.1f %9.1f  %s\n", name.c_str(), s.type.empty() ? "?" : s.type.c_str(),
-                (long long)s.rate.count(), s.rate.hz(at), s.rate.kbPerSecond(at), s.last.c_str());
+    std::printf("%-22s %-30s %8lld %7.1f %9.1f  %s\n", name.c_str(),
+                s.type.empty() ? "?" : s.type.c_str(), (long long)s.rate.count(), s.rate.hz(at),
+                s.rate.kbPerSecond(at), s.last.c_str());
   }
   std::printf("(%.0f s)\n", elapsed_s);
   std::fflush(stdout);
@@ -72,7 +73,8 @@ int runBusMonitor(const NodeArgs& node, double duration_s, bool once, const std:
 }  // namespace
 
 void addBusCommand(CLI::App& app, CtlContext& ctx) {
-  auto* cmd = app.add_subcommand("bus", "live table of the channels on the bus (rate, bandwidth, last message)");
+  auto* cmd = app.add_subcommand(
+      "bus", "live table of the channels on the bus (rate, bandwidth, last message)");
   auto duration = std::make_shared<double>(0.0);
   auto once = std::make_shared<bool>(false);
   auto channels = std::make_shared<std::string>(".*");
@@ -80,7 +82,8 @@ void addBusCommand(CLI::App& app, CtlContext& ctx) {
   cmd->add_flag("--once", *once, "print one table at the end instead of a live view");
   cmd->add_option("--channels", *channels, "LCM channel regular expression");
   cmd->callback([&ctx, duration, once, channels]() {
-    ctx.exit_code = runNode("ctl", ctx.node, [&]() { return runBusMonitor(ctx.node, *duration, *once, *channels); });
+    ctx.exit_code = runNode("ctl", ctx.node,
+                            [&]() { return runBusMonitor(ctx.node, *duration, *once, *channels); });
   });
 }
 

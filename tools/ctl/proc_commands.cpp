@@ -26,13 +26,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 const char* stateName(int s) {
-  static const char* names[] = {"stopped", "starting", "running", "stopping", "backoff", "failed", "hung"};
+  static const char* names[] = {"stopped", "starting", "running", "stopping",
+                                "backoff", "failed",   "hung"};
   return s >= 0 && s < 7 ? names[s] : "?";
 }
 
 // Collects the latest PROC_STATUS of every supervisor for `seconds` (or until `done` says so).
-std::map<std::string, proc_status_t> collect(Bus& bus, const std::string& channel, double seconds,
-                                             const std::function<bool(const std::map<std::string, proc_status_t>&)>& done) {
+std::map<std::string, proc_status_t> collect(
+    Bus& bus, const std::string& channel, double seconds,
+    const std::function<bool(const std::map<std::string, proc_status_t>&)>& done) {
   std::map<std::string, proc_status_t> by_host;
   bus.subscribe<proc_status_t>(channel, [&](const proc_status_t& s) { by_host[s.host] = s; });
   const auto end = Clock::now() + std::chrono::duration<double>(seconds);
@@ -44,8 +46,8 @@ std::map<std::string, proc_status_t> collect(Bus& bus, const std::string& channe
 }
 
 void printTable(const std::map<std::string, proc_status_t>& by_host) {
-  std::printf("%-10s %-14s %-10s %-9s %7s %8s %6s %8s %9s %5s  %s\n", "HOST", "NAME", "GROUP", "STATE", "PID",
-              "RESTARTS", "CPU%", "RSS_MB", "HEARTBEAT", "EXIT", "MESSAGE");
+  std::printf("%-10s %-14s %-10s %-9s %7s %8s %6s %8s %9s %5s  %s\n", "HOST", "NAME", "GROUP",
+              "STATE", "PID", "RESTARTS", "CPU%", "RSS_MB", "HEARTBEAT", "EXIT", "MESSAGE");
   for (const auto& [host, st] : by_host) {
     for (const auto& p : st.procs) {
       char hb[16];
@@ -53,9 +55,9 @@ void printTable(const std::map<std::string, proc_status_t>& by_host) {
         std::snprintf(hb, sizeof(hb), "-");
       else
         std::snprintf(hb, sizeof(hb), "%.1fs", p.heartbeat_age_s);
-      std::printf("%-10s %-14s %-10s %-9s %7d %8d %6.1f %8.1f %9s %5d  %s\n", host.c_str(), p.name.c_str(),
-                  p.group.c_str(), stateName(p.state), p.pid, p.restarts, p.cpu_pct, p.rss_kb / 1024.0, hb,
-                  p.exit_code, p.message.c_str());
+      std::printf("%-10s %-14s %-10s %-9s %7d %8d %6.1f %8.1f %9s %5d  %s\n", host.c_str(),
+                  p.name.c_str(), p.group.c_str(), stateName(p.state), p.pid, p.restarts, p.cpu_pct,
+                  p.rss_kb / 1024.0, hb, p.exit_code, p.message.c_str());
     }
   }
 }
@@ -65,19 +67,21 @@ int runStatus(const NodeArgs& node, double wait_s) {
   Bus bus(sys.bus.url);
   const auto by_host = collect(bus, sys.channels.proc_status, wait_s, nullptr);
   if (by_host.empty()) {
-    std::fprintf(stderr, "no supervisor answered on %s within %.1f s\n", sys.channels.proc_status.c_str(), wait_s);
+    std::fprintf(stderr, "no supervisor answered on %s within %.1f s\n",
+                 sys.channels.proc_status.c_str(), wait_s);
     return 1;
   }
   printTable(by_host);
   return 0;
 }
 
-int runCommand(const NodeArgs& node, int8_t command, const std::string& target, const std::string& host,
-               double wait_s) {
+int runCommand(const NodeArgs& node, int8_t command, const std::string& target,
+               const std::string& host, double wait_s) {
   const SystemConfig sys = loadSystem(node);
   Bus bus(sys.bus.url);
   // Know the state before, so that a restart is confirmed by a new pid, not the old one.
-  auto before = collect(bus, sys.channels.proc_status, 1.5, [](const auto& m) { return !m.empty(); });
+  auto before =
+      collect(bus, sys.channels.proc_status, 1.5, [](const auto& m) { return !m.empty(); });
   std::map<std::string, int32_t> old_pid;
   for (const auto& [h, st] : before)
     for (const auto& p : st.procs) old_pid[h + "/" + p.name] = p.pid;
@@ -87,7 +91,9 @@ int runCommand(const NodeArgs& node, int8_t command, const std::string& target, 
   cmd.target = target;
   cmd.command = command;
   bus.publish(sys.channels.proc_command, cmd);
-  auto matches = [&](const proc_info_t& p) { return target == "all" || p.name == target || p.group == target; };
+  auto matches = [&](const proc_info_t& p) {
+    return target == "all" || p.name == target || p.group == target;
+  };
   auto settled = [&](const std::map<std::string, proc_status_t>& m) {
     int found = 0;
     for (const auto& [h, st] : m) {
@@ -96,9 +102,11 @@ int runCommand(const NodeArgs& node, int8_t command, const std::string& target, 
         if (!matches(p)) continue;
         ++found;
         const bool running = p.state == proc_info_t::STATE_RUNNING;
-        if (command == proc_command_t::COMMAND_STOP && p.state != proc_info_t::STATE_STOPPED) return false;
+        if (command == proc_command_t::COMMAND_STOP && p.state != proc_info_t::STATE_STOPPED)
+          return false;
         if (command == proc_command_t::COMMAND_START && !running) return false;
-        if (command == proc_command_t::COMMAND_RESTART && (!running || p.pid == old_pid[h + "/" + p.name]))
+        if (command == proc_command_t::COMMAND_RESTART &&
+            (!running || p.pid == old_pid[h + "/" + p.name]))
           return false;
       }
     }
@@ -107,7 +115,9 @@ int runCommand(const NodeArgs& node, int8_t command, const std::string& target, 
   const auto after = collect(bus, sys.channels.proc_status, wait_s, settled);
   const bool ok = settled(after);
   printTable(after);
-  if (!ok) std::fprintf(stderr, "'%s' did not reach the expected state within %.0f s\n", target.c_str(), wait_s);
+  if (!ok)
+    std::fprintf(stderr, "'%s' did not reach the expected state within %.0f s\n", target.c_str(),
+                 wait_s);
   return ok ? 0 : 1;
 }
 
@@ -139,17 +149,20 @@ int runReload(const NodeArgs& node, const std::string& target, double wait_s) {
   };
   // Its heartbeat comes once a second: know the counts before the command.
   if (!pump(2.5, [&] { return have; })) {
-    std::fprintf(stderr, "no heartbeat from '%s' on %s: is it running?\n", target.c_str(), channel.c_str());
+    std::fprintf(stderr, "no heartbeat from '%s' on %s: is it running?\n", target.c_str(),
+                 channel.c_str());
     return 1;
   }
-  const int64_t reloads = statusCounter(last, "reloads"), failures = statusCounter(last, "reload_failures");
+  const int64_t reloads = statusCounter(last, "reloads"),
+                failures = statusCounter(last, "reload_failures");
   proc_command_t cmd{};
   cmd.utime = wallUtime();
   cmd.target = target;
   cmd.command = proc_command_t::COMMAND_RELOAD;
   bus.publish(sys.channels.proc_command, cmd);
   const bool answered = pump(wait_s, [&] {
-    return statusCounter(last, "reloads") > reloads || statusCounter(last, "reload_failures") > failures;
+    return statusCounter(last, "reloads") > reloads ||
+           statusCounter(last, "reload_failures") > failures;
   });
   if (!answered) {
     std::fprintf(stderr, "'%s' did not report a reload within %.0f s\n", target.c_str(), wait_s);
@@ -173,8 +186,8 @@ int runLogs(const NodeArgs& node, const std::string& name, int lines, bool follo
   const std::string path = cfg.options.log_dir + "/" + name + ".log";
   std::ifstream in(path);
   if (!in) {
-    std::fprintf(stderr, "logs: %s not found (is '%s' run by the supervisor on this host?)\n", path.c_str(),
-                 name.c_str());
+    std::fprintf(stderr, "logs: %s not found (is '%s' run by the supervisor on this host?)\n",
+                 path.c_str(), name.c_str());
     return 1;
   }
   std::vector<std::string> tail;
@@ -205,7 +218,8 @@ int runWait(const NodeArgs& node, const std::string& target, double timeout_s) {
       for (const auto& p : st.procs) {
         if (target != "all" && p.name != target && p.group != target) continue;
         ++found;
-        if (p.state != proc_info_t::STATE_STOPPED && p.state != proc_info_t::STATE_FAILED) return false;
+        if (p.state != proc_info_t::STATE_STOPPED && p.state != proc_info_t::STATE_FAILED)
+          return false;
       }
     return found > 0;
   };
@@ -226,15 +240,18 @@ void addProcCommands(CLI::App& app, CtlContext& ctx) {
   auto wait = std::make_shared<double>(1.5);
   auto* status = app.add_subcommand("status", "table of every supervised process on every host");
   status->add_option("--wait", *wait, "s to listen for supervisors");
-  status->callback([&ctx, wait] { ctx.exit_code = runNode("ctl", ctx.node, [&] { return runStatus(ctx.node, *wait); }); });
+  status->callback([&ctx, wait] {
+    ctx.exit_code = runNode("ctl", ctx.node, [&] { return runStatus(ctx.node, *wait); });
+  });
 
   struct CmdArgs {
     std::string target, host;
     double wait = 10;
   };
-  for (auto [name, code, help] : {std::tuple{"start", proc_command_t::COMMAND_START, "start a process or group"},
-                                  std::tuple{"stop", proc_command_t::COMMAND_STOP, "stop a process or group"},
-                                  std::tuple{"restart", proc_command_t::COMMAND_RESTART, "restart a process or group"}}) {
+  for (auto [name, code, help] :
+       {std::tuple{"start", proc_command_t::COMMAND_START, "start a process or group"},
+        std::tuple{"stop", proc_command_t::COMMAND_STOP, "stop a process or group"},
+        std::tuple{"restart", proc_command_t::COMMAND_RESTART, "restart a process or group"}}) {
     auto args = std::make_shared<CmdArgs>();
     auto* sub = app.add_subcommand(name, help);
     sub->add_option("target", args->target, "process name, group name, or all")->required();
@@ -242,30 +259,35 @@ void addProcCommands(CLI::App& app, CtlContext& ctx) {
     sub->add_option("--wait", args->wait, "s to wait for the change to show");
     const int8_t c = code;
     sub->callback([&ctx, args, c] {
-      ctx.exit_code =
-          runNode("ctl", ctx.node, [&] { return runCommand(ctx.node, c, args->target, args->host, args->wait); });
+      ctx.exit_code = runNode("ctl", ctx.node, [&] {
+        return runCommand(ctx.node, c, args->target, args->host, args->wait);
+      });
     });
   }
 
   auto reload_args = std::make_shared<CmdArgs>();
   reload_args->wait = 30;
   auto* reload = app.add_subcommand(
-      "reload", "a process reads its files anew without a restart (the recognizer: its model); "
-                "the old ones stay if the new ones are refused");
+      "reload",
+      "a process reads its files anew without a restart (the recognizer: its model); "
+      "the old ones stay if the new ones are refused");
   reload->add_option("target", reload_args->target, "process name")->required();
   reload->add_option("--wait", reload_args->wait, "s to wait for the process to report the reload");
   reload->callback([&ctx, reload_args] {
-    ctx.exit_code =
-        runNode("ctl", ctx.node, [&] { return runReload(ctx.node, reload_args->target, reload_args->wait); });
+    ctx.exit_code = runNode("ctl", ctx.node, [&] {
+      return runReload(ctx.node, reload_args->target, reload_args->wait);
+    });
   });
 
   auto wait_args = std::make_shared<CmdArgs>();
   wait_args->wait = 3600;
-  auto* wait_cmd = app.add_subcommand("wait", "wait until a process or group has finished (exit 0: all exited with 0)");
+  auto* wait_cmd = app.add_subcommand(
+      "wait", "wait until a process or group has finished (exit 0: all exited with 0)");
   wait_cmd->add_option("target", wait_args->target, "process name, group name, or all")->required();
   wait_cmd->add_option("--timeout", wait_args->wait, "s to wait at most");
   wait_cmd->callback([&ctx, wait_args] {
-    ctx.exit_code = runNode("ctl", ctx.node, [&] { return runWait(ctx.node, wait_args->target, wait_args->wait); });
+    ctx.exit_code = runNode("ctl", ctx.node,
+                            [&] { return runWait(ctx.node, wait_args->target, wait_args->wait); });
   });
 
   auto log_name = std::make_shared<std::string>();
@@ -276,7 +298,8 @@ void addProcCommands(CLI::App& app, CtlContext& ctx) {
   logs->add_option("-n,--lines", *lines, "lines from the end");
   logs->add_flag("-f,--follow", *follow, "keep printing what is appended");
   logs->callback([&ctx, log_name, lines, follow] {
-    ctx.exit_code = runNode("ctl", ctx.node, [&] { return runLogs(ctx.node, *log_name, *lines, *follow); });
+    ctx.exit_code =
+        runNode("ctl", ctx.node, [&] { return runLogs(ctx.node, *log_name, *lines, *follow); });
   });
 }
 

@@ -39,7 +39,8 @@ void printReply(const object_query_reply_t& r, bool hide_background) {
   size_t hidden = 0;
   for (const auto& o : r.objects) hidden += hide_background && o.label == "background";
   if (r.objects.size() == hidden) {
-    std::printf("no objects%s\n", hidden ? (" (" + std::to_string(hidden) + " background candidates)").c_str() : "");
+    std::printf("no objects%s\n",
+                hidden ? (" (" + std::to_string(hidden) + " background candidates)").c_str() : "");
     return;
   }
   std::printf("%6s  %-16s %6s %6s  %-26s %-20s %7s %4s  %s\n", "ID", "LABEL", "P", "VIEWS",
@@ -111,8 +112,8 @@ int runQuery(const NodeArgs& node, const QueryArgs& args) {
     return 1;
   }
   if (!reply->error.empty()) {
-    std::fprintf(stderr, "%s refused: %s\n", args.kind >= object_query_t::KIND_LABEL ? "label" : "query",
-                 reply->error.c_str());
+    std::fprintf(stderr, "%s refused: %s\n",
+                 args.kind >= object_query_t::KIND_LABEL ? "label" : "query", reply->error.c_str());
     return 1;
   }
   printReply(*reply, args.hide_background);
@@ -142,9 +143,11 @@ void addQueryCommand(CLI::App& app, CtlContext& ctx) {
   auto largs = std::make_shared<QueryArgs>();
   auto unlabel = std::make_shared<bool>(false);
   auto* lab = app.add_subcommand(
-      "label", "give an object of the map your class name (saved with the map; slamaware-harvest "
-               "collects its views), or take it back with --unlabel");
-  lab->add_option("object_id", largs->object_id, "the object's id (slamaware-ctl query)")->required();
+      "label",
+      "give an object of the map your class name (saved with the map; slamaware-harvest "
+      "collects its views), or take it back with --unlabel");
+  lab->add_option("object_id", largs->object_id, "the object's id (slamaware-ctl query)")
+      ->required();
   lab->add_option("class", largs->label, "class name: letters, digits, _ or -");
   lab->add_flag("--unlabel", *unlabel, "take the object's label back");
   lab->add_option("--timeout", largs->timeout_s, "s to wait for the answer");

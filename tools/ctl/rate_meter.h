@@ -32,7 +32,9 @@ class RateMeter {
   }
   int64_t count() const { return count_; }
   /// When the last message came (rates at this moment ignore how long ago that was).
-  Clock::time_point lastTick() const { return recent_.empty() ? Clock::time_point{} : recent_.back().first; }
+  Clock::time_point lastTick() const {
+    return recent_.empty() ? Clock::time_point{} : recent_.back().first;
+  }
 
  private:
   double span(Clock::time_point now) const {

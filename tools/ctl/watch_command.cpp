@@ -33,11 +33,16 @@ using Clock = std::chrono::steady_clock;
 
 const char* slamStateName(int state) {
   switch (state) {
-    case pose_t::STATE_INITIALIZING: return "INITIALIZING";
-    case pose_t::STATE_TRACKING: return "TRACKING";
-    case pose_t::STATE_LOST: return "LOST";
-    case pose_t::STATE_RELOCALIZED: return "RELOCALIZED";
-    default: return "?";
+    case pose_t::STATE_INITIALIZING:
+      return "INITIALIZING";
+    case pose_t::STATE_TRACKING:
+      return "TRACKING";
+    case pose_t::STATE_LOST:
+      return "LOST";
+    case pose_t::STATE_RELOCALIZED:
+      return "RELOCALIZED";
+    default:
+      return "?";
   }
 }
 
@@ -47,18 +52,20 @@ struct WatchState {
   int64_t tracked = 0, boxes = 0, proposal_msgs = 0, dropped = 0;
   std::map<std::string, int> labels;  // objects per label (background left out)
   int objects = 0;
-  std::string in_view;  // the last frame's objects as the map labelled them ("#12 coffee_mug 0.93, ...")
+  std::string
+      in_view;  // the last frame's objects as the map labelled them ("#12 coffee_mug 0.93, ...")
 };
 
 std::string statusLine(const WatchState& s, double elapsed_s, Clock::time_point now) {
   char head[512];
-  std::snprintf(head, sizeof(head),
-                "%5.0f s | camera %4.1f fps seq %d | SLAM %s map %d, %lld/%lld tracked | %.1f boxes/frame "
-                "| recognised %4.1f Hz, %lld dropped | %d objects",
-                elapsed_s, s.camera.hz(now), s.last_seq, s.slam_state < 0 ? "-" : slamStateName(s.slam_state),
-                s.map_id, static_cast<long long>(s.tracked), static_cast<long long>(s.poses.count()),
-                s.proposal_msgs ? static_cast<double>(s.boxes) / static_cast<double>(s.proposal_msgs) : 0.0,
-                s.detections.hz(now), static_cast<long long>(s.dropped), s.objects);
+  std::snprintf(
+      head, sizeof(head),
+      "%5.0f s | camera %4.1f fps seq %d | SLAM %s map %d, %lld/%lld tracked | %.1f boxes/frame "
+      "| recognised %4.1f Hz, %lld dropped | %d objects",
+      elapsed_s, s.camera.hz(now), s.last_seq, s.slam_state < 0 ? "-" : slamStateName(s.slam_state),
+      s.map_id, static_cast<long long>(s.tracked), static_cast<long long>(s.poses.count()),
+      s.proposal_msgs ? static_cast<double>(s.boxes) / static_cast<double>(s.proposal_msgs) : 0.0,
+      s.detections.hz(now), static_cast<long long>(s.dropped), s.objects);
   std::string line = head;
   std::string sep = ": ";
   for (const auto& [label, n] : s.labels) {
@@ -75,8 +82,9 @@ int runWatch(const NodeArgs& node, double duration_s, double period_s) {
   Bus bus(sys.bus.url);
   WatchState s;
   // The camera's images are large: only their arrival is counted, never decoded.
-  bus.subscribeRaw(ch.camera, [&](const Bus::RawMessage&) { s.camera.tick(Clock::now()); },
-                   static_cast<size_t>(sys.bus.max_image_bytes));
+  bus.subscribeRaw(
+      ch.camera, [&](const Bus::RawMessage&) { s.camera.tick(Clock::now()); },
+      static_cast<size_t>(sys.bus.max_image_bytes));
   bus.subscribe<pose_t>(ch.slam_pose, [&](const pose_t& p) {
     s.poses.tick(Clock::now());
     s.slam_state = p.state;
@@ -88,13 +96,16 @@ int runWatch(const NodeArgs& node, double duration_s, double period_s) {
     ++s.proposal_msgs;
     s.boxes += p.num_boxes;
   });
-  bus.subscribe<detections_t>(ch.detections, [&](const detections_t&) { s.detections.tick(Clock::now()); });
+  bus.subscribe<detections_t>(ch.detections,
+                              [&](const detections_t&) { s.detections.tick(Clock::now()); });
   bus.subscribe<object_detections_t>(ch.object_detections, [&](const object_detections_t& d) {
     s.in_view.clear();
     for (size_t i = 0; i < d.labels.size(); ++i)
-      if (isLabelledObject(d, i)) s.in_view += (s.in_view.empty() ? "" : ", ") + objectLabelText(d, i);
+      if (isLabelledObject(d, i))
+        s.in_view += (s.in_view.empty() ? "" : ", ") + objectLabelText(d, i);
   });
-  bus.subscribe<status_t>(ch.statusOf("recognizer"), [&](const status_t& st) { s.dropped = st.frames_dropped; });
+  bus.subscribe<status_t>(ch.statusOf("recognizer"),
+                          [&](const status_t& st) { s.dropped = st.frames_dropped; });
   bus.subscribe<object_map_t>(
       ch.object_map,
       [&](const object_map_t& m) {
@@ -127,22 +138,28 @@ int runWatch(const NodeArgs& node, double duration_s, double period_s) {
       std::fflush(stdout);
     }
   }
-  std::printf("%s%s\n", tty ? "\r\033[K" : "",
-              statusLine(s, std::chrono::duration<double>(Clock::now() - start).count(), Clock::now()).c_str());
+  std::printf(
+      "%s%s\n", tty ? "\r\033[K" : "",
+      statusLine(s, std::chrono::duration<double>(Clock::now() - start).count(), Clock::now())
+          .c_str());
   return 0;
 }
 
 }  // namespace
 
 void addWatchCommand(CLI::App& app, CtlContext& ctx) {
-  auto* cmd = app.add_subcommand(
-      "watch", "one live status line: camera fps, SLAM state, boxes per frame, recognised/dropped frames, objects");
+  auto* cmd = app.add_subcommand("watch",
+                                 "one live status line: camera fps, SLAM state, boxes per frame, "
+                                 "recognised/dropped frames, objects");
   auto duration = std::make_shared<double>(0.0);
   auto period = std::make_shared<double>(5.0);
   cmd->add_option("--duration", *duration, "s to watch (0: until Ctrl-C)");
-  cmd->add_option("--period", *period, "s between lines when the output is not a terminal (a terminal: 0.5 s, in place)");
+  cmd->add_option(
+      "--period", *period,
+      "s between lines when the output is not a terminal (a terminal: 0.5 s, in place)");
   cmd->callback([&ctx, duration, period]() {
-    ctx.exit_code = runNode("ctl", ctx.node, [&]() { return runWatch(ctx.node, *duration, *period); });
+    ctx.exit_code =
+        runNode("ctl", ctx.node, [&]() { return runWatch(ctx.node, *duration, *period); });
   });
 }
 

@@ -76,5 +76,4 @@ class ChildProcess {
   double cpu_s_ = 0;
 };
 
-
 }  // namespace slamaware

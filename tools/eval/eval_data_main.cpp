@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
       for (size_t i = 0; i < seq.size(); ++i) {
         try {
           const cv::Mat img = readImage(seq.framePath(i));
-          readable += img.cols == seq.info().camera.width() && img.rows == seq.info().camera.height();
+          readable +=
+              img.cols == seq.info().camera.width() && img.rows == seq.info().camera.height();
         } catch (const ImageError& e) {
           std::cerr << "eval-data: " << e.what() << "\n";
         }

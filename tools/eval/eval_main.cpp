@@ -13,10 +13,10 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <filesystem>
-#include <optional>
 #include <fstream>
-#include <stdexcept>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
 
 #include "common/bus/log_reader.h"
 #include "common/bus/system_config.h"
@@ -53,7 +53,8 @@ void writeBoxesCsv(const RecognitionRecording& rr, const std::string& path) {
   for (const auto& [frame, boxes] : rr.frames)
     for (const auto& b : boxes) {
       f << frame << "," << b.map_id << "," << b.candidate << "," << b.object << "," << b.role << ","
-        << b.single.box.x << "," << b.single.box.y << "," << b.single.box.w << "," << b.single.box.h;
+        << b.single.box.x << "," << b.single.box.y << "," << b.single.box.w << ","
+        << b.single.box.h;
       for (const auto* lp : {&b.single.log_p, &b.online.log_p, &b.final.log_p})
         for (double v : *lp) f << "," << v;
       f << "\n";
@@ -61,15 +62,18 @@ void writeBoxesCsv(const RecognitionRecording& rr, const std::string& path) {
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
-// The single_view, multi_view_online and multi_view_final sections of a sequence (into `out`) and its
-// precision-recall plot, from the DETECTIONS of its recording and the object map's outputs
+// The single_view, multi_view_online and multi_view_final sections of a sequence (into `out`) and
+// its precision-recall plot, from the DETECTIONS of its recording and the object map's outputs
 // (recorded, or re-run with `objectmap_options` when given); no classes in the result when the
 // sequence has none to evaluate.
-RecognitionResult recognitionSections(const std::string& name, const SequenceFolder& seq, const std::string& log,
-                                      const Channels& channels, const objectmap::ObjectMapOptions* objectmap_options,
-                                      const std::string& out_dir, bool dump_boxes, nlohmann::json& out) {
-  const ObjectMapOutputs outputs = objectmap_options ? rerunObjectMap(log, channels, *objectmap_options)
-                                                     : readObjectMapOutputs(log, channels);
+RecognitionResult recognitionSections(const std::string& name, const SequenceFolder& seq,
+                                      const std::string& log, const Channels& channels,
+                                      const objectmap::ObjectMapOptions* objectmap_options,
+                                      const std::string& out_dir, bool dump_boxes,
+                                      nlohmann::json& out) {
+  const ObjectMapOutputs outputs = objectmap_options
+                                       ? rerunObjectMap(log, channels, *objectmap_options)
+                                       : readObjectMapOutputs(log, channels);
   const RecognitionRecording rr = readRecognitionRecording(log, channels, outputs);
   if (rr.empty()) {
     spdlog::info("{}: no DETECTIONS in the recording: no single_view / multi_view", name);
@@ -81,16 +85,19 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
     writeBoxesCsv(rr, (d / (name + ".csv")).string());
   }
   out["object_map"] = rr.object_map;
-  spdlog::info("{}: object map: {} objects; in its main segment the largest holds {} of the {} object voxels", name,
-               rr.object_map["objects"].dump(), rr.object_map["largest_object_voxels"].dump(),
-               rr.object_map["main_segment_object_voxels"].dump());
+  spdlog::info(
+      "{}: object map: {} objects; in its main segment the largest holds {} of the {} object "
+      "voxels",
+      name, rr.object_map["objects"].dump(), rr.object_map["largest_object_voxels"].dump(),
+      rr.object_map["main_segment_object_voxels"].dump());
   if (!seq.hasBoxes()) {
     spdlog::info("{}: no ground-truth boxes: no single_view / multi_view", name);
     return {};
   }
   RecognitionResult res = scoreRecognition(rr, seq, RecognitionEvalOptions{});
   if (res.classes.empty()) {
-    spdlog::info("{}: none of the model's classes is in the sequence: no single_view / multi_view", name);
+    spdlog::info("{}: none of the model's classes is in the sequence: no single_view / multi_view",
+                 name);
     return res;
   }
   out["single_view"] = recognitionSection(res.single);
@@ -100,25 +107,33 @@ RecognitionResult recognitionSections(const std::string& name, const SequenceFol
   for (const auto& [seq, boxes] : rr.frames)
     for (const auto& b : boxes) ++published, carried += b.carried;
   out["single_view"]["boxes_classified_pct"] =
-      published > 0 ? 100.0 * static_cast<double>(published - carried) / static_cast<double>(published) : 0.0;
+      published > 0
+          ? 100.0 * static_cast<double>(published - carried) / static_cast<double>(published)
+          : 0.0;
   out["multi_view_online"] = recognitionSection(res.online);
   out["multi_view_final"] = recognitionSection(res.final);
   out["multi_view_final"]["hindsight"] =
-      "each box's object labelled by the last OBJECT_MAP (evidence of the whole sequence, later frames included)";
+      "each box's object labelled by the last OBJECT_MAP (evidence of the whole sequence, later "
+      "frames included)";
   nlohmann::json roles;
   const char* names[] = {"primary", "duplicate", "part", "no_object"};
   for (const auto& [role, n] : rr.roles) roles[role >= 0 && role < 4 ? names[role] : "unknown"] = n;
   out["multi_view_online"]["boxes_by_role"] = roles;
-  out["multi_view_online"]["frames_without_object_detections"] = rr.frames_without_object_detections;
+  out["multi_view_online"]["frames_without_object_detections"] =
+      rr.frames_without_object_detections;
   out["multi_view_final"]["objects"] = rr.objects;
   out["multi_view_final"]["boxes_whose_object_is_gone"] = rr.final_without_object;
   const std::string plot = (fs::path(out_dir) / "plots" / (name + "_pr.png")).string();
-  drawPrCurves(res.single, res.online, res.final, name + ": precision-recall at IoU 0.5, every 5th frame", plot);
-  out["single_view"]["plot"] = out["multi_view_online"]["plot"] = out["multi_view_final"]["plot"] = plot;
+  drawPrCurves(res.single, res.online, res.final,
+               name + ": precision-recall at IoU 0.5, every 5th frame", plot);
+  out["single_view"]["plot"] = out["multi_view_online"]["plot"] = out["multi_view_final"]["plot"] =
+      plot;
   auto pct = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : NAN; };
-  spdlog::info("{}: mAP single view {:.1f}%, multi-view online {:.1f}%, final {:.1f}% ({} boxes, {} objects)", name,
-               pct(out["single_view"]["mAP"]), pct(out["multi_view_online"]["mAP"]),
-               pct(out["multi_view_final"]["mAP"]), res.single.boxes, rr.objects);
+  spdlog::info(
+      "{}: mAP single view {:.1f}%, multi-view online {:.1f}%, final {:.1f}% ({} boxes, {} "
+      "objects)",
+      name, pct(out["single_view"]["mAP"]), pct(out["multi_view_online"]["mAP"]),
+      pct(out["multi_view_final"]["mAP"]), res.single.boxes, rr.objects);
   return res;
 }
 
@@ -128,7 +143,7 @@ struct EvalContext {
   PipelineRunOptions pipeline;
   std::string out_dir;
   bool from_logs = false, offline = false, verbose = false;
-  slam::SlamOptions slam_options;                     // offline
+  slam::SlamOptions slam_options;               // offline
   proposals::ProposalOptions proposal_options;  // of the recorded run, or the ones to try
   bool rerun_proposals = false;  // score proposal_options' boxes, not the recorded ones
   ProposalEvalOptions peo;
@@ -294,7 +309,8 @@ int main(int argc, char** argv) {
   app.add_option("--system", system_path, "system.yaml (bus URL, channels)");
   app.add_option("--lcm-url", pipeline.lcm_url, "bus URL (default: the system's)");
   app.add_option("--config-dir", pipeline.config_dir, "folder of the processes' <name>.yaml");
-  app.add_option("--model", pipeline.recognizer_model, "recognizer model (default: config/recognizer.yaml's)");
+  app.add_option("--model", pipeline.recognizer_model,
+                 "recognizer model (default: config/recognizer.yaml's)");
   app.add_option("--stages", stages, "comma-separated stages to run (default: every built stage)");
   app.add_flag("--offline", c.offline, "run the SLAM library in-process instead of the processes");
   app.add_option("--slam-config", slam_config,
@@ -304,9 +320,10 @@ int main(int argc, char** argv) {
                "score the recordings already in <out-dir>/logs (no run)");
   app.add_option("--proposals-config", proposals_config,
                  "re-run the proposals stage on the recording with this options file");
-  app.add_option("--objectmap-config", objectmap_config,
-                 "re-run the object map on the recording with this options file (as the lockstep node) and "
-                 "score its outputs instead of the recorded ones");
+  app.add_option(
+      "--objectmap-config", objectmap_config,
+      "re-run the object map on the recording with this options file (as the lockstep node) and "
+      "score its outputs instead of the recorded ones");
   app.add_option(
       "--draw-proposals", c.draw_frames,
       "write this many frames with ground truth and proposals to <out-dir>/proposals/<seq>/");

@@ -20,7 +20,8 @@
 //   "single_view_ss" (photographed sequences of the model's classes): OpenCV selective search's
 //     boxes of each scored frame through the recognizer and its suppression, scored as detections
 //     (mAP) against the ground-truth boxes: detection on real frames without SLAM.
-//   {"sequences": {"<name>": {"gt_boxes": {...}, "single_view_ss": {...}}}, "overall": {"gt_boxes": {...}}}
+//   {"sequences": {"<name>": {"gt_boxes": {...}, "single_view_ss": {...}}}, "overall": {"gt_boxes":
+//   {...}}}
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -32,11 +33,11 @@
 
 #include "common/config.h"
 #include "common/dataset.h"
-#include "common/progress.h"
 #include "common/image_codec.h"
+#include "common/progress.h"
 #include "procs/recognizer/recognizer.h"
-#include "tools/train/trainer.h"
 #include "tools/eval/recognition_metrics.h"
+#include "tools/train/trainer.h"
 
 using namespace slamaware;
 using namespace slamaware::recognizer;
@@ -76,14 +77,16 @@ struct BoxTally {
     correct += o.correct;
     jittered += o.jittered;
     jittered_correct += o.jittered_correct;
-    runner_up_log_prob.insert(runner_up_log_prob.end(), o.runner_up_log_prob.begin(), o.runner_up_log_prob.end());
+    runner_up_log_prob.insert(runner_up_log_prob.end(), o.runner_up_log_prob.begin(),
+                              o.runner_up_log_prob.end());
   }
   nlohmann::json json() const {
     nlohmann::json j;
     j["boxes"] = boxes;
     j["accuracy"] = boxes ? 100.0 * static_cast<double>(correct) / static_cast<double>(boxes) : 0.0;
     j["jittered_accuracy"] =
-        jittered ? 100.0 * static_cast<double>(jittered_correct) / static_cast<double>(jittered) : 0.0;
+        jittered ? 100.0 * static_cast<double>(jittered_correct) / static_cast<double>(jittered)
+                 : 0.0;
     j["classes"] = classes;
     j["confusion"] = confusion;
     j["per_class"] = nlohmann::json::object();
@@ -91,7 +94,9 @@ struct BoxTally {
       int64_t n = 0;
       for (int64_t v : confusion[c]) n += v;
       if (n == 0) continue;
-      j["per_class"][classes[c]] = {{"boxes", n}, {"accuracy", 100.0 * static_cast<double>(confusion[c][c]) / static_cast<double>(n)}};
+      j["per_class"][classes[c]] = {
+          {"boxes", n},
+          {"accuracy", 100.0 * static_cast<double>(confusion[c][c]) / static_cast<double>(n)}};
     }
     std::vector<double> r = runner_up_log_prob;
     std::sort(r.begin(), r.end());
@@ -104,7 +109,10 @@ struct BoxTally {
       int64_t n = 0;
       for (int64_t v : confusion[c]) n += v;
       out << fmt::format("    {:<14} {:>6} {:>4} |", classes[c],
-                         n ? fmt::format("{:.1f}%", 100.0 * static_cast<double>(confusion[c][c]) / static_cast<double>(n)) : "-", n);
+                         n ? fmt::format("{:.1f}%", 100.0 * static_cast<double>(confusion[c][c]) /
+                                                        static_cast<double>(n))
+                           : "-",
+                         n);
       for (int64_t v : confusion[c]) out << fmt::format(" {:>4}", v);
       out << "\n";
     }
@@ -137,8 +145,9 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
       const int l = it == t.classes.end() ? C - 1 : static_cast<int>(it - t.classes.begin());
       req.push_back({b.x, b.y, b.w, b.h, 0});
       label.push_back(l);
-      for (const auto& r : jitteredBoxes(cv::Rect2d(b.x, b.y, b.w, b.h), image.cols, image.rows, 1, 0.6,
-                                         static_cast<uint32_t>(frame * 131 + static_cast<int>(i)))) {
+      for (const auto& r :
+           jitteredBoxes(cv::Rect2d(b.x, b.y, b.w, b.h), image.cols, image.rows, 1, 0.6,
+                         static_cast<uint32_t>(frame * 131 + static_cast<int>(i)))) {
         req.push_back({r.x, r.y, r.width, r.height, 1});
         label.push_back(l);
       }
@@ -168,7 +177,8 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
 // scored frame through the recognizer and the node's suppression of overlapping boxes, scored as
 // single-view detections of `evaluated` against the ground-truth boxes.
 nlohmann::json selectiveSearchDetection(Recognizer& recognizer, const RecognizerOptions& options,
-                                        const SequenceFolder& seq, const std::vector<std::string>& evaluated, int stride,
+                                        const SequenceFolder& seq,
+                                        const std::vector<std::string>& evaluated, int stride,
                                         int max_boxes, int width) {
   std::map<int, std::vector<GroundTruthBox>> by_frame;
   for (const auto& b : seq.boxes()) by_frame[b.frame].push_back(b);
@@ -177,18 +187,21 @@ nlohmann::json selectiveSearchDetection(Recognizer& recognizer, const Recognizer
   for (const int frame : framesToScore(seq, stride)) {
     const cv::Mat image = readImage(seq.framePath(static_cast<size_t>(frame)));
     std::vector<BoxRequest> req;
-    for (const Box2& b : selectiveSearch(image, width, max_boxes)) req.push_back({b.x, b.y, b.w, b.h, 0});
+    for (const Box2& b : selectiveSearch(image, width, max_boxes))
+      req.push_back({b.x, b.y, b.w, b.h, 0});
     FrameDetections d = recognizer.recognize(image, req);
     suppressOverlaps(&d, options.nms_iou, options.nms_per_class);
     std::vector<LabelledBox> labelled;
     for (const auto& b : d.boxes)
-      labelled.push_back({Box2{b.x, b.y, b.w, b.h}, std::vector<double>(b.log_prob.begin(), b.log_prob.end()), -1});
+      labelled.push_back({Box2{b.x, b.y, b.w, b.h},
+                          std::vector<double>(b.log_prob.begin(), b.log_prob.end()), -1});
     boxes += static_cast<int64_t>(labelled.size());
     scoreFrame(d.classes, labelled, by_frame[frame], 0.5, &scores);
   }
   nlohmann::json j = recognitionSection(scores);
-  j["proposals"] = fmt::format("OpenCV selective search (fast), at most {} boxes per frame found at {} px wide", max_boxes,
-                               width);
+  j["proposals"] =
+      fmt::format("OpenCV selective search (fast), at most {} boxes per frame found at {} px wide",
+                  max_boxes, width);
   j["boxes_per_frame_after_suppression"] =
       scores.frames ? static_cast<double>(boxes) / static_cast<double>(scores.frames) : 0.0;
   return j;
@@ -205,10 +218,12 @@ std::string whyNotSplit(const ObjectSet& set, bool loio) {
   for (const auto& [category, list] : instances)
     if (list.size() < 2) single.push_back(category);
   if (loio && !single.empty())
-    return fmt::format("{} of its {} categories have a single instance ({}{}): leave-one-instance-out cannot hold "
-                       "it out",
-                       single.size(), instances.size(), fmt::join(single.begin(), single.begin() + std::min<size_t>(single.size(), 5), ", "),
-                       single.size() > 5 ? ", ..." : "");
+    return fmt::format(
+        "{} of its {} categories have a single instance ({}{}): leave-one-instance-out cannot hold "
+        "it out",
+        single.size(), instances.size(),
+        fmt::join(single.begin(), single.begin() + std::min<size_t>(single.size(), 5), ", "),
+        single.size() > 5 ? ", ..." : "");
   if (single.size() == instances.size()) return "no category has two instances to hold one out";
   return "";
 }
@@ -225,7 +240,8 @@ struct ExtraTraining {
 };
 
 // The extra training sets of the evaluated set `name`.
-std::vector<std::string> extraTrainingFor(const std::string& name, const std::vector<std::string>& args) {
+std::vector<std::string> extraTrainingFor(const std::string& name,
+                                          const std::vector<std::string>& args) {
   std::vector<std::string> dirs;
   for (const auto& a : args) {
     const ExtraTraining e(a);
@@ -243,42 +259,54 @@ struct Args {
 };
 
 void addOptions(CLI::App& app, Args& a) {
-  app.add_option("--objects", a.objects, "object set folders (default: every set in <shared>/objects and build/data/objects)");
+  app.add_option(
+      "--objects", a.objects,
+      "object set folders (default: every set in <shared>/objects and build/data/objects)");
   app.add_option("--out", a.out, "JSON fragment to write")->required();
-  app.add_option("--config", a.config, "YAML file with a 'train' section (default: built-in options)")
+  app.add_option("--config", a.config,
+                 "YAML file with a 'train' section (default: built-in options)")
       ->check(CLI::ExistingFile);
   app.add_option("--shared", a.shared, "the shared data folder");
-  app.add_option("--protocol", a.protocol, "auto, loio (leave-one-instance-out) or holdout (one instance per category)")
+  app.add_option("--protocol", a.protocol,
+                 "auto, loio (leave-one-instance-out) or holdout (one instance per category)")
       ->check(CLI::IsMember({"auto", "loio", "holdout"}));
-  app.add_option("--loio-max-instances", a.loio_max, "auto: leave-one-instance-out up to this many instances");
+  app.add_option("--loio-max-instances", a.loio_max,
+                 "auto: leave-one-instance-out up to this many instances");
   // One value per occurrence (repeat the option for more): a list would swallow the sequence
   // folders that follow it on the command line (make eval passes them last).
   app.add_option("--hold-out", a.held_out,
-                 "leave-one-instance-out: only this instance's folds (e.g. ball_1; repeat for more; default: "
+                 "leave-one-instance-out: only this instance's folds (e.g. ball_1; repeat for "
+                 "more; default: "
                  "every instance)")
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  app.add_option("--extra-training", a.extra,
-                 "[SET=]DIR: an object set (e.g. rendered by slamaware-synth objects) whose crops of the "
-                 "categories of the evaluated set SET (default: of every set but itself) are added to the "
-                 "training data of every fold; never tested; repeat for more")
+  app.add_option(
+         "--extra-training", a.extra,
+         "[SET=]DIR: an object set (e.g. rendered by slamaware-synth objects) whose crops of the "
+         "categories of the evaluated set SET (default: of every set but itself) are added to the "
+         "training data of every fold; never tested; repeat for more")
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  app.add_option("--max-views", a.max_views, "views per instance (overrides train.max_views_per_instance)");
+  app.add_option("--max-views", a.max_views,
+                 "views per instance (overrides train.max_views_per_instance)");
   app.add_option("--log-level", a.log_level, "trace, debug, info, warn, error");
-  app.add_option("sequences", a.sequences,
-                 "sequence folders: their ground-truth boxes are classified with --model (objects of other "
-                 "categories count as background)");
+  app.add_option(
+      "sequences", a.sequences,
+      "sequence folders: their ground-truth boxes are classified with --model (objects of other "
+      "categories count as background)");
   app.add_option("--model", a.model_path, "model for the ground-truth boxes of the sequences");
   app.add_option("--ss-boxes", a.ss_boxes,
-                 "photographed sequences: selective-search boxes per frame classified as detections (0: none)");
-  app.add_option("--ss-width", a.ss_width, "px, frames are downscaled to this width for selective search");
+                 "photographed sequences: selective-search boxes per frame classified as "
+                 "detections (0: none)");
+  app.add_option("--ss-width", a.ss_width,
+                 "px, frames are downscaled to this width for selective search");
   app.add_flag("--no-object-sets", a.skip_sets, "only the ground-truth boxes of the sequences");
 }
 
-void printConfusion(const std::vector<std::string>& classes, const std::vector<std::vector<int64_t>>& confusion) {
+void printConfusion(const std::vector<std::string>& classes,
+                    const std::vector<std::vector<int64_t>>& confusion) {
   for (size_t i = 0; i < classes.size(); ++i) {
     std::cout << "  " << classes[i];
     for (int64_t n : confusion[i]) std::cout << " " << n;
@@ -288,7 +316,8 @@ void printConfusion(const std::vector<std::string>& classes, const std::vector<s
 
 // One object set: held-out accuracy (leave-one-instance-out or one instance per category out),
 // or why it cannot be split.
-nlohmann::json evaluateObjectSet(const std::string& dir, const Args& a, const TrainOptions& options) {
+nlohmann::json evaluateObjectSet(const std::string& dir, const Args& a,
+                                 const TrainOptions& options) {
   std::unique_ptr<ProgressBar> bar;
   std::string current;
   auto progress = [&](const std::string& stage, int64_t done, int64_t total) {
@@ -303,8 +332,9 @@ nlohmann::json evaluateObjectSet(const std::string& dir, const Args& a, const Tr
   size_t instances = 0;
   for (const auto& [c, list] : set.instances()) instances += list.size();
   // Photographed sets are small and are what counts: every instance is held out in turn.
-  const bool loio = a.protocol == "loio" ||
-                    (a.protocol == "auto" && (!set.rendered() || static_cast<int>(instances) <= a.loio_max));
+  const bool loio =
+      a.protocol == "loio" ||
+      (a.protocol == "auto" && (!set.rendered() || static_cast<int>(instances) <= a.loio_max));
   const std::string name = folderName(dir);
   const std::string why_not = whyNotSplit(set, loio);
   if (!why_not.empty()) {
@@ -326,10 +356,11 @@ nlohmann::json evaluateObjectSet(const std::string& dir, const Args& a, const Tr
     entry["extra_training_crops"] = r.extra_crops;
   }
   entry["instance_accuracy"] = r.instance_accuracy;
-  std::cout << name << " (" << r.protocol << "): category accuracy " << r.accuracy() << "% (" << r.correct << "/"
-            << r.crops << ")\nconfusion (rows: true, columns: predicted):\n";
+  std::cout << name << " (" << r.protocol << "): category accuracy " << r.accuracy() << "% ("
+            << r.correct << "/" << r.crops << ")\nconfusion (rows: true, columns: predicted):\n";
   printConfusion(r.classes, r.confusion);
-  for (const auto& [inst, acc] : r.instance_accuracy) std::cout << "  " << inst << ": " << acc << "%\n";
+  for (const auto& [inst, acc] : r.instance_accuracy)
+    std::cout << "  " << inst << ": " << acc << "%\n";
   return entry;
 }
 
@@ -347,7 +378,8 @@ void evaluateSequences(const Args& a, nlohmann::json& j) {
     const std::string name = folderName(dir);
     j["sequences"][name]["gt_boxes"] = t.json();
     std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
-              << " ground-truth boxes right (jittered: " << t.json()["jittered_accuracy"].get<double>() << "%)\n";
+              << " ground-truth boxes right (jittered: "
+              << t.json()["jittered_accuracy"].get<double>() << "%)\n";
     t.print(std::cout);
     if (isSyntheticSequence(seq)) {
       suite.merge(t);
@@ -355,8 +387,8 @@ void evaluateSequences(const Args& a, nlohmann::json& j) {
     }
     const std::vector<std::string> evaluated = evaluatedClasses(recognizer.classes(), seq);
     if (evaluated.empty() || a.ss_boxes <= 0) continue;
-    const nlohmann::json ss =
-        selectiveSearchDetection(recognizer, recognizer_options, seq, evaluated, 5, a.ss_boxes, a.ss_width);
+    const nlohmann::json ss = selectiveSearchDetection(recognizer, recognizer_options, seq,
+                                                       evaluated, 5, a.ss_boxes, a.ss_width);
     j["sequences"][name]["single_view_ss"] = ss;
     std::cout << name << ": selective search + recognizer, single-view mAP " << ss["mAP"] << " ("
               << ss["boxes_per_frame_after_suppression"] << " boxes per frame)\n";
@@ -389,16 +421,20 @@ int main(int argc, char** argv) {
     TrainOptions options = loadConfig<TrainOptions>(a.config, "train", false);
     if (a.max_views >= 0) options.max_views_per_instance = a.max_views;
     if (a.objects.empty() && !a.skip_sets) a.objects = defaultObjectSets(a.shared);
-    if (a.objects.empty() && !a.skip_sets) throw std::runtime_error("no object sets found (give --objects DIR)");
+    if (a.objects.empty() && !a.skip_sets)
+      throw std::runtime_error("no object sets found (give --objects DIR)");
     for (const auto& arg : a.extra) {
       const ExtraTraining e(arg);
-      if (!e.set.empty() && std::none_of(a.objects.begin(), a.objects.end(),
-                                         [&](const std::string& d) { return folderName(d) == e.set; }))
-        throw std::runtime_error("--extra-training " + arg + ": no evaluated object set is named " + e.set);
+      if (!e.set.empty() &&
+          std::none_of(a.objects.begin(), a.objects.end(),
+                       [&](const std::string& d) { return folderName(d) == e.set; }))
+        throw std::runtime_error("--extra-training " + arg + ": no evaluated object set is named " +
+                                 e.set);
     }
     nlohmann::json j = nlohmann::json::object();
     j["objects"] = nlohmann::json::object();
-    for (const auto& dir : a.objects) j["objects"][folderName(dir)] = evaluateObjectSet(dir, a, options);
+    for (const auto& dir : a.objects)
+      j["objects"][folderName(dir)] = evaluateObjectSet(dir, a, options);
     if (!a.sequences.empty()) evaluateSequences(a, j);
     writeJson(j, a.out);
   } catch (const std::exception& e) {

@@ -46,8 +46,8 @@ SlamRecording runSlamOffline(const SequenceFolder& sequence, const slam::SlamOpt
       spdlog::info(
           "seq {:4d} {:12s} map {} tracked {:4d} kfs {:3d} points {:5d} seeds {:6d} dpts {:7d} "
           "track {:.1f} ms (orb {:.1f}) depth {:.1f} ms",
-          i, slam::poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked, st.keyframes,
-          st.points, st.depth_seeds, st.depth_points, st.track_ms, st.extract_ms,
+          i, slam::poseStateName(out.pose.state), out.pose.map_id, out.pose.num_tracked,
+          st.keyframes, st.points, st.depth_seeds, st.depth_points, st.track_ms, st.extract_ms,
           st.depth_update_ms);
       for (const auto& e : out.events) spdlog::info("  {}", e);
     }

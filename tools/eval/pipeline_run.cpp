@@ -13,8 +13,8 @@
 #include "common/dataset.h"
 #include "slamaware/keyframe_t.hpp"
 #include "slamaware/point_cloud_t.hpp"
-#include "tools/eval/child_process.h"
 #include "slamaware/pose_t.hpp"
+#include "tools/eval/child_process.h"
 
 namespace fs = std::filesystem;
 
@@ -77,7 +77,7 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   }
 
   ChildProcess logger({"lcm-logger", "--lcm-url=" + options.lcm_url, "-f", log_path},
-               log_path + ".logger.txt");
+                      log_path + ".logger.txt");
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // lcm-logger has no ready signal
   // Every process reads the caller's system.yaml (its channels and scheduling; the bus URL and
   // lockstep mode are given on the command line).
@@ -106,8 +106,14 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
     procs.push_back(std::make_unique<ChildProcess>(argv, log_path + "." + s.name + ".txt"));
   }
   std::vector<std::string> camera_argv = {(fs::path(options.bin_dir) / "slamaware-camera").string(),
-                                          "--source", sequence_dir, "--wait-for", wait_for,
-                                          "--lcm-url", options.lcm_url, "--log-level", "warn"};
+                                          "--source",
+                                          sequence_dir,
+                                          "--wait-for",
+                                          wait_for,
+                                          "--lcm-url",
+                                          options.lcm_url,
+                                          "--log-level",
+                                          "warn"};
   if (!system_yaml.empty()) camera_argv.insert(camera_argv.end(), {"--system", system_yaml});
   if (options.realtime) {
     camera_argv.insert(camera_argv.end(), {"--speed", "1"});

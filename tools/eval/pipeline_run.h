@@ -1,6 +1,6 @@
 #pragma once
-// Runs the multi-process pipeline on one sequence folder, lockstep (or real time), and records the bus:
-// lcm-logger, then every stage of the pipeline whose binary is built, then the camera, which
+// Runs the multi-process pipeline on one sequence folder, lockstep (or real time), and records the
+// bus: lcm-logger, then every stage of the pipeline whose binary is built, then the camera, which
 // publishes frame n+1 only after the last stage answered frame n. The stages are a table (the
 // order of docs/architecture.md §1) so that later stages join by being built.
 #include <map>
@@ -26,7 +26,8 @@ std::vector<std::string> stageList(const std::string& comma_separated);
 struct PipelineRunOptions {
   std::string bin_dir;                ///< where slamaware-* binaries are
   std::string config_dir = "config";  ///< <name>.yaml passed as --config when it exists
-  std::string system_path;  ///< system.yaml passed to every process as --system ("" = built-in defaults)
+  std::string
+      system_path;  ///< system.yaml passed to every process as --system ("" = built-in defaults)
   std::string lcm_url;
   std::vector<std::string> only;  ///< stage names to run ("" = every built stage)
   std::string objectmap_dir;      ///< --map-dir of the objectmap stage: a fresh folder per sequence
@@ -46,8 +47,8 @@ struct PipelineRun {
   std::map<std::string, double> cpu_s;  ///< CPU time (all threads) of the camera and each stage
 };
 
-/// Runs the pipeline on `sequence_dir` (a sequence folder or an LCM log with CAMERA), recording the bus into `log_path` (process outputs go to
-/// <log_path>.<name>.txt).
+/// Runs the pipeline on `sequence_dir` (a sequence folder or an LCM log with CAMERA), recording the
+/// bus into `log_path` (process outputs go to <log_path>.<name>.txt).
 PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
                         const SystemConfig& system, const PipelineRunOptions& options);
 

@@ -20,11 +20,13 @@ std::string tickText(double v) {
 }
 
 // Text turned 90° counter-clockwise, its top-left corner at `at` (clipped to the canvas).
-void verticalText(cv::Mat& canvas, const std::string& text, cv::Point at, double scale, const cv::Scalar& colour) {
+void verticalText(cv::Mat& canvas, const std::string& text, cv::Point at, double scale,
+                  const cv::Scalar& colour) {
   int base = 0;
   const cv::Size sz = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &base);
   cv::Mat strip(sz.height + base + 2, sz.width + 2, canvas.type(), cv::Scalar(255, 255, 255));
-  cv::putText(strip, text, cv::Point(1, sz.height + 1), cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
+  cv::putText(strip, text, cv::Point(1, sz.height + 1), cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1,
+              cv::LINE_AA);
   cv::Mat turned;
   cv::rotate(strip, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
   const cv::Rect dst = cv::Rect(at, turned.size()) & cv::Rect(0, 0, canvas.cols, canvas.rows);
@@ -33,7 +35,8 @@ void verticalText(cv::Mat& canvas, const std::string& text, cv::Point at, double
 
 }  // namespace
 
-PlotPanel::PlotPanel(cv::Mat& canvas, const cv::Rect& area, PlotAxis x, PlotAxis y, const std::string& title)
+PlotPanel::PlotPanel(cv::Mat& canvas, const cv::Rect& area, PlotAxis x, PlotAxis y,
+                     const std::string& title)
     : canvas_(canvas),
       plot_(area.x + kLeft, area.y + kTop, std::max(1, area.width - kLeft - kRight),
             std::max(1, area.height - kTop - kBottom)),
@@ -42,30 +45,32 @@ PlotPanel::PlotPanel(cv::Mat& canvas, const cv::Rect& area, PlotAxis x, PlotAxis
   const cv::Scalar black(0, 0, 0);
   for (double t : y_.ticks) {
     cv::line(canvas_, toPixel(x_.min, t), toPixel(x_.max, t), kGrid);
-    cv::putText(canvas_, tickText(t), toPixel(x_.min, t) + cv::Point(-35, 5), cv::FONT_HERSHEY_SIMPLEX, kFontScale,
-                black);
+    cv::putText(canvas_, tickText(t), toPixel(x_.min, t) + cv::Point(-35, 5),
+                cv::FONT_HERSHEY_SIMPLEX, kFontScale, black);
   }
   for (double t : x_.ticks) {
     cv::line(canvas_, toPixel(t, y_.min), toPixel(t, y_.max), kGrid);
-    cv::putText(canvas_, tickText(t), toPixel(t, y_.min) + cv::Point(-5, 18), cv::FONT_HERSHEY_SIMPLEX, kFontScale,
-                black);
+    cv::putText(canvas_, tickText(t), toPixel(t, y_.min) + cv::Point(-5, 18),
+                cv::FONT_HERSHEY_SIMPLEX, kFontScale, black);
   }
   cv::rectangle(canvas_, plot_, cv::Scalar(160, 160, 160));
   if (!x_.label.empty()) {
     int base = 0;
     const int w = cv::getTextSize(x_.label, cv::FONT_HERSHEY_SIMPLEX, kLabelScale, 1, &base).width;
-    cv::putText(canvas_, x_.label, cv::Point(plot_.x + (plot_.width - w) / 2, area.y + area.height - 12),
+    cv::putText(canvas_, x_.label,
+                cv::Point(plot_.x + (plot_.width - w) / 2, area.y + area.height - 12),
                 cv::FONT_HERSHEY_SIMPLEX, kLabelScale, black, 1, cv::LINE_AA);
   }
   if (!y_.label.empty()) {
     int base = 0;
     const int w = cv::getTextSize(y_.label, cv::FONT_HERSHEY_SIMPLEX, kLabelScale, 1, &base).width;
-    verticalText(canvas_, y_.label, cv::Point(area.x + 2, plot_.y + std::max(0, (plot_.height - w) / 2)),
-                 kLabelScale, black);
+    verticalText(canvas_, y_.label,
+                 cv::Point(area.x + 2, plot_.y + std::max(0, (plot_.height - w) / 2)), kLabelScale,
+                 black);
   }
   if (!title.empty())
-    cv::putText(canvas_, title, cv::Point(plot_.x, area.y + 18), cv::FONT_HERSHEY_SIMPLEX, kLabelScale, black, 1,
-                cv::LINE_AA);
+    cv::putText(canvas_, title, cv::Point(plot_.x, area.y + 18), cv::FONT_HERSHEY_SIMPLEX,
+                kLabelScale, black, 1, cv::LINE_AA);
 }
 
 double PlotPanel::fraction(const PlotAxis& a, double v) const {
@@ -80,20 +85,24 @@ double PlotPanel::fraction(const PlotAxis& a, double v) const {
 }
 
 cv::Point PlotPanel::toPixel(double x, double y) const {
-  return cv::Point(plot_.x + static_cast<int>(std::lround(fraction(x_, x) * plot_.width)),
-                   plot_.y + plot_.height - static_cast<int>(std::lround(fraction(y_, y) * plot_.height)));
+  return cv::Point(
+      plot_.x + static_cast<int>(std::lround(fraction(x_, x) * plot_.width)),
+      plot_.y + plot_.height - static_cast<int>(std::lround(fraction(y_, y) * plot_.height)));
 }
 
-void PlotPanel::curve(const std::vector<cv::Point2d>& points, const cv::Scalar& colour, const std::string& label,
-                      int thickness) {
+void PlotPanel::curve(const std::vector<cv::Point2d>& points, const cv::Scalar& colour,
+                      const std::string& label, int thickness) {
   for (size_t i = 1; i < points.size(); ++i)
-    cv::line(canvas_, toPixel(points[i - 1].x, points[i - 1].y), toPixel(points[i].x, points[i].y), colour, thickness,
-             cv::LINE_AA);
-  if (points.size() == 1) cv::circle(canvas_, toPixel(points[0].x, points[0].y), thickness + 1, colour, cv::FILLED);
+    cv::line(canvas_, toPixel(points[i - 1].x, points[i - 1].y), toPixel(points[i].x, points[i].y),
+             colour, thickness, cv::LINE_AA);
+  if (points.size() == 1)
+    cv::circle(canvas_, toPixel(points[0].x, points[0].y), thickness + 1, colour, cv::FILLED);
   if (!label.empty()) note(label, colour);
 }
 
-void PlotPanel::note(const std::string& text, const cv::Scalar& colour) { legend_.emplace_back(text, colour); }
+void PlotPanel::note(const std::string& text, const cv::Scalar& colour) {
+  legend_.emplace_back(text, colour);
+}
 
 PlotPanel::~PlotPanel() {
   for (size_t row = 0; row < legend_.size(); ++row) {
@@ -102,8 +111,10 @@ PlotPanel::~PlotPanel() {
     int base = 0;
     const cv::Size sz = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, kLabelScale, 1, &base);
     // On white, so that the curves under the legend do not hide it.
-    cv::rectangle(canvas_, cv::Rect(at.x - 3, at.y - sz.height - 3, sz.width + 6, sz.height + base + 5) & plot_,
-                  cv::Scalar(255, 255, 255), cv::FILLED);
+    cv::rectangle(
+        canvas_,
+        cv::Rect(at.x - 3, at.y - sz.height - 3, sz.width + 6, sz.height + base + 5) & plot_,
+        cv::Scalar(255, 255, 255), cv::FILLED);
     cv::putText(canvas_, text, at, cv::FONT_HERSHEY_SIMPLEX, kLabelScale, colour, 1, cv::LINE_AA);
   }
 }

@@ -11,8 +11,8 @@ namespace slamaware {
 
 struct PlotAxis {
   double min = 0, max = 1;
-  bool log10 = false;          ///< logarithmic axis (min > 0)
-  std::vector<double> ticks;   ///< grid lines, labelled with %g
+  bool log10 = false;         ///< logarithmic axis (min > 0)
+  std::vector<double> ticks;  ///< grid lines, labelled with %g
   std::string label;
 };
 
@@ -20,7 +20,8 @@ struct PlotAxis {
 class PlotPanel {
  public:
   /// Draws the frame, the grid, the tick labels, the axis labels and `title` (top left).
-  PlotPanel(cv::Mat& canvas, const cv::Rect& area, PlotAxis x, PlotAxis y, const std::string& title);
+  PlotPanel(cv::Mat& canvas, const cv::Rect& area, PlotAxis x, PlotAxis y,
+            const std::string& title);
 
   /// Draws the legend (over the curves).
   ~PlotPanel();
@@ -31,8 +32,8 @@ class PlotPanel {
   cv::Point toPixel(double x, double y) const;
   /// A polyline through the points in order (one point: a dot); a legend row `label` (if not
   /// empty) in `colour`, top left inside the panel.
-  void curve(const std::vector<cv::Point2d>& points, const cv::Scalar& colour, const std::string& label,
-             int thickness = 2);
+  void curve(const std::vector<cv::Point2d>& points, const cv::Scalar& colour,
+             const std::string& label, int thickness = 2);
   /// A legend row without a curve (e.g. a note).
   void note(const std::string& text, const cv::Scalar& colour);
 
@@ -46,8 +47,8 @@ class PlotPanel {
 
 /// Default colours of the charts (BGR).
 namespace plot_colour {
-const cv::Scalar kBlue(200, 80, 0), kLightBlue(230, 170, 110), kRed(0, 0, 200), kOrange(0, 140, 255),
-    kBlack(0, 0, 0), kGrey(120, 120, 120);
+const cv::Scalar kBlue(200, 80, 0), kLightBlue(230, 170, 110), kRed(0, 0, 200),
+    kOrange(0, 140, 255), kBlack(0, 0, 0), kGrey(120, 120, 120);
 }
 
 }  // namespace slamaware

@@ -1,7 +1,5 @@
 #include "tools/eval/proposal_metrics.h"
 
-#include "tools/eval/stats.h"
-
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -18,6 +16,7 @@
 #include "common/image_codec.h"
 #include "procs/proposals/proposal_engine.h"
 #include "tools/eval/plot.h"
+#include "tools/eval/stats.h"
 
 namespace slamaware {
 
@@ -63,10 +62,12 @@ void drawPlot(const ProposalScores& sc, const std::string& path) {
   const double kmax = 2000;
   cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
   {
-    PlotPanel panel(img, cv::Rect(0, 0, W, H), PlotAxis{1, kmax, true, {1, 10, 100, 1000}, "boxes per frame (log)"},
+    PlotPanel panel(img, cv::Rect(0, 0, W, H),
+                    PlotAxis{1, kmax, true, {1, 10, 100, 1000}, "boxes per frame (log)"},
                     PlotAxis{0, 100, false, {0, 20, 40, 60, 80, 100}, ""},
                     "recall of ground-truth boxes at IoU 0.5 (%)");
-    auto curve = [&](const std::vector<int>& ranks, const cv::Scalar& colour, const std::string& label) {
+    auto curve = [&](const std::vector<int>& ranks, const cv::Scalar& colour,
+                     const std::string& label) {
       if (ranks.empty()) return;
       std::vector<cv::Point2d> points{{1, recallAt(ranks, 1)}};
       for (int k = 2; k <= kmax; k = std::max(k + 1, static_cast<int>(k * 1.05)))
@@ -126,13 +127,13 @@ double bestIou(const std::vector<Box2>& boxes, const Box2& truth) {
 
 // The cause of each uncovered ground-truth box of one frame (ProposalMisses).
 void countMisses(const ProposalEngine& engine, const ProposalOptions& options, const pose_t& pose,
-                 const std::vector<Box2>& published, bool any_before, const std::vector<Box2>& truth,
-                 ProposalMisses* m) {
+                 const std::vector<Box2>& published, bool any_before,
+                 const std::vector<Box2>& truth, ProposalMisses* m) {
   std::vector<Box2> without_nms, without_culling;
   const CameraModel* camera = engine.camera();
   const bool localized = isLocalized(pose);
-  const bool any_uncovered =
-      std::any_of(truth.begin(), truth.end(), [&](const Box2& t) { return bestIou(published, t) < 0.5; });
+  const bool any_uncovered = std::any_of(
+      truth.begin(), truth.end(), [&](const Box2& t) { return bestIou(published, t) < 0.5; });
   if (any_uncovered && localized && camera && engine.map().mapId() == pose.map_id) {
     const SE3 T_world_camera = se3FromArrays(pose.position, pose.orientation);
     ProposalOptions o = options;
@@ -146,23 +147,31 @@ void countMisses(const ProposalEngine& engine, const ProposalOptions& options, c
   }
   for (const auto& t : truth) {
     ++m->boxes;
-    if (bestIou(published, t) >= 0.5) ++m->covered;
-    else if (!any_before) ++m->before_first;
-    else if (!localized) ++m->not_localized;
-    else if (bestIou(without_nms, t) >= 0.5) ++m->suppressed;
-    else if (bestIou(without_culling, t) >= 0.5) ++m->occluded;
-    else if (bestIou(without_culling, t) >= 0.3) ++m->partial;
-    else ++m->no_candidate;
+    if (bestIou(published, t) >= 0.5)
+      ++m->covered;
+    else if (!any_before)
+      ++m->before_first;
+    else if (!localized)
+      ++m->not_localized;
+    else if (bestIou(without_nms, t) >= 0.5)
+      ++m->suppressed;
+    else if (bestIou(without_culling, t) >= 0.5)
+      ++m->occluded;
+    else if (bestIou(without_culling, t) >= 0.3)
+      ++m->partial;
+    else
+      ++m->no_candidate;
   }
 }
 
 }  // namespace
 
-ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch, const ProposalOptions& options,
-                                 const SequenceFolder* sequence, int stride, ProposalMisses* misses) {
+ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch,
+                                 const ProposalOptions& options, const SequenceFolder* sequence,
+                                 int stride, ProposalMisses* misses) {
   std::map<int, std::vector<Box2>> truth;
   if (sequence && misses) truth = truthByFrame(*sequence, stride);
-  bool any_proposals = false;  // a frame so far had proposals
+  bool any_proposals = false;                  // a frame so far had proposals
   std::map<int, bool> unlocated_before_first;  // frame not located -> it came before any proposals
   ProposalRecording run;
   ProposalEngine engine(options);
@@ -197,10 +206,14 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       }
       if (reclustered) {
         const ClusterStats& s = engine.map().stats();
-        spdlog::debug("frame {}: map {} points{} ({} cropped, {} single-view, voxel {:.4f}), {} planes with {} points, "
-                      "support {}, scale {:.3f}, {} clustered -> {} candidates ({} of {} band points taken), {:.0f} ms",
-                      m.seq, s.input_points, s.young ? " (young)" : "", s.cropped, s.single_view, s.voxel, s.planes, s.plane_points, s.support,
-                      s.scene_scale, s.clustered_points, s.clusters, s.band_taken, s.band_points, s.ms);
+        spdlog::debug(
+            "frame {}: map {} points{} ({} cropped, {} single-view, voxel {:.4f}), {} planes with "
+            "{} points, "
+            "support {}, scale {:.3f}, {} clustered -> {} candidates ({} of {} band points taken), "
+            "{:.0f} ms",
+            m.seq, s.input_points, s.young ? " (young)" : "", s.cropped, s.single_view, s.voxel,
+            s.planes, s.plane_points, s.support, s.scene_scale, s.clustered_points, s.clusters,
+            s.band_taken, s.band_points, s.ms);
       }
     }
   }
@@ -208,7 +221,8 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
   for (const auto& [frame, boxes] : truth) {
     if (frame < 0 || static_cast<size_t>(frame) >= sequence->size()) continue;
     const auto posed = unlocated_before_first.find(frame);
-    const bool before_first = posed != unlocated_before_first.end() ? posed->second : !any_proposals;
+    const bool before_first =
+        posed != unlocated_before_first.end() ? posed->second : !any_proposals;
     const auto late = run.boxes.find(frame);
     for (const auto& t : boxes) {
       ++misses->boxes;
@@ -282,16 +296,18 @@ ProposalScores scoreProposals(const ProposalRecording& run, const SequenceFolder
 }
 
 void mergeScores(ProposalScores* into, const ProposalScores& more) {
-  auto append = [](std::vector<int>& a, const std::vector<int>& b) { a.insert(a.end(), b.begin(), b.end()); };
+  auto append = [](std::vector<int>& a, const std::vector<int>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+  };
   append(into->rank50, more.rank50);
   append(into->rank70, more.rank70);
   append(into->rank50_localized, more.rank50_localized);
   append(into->boxes_per_frame, more.boxes_per_frame);
   append(into->ours_on_baseline_frames, more.ours_on_baseline_frames);
   append(into->baseline_rank50, more.baseline_rank50);
-  into->baseline_ms_per_frame =
-      (into->baseline_ms_per_frame * into->baseline_frames + more.baseline_ms_per_frame * more.baseline_frames) /
-      std::max(1, into->baseline_frames + more.baseline_frames);
+  into->baseline_ms_per_frame = (into->baseline_ms_per_frame * into->baseline_frames +
+                                 more.baseline_ms_per_frame * more.baseline_frames) /
+                                std::max(1, into->baseline_frames + more.baseline_frames);
   into->frames += more.frames;
   into->localized_frames += more.localized_frames;
   into->baseline_frames += more.baseline_frames;
@@ -311,7 +327,9 @@ nlohmann::json proposalSection(const ProposalScores& sc, const std::string& plot
   const double per_frame = median(sc.boxes_per_frame);
   j["boxes_per_frame"] = per_frame;
   j["boxes_per_frame_max"] =
-      sc.boxes_per_frame.empty() ? 0 : *std::max_element(sc.boxes_per_frame.begin(), sc.boxes_per_frame.end());
+      sc.boxes_per_frame.empty()
+          ? 0
+          : *std::max_element(sc.boxes_per_frame.begin(), sc.boxes_per_frame.end());
   if (!sc.baseline_rank50.empty()) {
     nlohmann::json b;
     b["name"] = "OpenCV selective search (ximgproc, fast mode)";
@@ -325,7 +343,9 @@ nlohmann::json proposalSection(const ProposalScores& sc, const std::string& plot
     b["ours_recall_iou50_same_frames"] = ours;
     // Boxes the baseline needs per frame to reach our recall on its frames (null: never).
     int need = 0;
-    const int most = sc.baseline_rank50.empty() ? 0 : *std::max_element(sc.baseline_rank50.begin(), sc.baseline_rank50.end());
+    const int most = sc.baseline_rank50.empty()
+                         ? 0
+                         : *std::max_element(sc.baseline_rank50.begin(), sc.baseline_rank50.end());
     for (int kk = 1; kk <= most; ++kk)
       if (recallAt(sc.baseline_rank50, kk) >= ours) {
         need = kk;
@@ -347,13 +367,13 @@ void writeProposalBoxes(const ProposalRecording& run, const std::string& path) {
   out << "frame,rank,x,y,w,h\n";
   for (const auto& [frame, boxes] : run.boxes)
     for (size_t r = 0; r < boxes.size(); ++r)
-      out << frame << ',' << r << ',' << boxes[r].x << ',' << boxes[r].y << ',' << boxes[r].w << ',' << boxes[r].h
-          << '\n';
+      out << frame << ',' << r << ',' << boxes[r].x << ',' << boxes[r].y << ',' << boxes[r].w << ','
+          << boxes[r].h << '\n';
   if (!out) throw std::runtime_error(path + ": cannot write the proposal boxes");
 }
 
-void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& seq, const std::string& dir,
-                        int stride, int max_frames, int top_k) {
+void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& seq,
+                        const std::string& dir, int stride, int max_frames, int top_k) {
   std::map<int, std::vector<GroundTruthBox>> truth;
   for (const auto& b : seq.boxes())
     if (stride <= 1 || b.frame % stride == 0) truth[b.frame].push_back(b);
@@ -371,7 +391,8 @@ void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& seq,
       for (int k = 0; k < std::min<int>(top_k, static_cast<int>(it->second.size())); ++k) {
         const Box2& b = it->second[static_cast<size_t>(k)];
         cv::rectangle(img, cv::Rect2d(b.x, b.y, b.w, b.h), cv::Scalar(0, 140, 255), 1);
-        cv::putText(img, std::to_string(k + 1), cv::Point(static_cast<int>(b.x) + 2, static_cast<int>(b.y) + 12),
+        cv::putText(img, std::to_string(k + 1),
+                    cv::Point(static_cast<int>(b.x) + 2, static_cast<int>(b.y) + 12),
                     cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 140, 255), 1, cv::LINE_AA);
       }
     char name[32];

@@ -39,14 +39,15 @@ ProposalRecording readProposalRecording(const std::string& log_path, const Chann
 /// without the step that could have dropped the box. Counts of ground-truth boxes, each in the
 /// first cause that applies.
 struct ProposalMisses {
-  int boxes = 0;             ///< ground-truth boxes of the evaluated frames
-  int covered = 0;           ///< a proposal covers it
-  int before_first = 0;      ///< frame before the sequence's first proposal (the map is not built yet)
-  int not_localized = 0;     ///< SLAM did not localise the frame
-  int suppressed = 0;        ///< a candidate's box covers it, but a box ranked ahead overlapped that box (NMS)
-  int occluded = 0;          ///< a candidate's box covers it, but the depth buffer culled it
-  int partial = 0;           ///< the best candidate's box overlaps it at IoU 0.3-0.5 (a part, or too much)
-  int no_candidate = 0;      ///< no candidate's box overlaps it at IoU 0.3
+  int boxes = 0;          ///< ground-truth boxes of the evaluated frames
+  int covered = 0;        ///< a proposal covers it
+  int before_first = 0;   ///< frame before the sequence's first proposal (the map is not built yet)
+  int not_localized = 0;  ///< SLAM did not localise the frame
+  int suppressed =
+      0;  ///< a candidate's box covers it, but a box ranked ahead overlapped that box (NMS)
+  int occluded = 0;  ///< a candidate's box covers it, but the depth buffer culled it
+  int partial = 0;   ///< the best candidate's box overlaps it at IoU 0.3-0.5 (a part, or too much)
+  int no_candidate = 0;  ///< no candidate's box overlaps it at IoU 0.3
 
   /// f(report key, count) for every count of `m` (const or not).
   template <class M, class F>
@@ -66,29 +67,30 @@ struct ProposalMisses {
 /// (to try other options without running SLAM again). With `misses` and `sequence`, also counts
 /// why the ground-truth boxes of every `stride`-th frame are missed.
 ProposalRecording rerunProposals(const std::string& log_path, const Channels& channels,
-                                 const proposals::ProposalOptions& options, const SequenceFolder* sequence = nullptr,
-                                 int stride = 5, ProposalMisses* misses = nullptr);
+                                 const proposals::ProposalOptions& options,
+                                 const SequenceFolder* sequence = nullptr, int stride = 5,
+                                 ProposalMisses* misses = nullptr);
 nlohmann::json missesSection(const ProposalMisses& misses);
 void mergeMisses(ProposalMisses* into, const ProposalMisses& more);
 
 struct ProposalEvalOptions {
-  int stride = 5;               ///< every stride-th frame is evaluated
-  int baseline_frames = 20;     ///< selective search runs on at most this many of those frames
-  int baseline_width = 320;     ///< px, frames are downscaled to this width for selective search
+  int stride = 5;            ///< every stride-th frame is evaluated
+  int baseline_frames = 20;  ///< selective search runs on at most this many of those frames
+  int baseline_width = 320;  ///< px, frames are downscaled to this width for selective search
   int baseline_max_boxes = 2000;
-  std::string plot_path;        ///< recall-vs-boxes PNG ("" = none)
+  std::string plot_path;  ///< recall-vs-boxes PNG ("" = none)
   bool baseline = true;
 };
 
 /// Per ground-truth box: the rank (1 = first) of the best-ranked proposal that covers it at the
 /// IoU threshold, 0 when none does. Recall at k boxes is the share of ranks in 1..k.
 struct ProposalScores {
-  std::vector<int> rank50, rank70;              ///< ours, every evaluated frame
-  std::vector<int> rank50_localized;            ///< ours, the evaluated frames SLAM localised
-  std::vector<int> boxes_per_frame;             ///< ours, localised evaluated frames
+  std::vector<int> rank50, rank70;    ///< ours, every evaluated frame
+  std::vector<int> rank50_localized;  ///< ours, the evaluated frames SLAM localised
+  std::vector<int> boxes_per_frame;   ///< ours, localised evaluated frames
   int frames = 0, localized_frames = 0;
-  std::vector<int> ours_on_baseline_frames;     ///< ours at IoU 0.5, the baseline's frames only
-  std::vector<int> baseline_rank50;             ///< selective search, its frames
+  std::vector<int> ours_on_baseline_frames;  ///< ours at IoU 0.5, the baseline's frames only
+  std::vector<int> baseline_rank50;          ///< selective search, its frames
   int baseline_frames = 0;
   double baseline_ms_per_frame = 0;
 };
@@ -104,7 +106,7 @@ void mergeScores(ProposalScores* into, const ProposalScores& more);
 void writeProposalBoxes(const ProposalRecording& run, const std::string& path);
 /// Writes <dir>/<frame>.png for evaluated frames (at most `max_frames`, spread evenly): the
 /// ground-truth boxes in green, our first `top_k` boxes in orange with their rank.
-void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& sequence, const std::string& dir,
-                        int stride, int max_frames, int top_k);
+void drawProposalFrames(const ProposalRecording& run, const SequenceFolder& sequence,
+                        const std::string& dir, int stride, int max_frames, int top_k);
 
 }  // namespace slamaware

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <tuple>
-#include <opencv2/imgproc.hpp>
 
 #include "common/bus/log_reader.h"
 #include "common/geometry.h"
@@ -29,18 +29,20 @@ nlohmann::json percentOrNull(double num, double den) {
   return den > 0 ? nlohmann::json(100.0 * num / den) : nlohmann::json(nullptr);
 }
 
-nlohmann::json numberOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+nlohmann::json numberOrNull(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
 
 int argmaxOf(const std::vector<double>& v) {
   int best = -1;
   for (size_t i = 0; i < v.size(); ++i)
-    if (!std::isnan(v[i]) && (best < 0 || v[i] > v[static_cast<size_t>(best)])) best = static_cast<int>(i);
+    if (!std::isnan(v[i]) && (best < 0 || v[i] > v[static_cast<size_t>(best)]))
+      best = static_cast<int>(i);
   return best;
 }
 
-
-// log(p / (1 - p)) of class k from log-probabilities of all classes: log p_k - log sum_{j != k} p_j.
-// Monotone in p_k, so it ranks boxes as p_k does, but without the ties that rounding makes of
+// log(p / (1 - p)) of class k from log-probabilities of all classes: log p_k - log sum_{j != k}
+// p_j. Monotone in p_k, so it ranks boxes as p_k does, but without the ties that rounding makes of
 // posteriors saturated at 1 (fused over hundreds of views) or at 0.
 double logOdds(const std::vector<double>& log_p, size_t k) {
   if (k >= log_p.size() || std::isnan(log_p[k]) || log_p[k] == kNegInf) return kNegInf;
@@ -54,15 +56,16 @@ double logOdds(const std::vector<double>& log_p, size_t k) {
   return log_p[k] - (m + std::log(s));
 }
 
-
 }  // namespace
 
 // ---- Average precision ------------------------------------------------------------------------
 
-double averagePrecision(std::vector<ScoredDetection> d, int num_truth, std::vector<PrPoint>* curve) {
+double averagePrecision(std::vector<ScoredDetection> d, int num_truth,
+                        std::vector<PrPoint>* curve) {
   if (curve) curve->clear();
   if (num_truth <= 0) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(d.begin(), d.end(), [](const ScoredDetection& a, const ScoredDetection& b) { return a.score > b.score; });
+  std::sort(d.begin(), d.end(),
+            [](const ScoredDetection& a, const ScoredDetection& b) { return a.score > b.score; });
   std::vector<PrPoint> points;
   int tp = 0, fp = 0;
   for (size_t i = 0; i < d.size();) {
@@ -93,14 +96,18 @@ RecognitionScores emptyScores(const std::vector<std::string>& evaluated_classes)
   return s;
 }
 
-void scoreFrame(const std::vector<std::string>& model_classes, const std::vector<LabelledBox>& boxes,
-                const std::vector<GroundTruthBox>& truth, double iou_threshold, RecognitionScores* s) {
+void scoreFrame(const std::vector<std::string>& model_classes,
+                const std::vector<LabelledBox>& boxes, const std::vector<GroundTruthBox>& truth,
+                double iou_threshold, RecognitionScores* s) {
   ++s->frames;
   s->boxes += static_cast<int>(boxes.size());
-  const auto background = std::find(model_classes.begin(), model_classes.end(), std::string(kBackgroundClass));
-  const int bg = background == model_classes.end() ? -1 : static_cast<int>(background - model_classes.begin());
+  const auto background =
+      std::find(model_classes.begin(), model_classes.end(), std::string(kBackgroundClass));
+  const int bg =
+      background == model_classes.end() ? -1 : static_cast<int>(background - model_classes.begin());
   std::vector<int> label(boxes.size());
-  for (size_t i = 0; i < boxes.size(); ++i) label[i] = boxes[i].label >= 0 ? boxes[i].label : argmaxOf(boxes[i].log_p);
+  for (size_t i = 0; i < boxes.size(); ++i)
+    label[i] = boxes[i].label >= 0 ? boxes[i].label : argmaxOf(boxes[i].log_p);
   std::vector<Box2> truth_boxes;
   for (const auto& t : truth) truth_boxes.push_back({t.x, t.y, t.w, t.h});
 
@@ -113,14 +120,16 @@ void scoreFrame(const std::vector<std::string>& model_classes, const std::vector
       if (truth[j].cls == cls) gt.push_back(j);
     tally.truth += static_cast<int>(gt.size());
     for (const size_t g : gt)
-      tally.boxed += std::any_of(boxes.begin(), boxes.end(),
-                                 [&](const LabelledBox& b) { return iou(b.box, truth_boxes[g]) >= iou_threshold; });
+      tally.boxed += std::any_of(boxes.begin(), boxes.end(), [&](const LabelledBox& b) {
+        return iou(b.box, truth_boxes[g]) >= iou_threshold;
+      });
     if (it == model_classes.end()) continue;  // the model cannot say it: no detections
     const size_t k = static_cast<size_t>(it - model_classes.begin());
     std::vector<size_t> order(boxes.size());
     std::iota(order.begin(), order.end(), 0);
     auto score = [&](size_t i) { return logOdds(boxes[i].log_p, k); };
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return score(a) > score(b); });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return score(a) > score(b); });
     auto match = [&](size_t i, std::vector<bool>& matched) {
       int best = -1;
       double best_iou = iou_threshold;
@@ -196,7 +205,8 @@ nlohmann::json recognitionSection(const RecognitionScores& s) {
   int ap_classes = 0, truth = 0, tp = 0, boxed = 0;
   for (const auto& [cls, t] : s.classes) {
     const double ap = averagePrecision(t.ranked, t.truth);
-    if (std::isfinite(ap)) ap_sum += ap, boxed_sum += static_cast<double>(t.boxed) / t.truth, ++ap_classes;
+    if (std::isfinite(ap))
+      ap_sum += ap, boxed_sum += static_cast<double>(t.boxed) / t.truth, ++ap_classes;
     truth += t.truth;
     tp += t.labelled_tp;
     boxed += t.boxed;
@@ -212,10 +222,12 @@ nlohmann::json recognitionSection(const RecognitionScores& s) {
   }
   j["mAP"] = ap_classes > 0 ? nlohmann::json(100.0 * ap_sum / ap_classes) : nlohmann::json(nullptr);
   j["recall"] = percentOrNull(tp, truth);
-  // What the boxes allow: a ground-truth box no box overlaps at the threshold is missed whatever the
-  // labels, so a class's AP is at most its share of boxed ground truth, and the mAP at most their mean.
+  // What the boxes allow: a ground-truth box no box overlaps at the threshold is missed whatever
+  // the labels, so a class's AP is at most its share of boxed ground truth, and the mAP at most
+  // their mean.
   j["boxed"] = percentOrNull(boxed, truth);
-  j["mAP_bound"] = ap_classes > 0 ? nlohmann::json(100.0 * boxed_sum / ap_classes) : nlohmann::json(nullptr);
+  j["mAP_bound"] =
+      ap_classes > 0 ? nlohmann::json(100.0 * boxed_sum / ap_classes) : nlohmann::json(nullptr);
   j["classes_with_ground_truth"] = ap_classes;
   j["frames_evaluated"] = s.frames;
   j["boxes"] = s.boxes;
@@ -225,7 +237,8 @@ nlohmann::json recognitionSection(const RecognitionScores& s) {
   d["accuracy_on_objects"] = percentOrNull(s.correct_on_objects, s.boxes_on_objects);
   d["background_on_objects"] = percentOrNull(s.background_on_objects, s.boxes_on_objects);
   d["boxes_on_distractors"] = s.boxes_on_distractors;
-  d["background_on_distractors"] = percentOrNull(s.background_on_distractors, s.boxes_on_distractors);
+  d["background_on_distractors"] =
+      percentOrNull(s.background_on_distractors, s.boxes_on_distractors);
   d["boxes_elsewhere"] = s.boxes_elsewhere;
   d["background_elsewhere"] = percentOrNull(s.background_elsewhere, s.boxes_elsewhere);
   d["confusion"] = s.confusion;
@@ -233,8 +246,9 @@ nlohmann::json recognitionSection(const RecognitionScores& s) {
   return j;
 }
 
-void drawPrCurves(const RecognitionScores& single, const RecognitionScores& online, const RecognitionScores& final,
-                  const std::string& title, const std::string& path) {
+void drawPrCurves(const RecognitionScores& single, const RecognitionScores& online,
+                  const RecognitionScores& final, const std::string& title,
+                  const std::string& path) {
   std::vector<std::string> classes;
   for (const auto& [cls, t] : single.classes)
     if (t.truth > 0) classes.push_back(cls);
@@ -243,14 +257,17 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& onli
   const int rows = (static_cast<int>(classes.size()) + cols - 1) / cols;
   const int pw = 420, ph = 340, header = 34;
   cv::Mat img(header + rows * ph, cols * pw, CV_8UC3, cv::Scalar(255, 255, 255));
-  cv::putText(img, title, cv::Point(12, 22), cv::FONT_HERSHEY_SIMPLEX, 0.55, plot_colour::kBlack, 1, cv::LINE_AA);
+  cv::putText(img, title, cv::Point(12, 22), cv::FONT_HERSHEY_SIMPLEX, 0.55, plot_colour::kBlack, 1,
+              cv::LINE_AA);
   const std::vector<double> ticks{0, 20, 40, 60, 80, 100};
   for (size_t n = 0; n < classes.size(); ++n) {
     const std::string& cls = classes[n];
-    const cv::Rect area(static_cast<int>(n % cols) * pw, header + static_cast<int>(n / cols) * ph, pw, ph);
-    PlotPanel panel(img, area, PlotAxis{0, 100, false, ticks, "recall (%)"},
-                    PlotAxis{0, 100, false, ticks, "precision (%)"},
-                    cls + ": " + std::to_string(single.classes.at(cls).truth) + " ground-truth boxes");
+    const cv::Rect area(static_cast<int>(n % cols) * pw, header + static_cast<int>(n / cols) * ph,
+                        pw, ph);
+    PlotPanel panel(
+        img, area, PlotAxis{0, 100, false, ticks, "recall (%)"},
+        PlotAxis{0, 100, false, ticks, "precision (%)"},
+        cls + ": " + std::to_string(single.classes.at(cls).truth) + " ground-truth boxes");
     auto draw = [&](const RecognitionScores& s, const cv::Scalar& colour, const std::string& name) {
       const auto it = s.classes.find(cls);
       if (it == s.classes.end()) return;
@@ -265,7 +282,8 @@ void drawPrCurves(const RecognitionScores& single, const RecognitionScores& onli
       // The reported label's operating point (argmax).
       const ClassTally& t = it->second;
       if (t.labelled > 0)
-        panel.curve({{100.0 * t.labelled_tp / t.truth, 100.0 * t.labelled_tp / t.labelled}}, colour, "", 4);
+        panel.curve({{100.0 * t.labelled_tp / t.truth, 100.0 * t.labelled_tp / t.labelled}}, colour,
+                    "", 4);
     };
     draw(single, plot_colour::kBlue, "single view");
     draw(online, plot_colour::kOrange, "multi-view online");
@@ -294,7 +312,8 @@ ObjectMapOutputs readObjectMapOutputs(const std::string& log_path, const Channel
   return out;
 }
 
-ObjectMapOutputs rerunObjectMap(const std::string& log_path, const Channels& ch, const ObjectMapOptions& options) {
+ObjectMapOutputs rerunObjectMap(const std::string& log_path, const Channels& ch,
+                                const ObjectMapOptions& options) {
   ObjectMapOutputs out;
   ObjectMapEngine engine(options);
   LogReader reader(log_path);
@@ -415,7 +434,8 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
         const auto fo = final_objects.find(b.object);
         if (b.object >= 0 && fo != final_objects.end()) {
           // The last OBJECT_MAP's posterior of the object, with the weights the map gave this box.
-          const std::vector<double> post = byName(outputs.last_map.class_names, fo->second->log_posterior, run.classes);
+          const std::vector<double> post =
+              byName(outputs.last_map.class_names, fo->second->log_posterior, run.classes);
           const std::vector<double> weight = byName(d.class_names, d.log_weight[i], run.classes);
           b.final.log_p = post;
           scaleObjectClasses(&b.final.log_p, weight);
@@ -434,7 +454,8 @@ RecognitionRecording readRecognitionRecording(const std::string& log_path, const
   run.objects = static_cast<int>(outputs.last_map.objects.size());
   run.object_map = objectMapSummary(outputs.last_map);
   if (run.frames_without_object_detections > 0)
-    spdlog::warn("{}: {} DETECTIONS without their OBJECT_DETECTIONS", log_path, run.frames_without_object_detections);
+    spdlog::warn("{}: {} DETECTIONS without their OBJECT_DETECTIONS", log_path,
+                 run.frames_without_object_detections);
   return run;
 }
 

@@ -39,7 +39,8 @@ struct PrPoint {
 /// (precision at recall r = the best precision at any recall >= r). Detections of equal score are
 /// one step of the curve (the curve's points are taken after each group of ties), so the result
 /// does not depend on their order. NaN when num_truth is 0. `curve` gets the raw points.
-double averagePrecision(std::vector<ScoredDetection> detections, int num_truth, std::vector<PrPoint>* curve = nullptr);
+double averagePrecision(std::vector<ScoredDetection> detections, int num_truth,
+                        std::vector<PrPoint>* curve = nullptr);
 
 // ---- Scoring boxes against ground truth --------------------------------------------------------
 
@@ -53,12 +54,14 @@ struct LabelledBox {
 
 /// Tallies of one evaluated class.
 struct ClassTally {
-  std::vector<ScoredDetection> ranked;  ///< every box, scored by the log-odds of p(class), TP when matched
-  int truth = 0;                        ///< ground-truth boxes of the class
-  int labelled = 0;                     ///< boxes whose argmax is the class
-  int labelled_tp = 0;                  ///< of those, matched to a ground-truth box of the class
-  int boxed = 0;  ///< ground-truth boxes of the class that some box overlaps at the IoU threshold: no
-                  ///< labelling of these boxes can find more (recall <= boxed / truth, so AP too)
+  std::vector<ScoredDetection>
+      ranked;           ///< every box, scored by the log-odds of p(class), TP when matched
+  int truth = 0;        ///< ground-truth boxes of the class
+  int labelled = 0;     ///< boxes whose argmax is the class
+  int labelled_tp = 0;  ///< of those, matched to a ground-truth box of the class
+  int boxed =
+      0;  ///< ground-truth boxes of the class that some box overlaps at the IoU threshold: no
+          ///< labelling of these boxes can find more (recall <= boxed / truth, so AP too)
 };
 
 /// Detection scores of one sequence or (merged) of a suite.
@@ -70,7 +73,8 @@ struct RecognitionScores {
   int boxes_on_objects = 0, correct_on_objects = 0, background_on_objects = 0;
   int boxes_on_distractors = 0, background_on_distractors = 0;
   int boxes_elsewhere = 0, background_elsewhere = 0;
-  std::map<std::string, std::map<std::string, int>> confusion;  ///< truth -> label -> boxes on objects
+  std::map<std::string, std::map<std::string, int>>
+      confusion;  ///< truth -> label -> boxes on objects
 };
 
 /// Scores without tallies for the evaluated classes.
@@ -84,8 +88,9 @@ RecognitionScores emptyScores(const std::vector<std::string>& evaluated_classes)
 /// the highest IoU >= iou_threshold. A box's score for class c is the log-odds of p(c),
 /// log p(c) - log(1 - p(c)): the order of p(c) without the ties that rounding makes of saturated
 /// fused posteriors.
-void scoreFrame(const std::vector<std::string>& model_classes, const std::vector<LabelledBox>& boxes,
-                const std::vector<GroundTruthBox>& truth, double iou_threshold, RecognitionScores* scores);
+void scoreFrame(const std::vector<std::string>& model_classes,
+                const std::vector<LabelledBox>& boxes, const std::vector<GroundTruthBox>& truth,
+                double iou_threshold, RecognitionScores* scores);
 
 /// Pools the detections of another sequence (AP of the pool, not a mean of APs).
 void mergeRecognition(RecognitionScores* into, const RecognitionScores& more);
@@ -97,8 +102,9 @@ nlohmann::json recognitionSection(const RecognitionScores& scores);
 
 /// Precision-recall curves per class (classes with ground truth), single view and the multi-view
 /// online and final labels, one panel per class, into a PNG.
-void drawPrCurves(const RecognitionScores& single, const RecognitionScores& online, const RecognitionScores& final,
-                  const std::string& title, const std::string& path);
+void drawPrCurves(const RecognitionScores& single, const RecognitionScores& online,
+                  const RecognitionScores& final, const std::string& title,
+                  const std::string& path);
 
 // ---- What the processes published ----------------------------------------------------------
 
@@ -141,17 +147,18 @@ struct RecognitionRecording {
     /// rest); a box without an object in that map keeps its online scores.
     LabelledBox final;
     int32_t map_id = -1, candidate = -1;
-    int32_t object = -1;  ///< OBJECT_DETECTIONS' object id (-1: none)
-    int role = -1;        ///< object_detections_t role; -1: no OBJECT_DETECTIONS for the frame
-    bool carried = false; ///< DETECTIONS carried its scores from an earlier view (classified_seq)
+    int32_t object = -1;   ///< OBJECT_DETECTIONS' object id (-1: none)
+    int role = -1;         ///< object_detections_t role; -1: no OBJECT_DETECTIONS for the frame
+    bool carried = false;  ///< DETECTIONS carried its scores from an earlier view (classified_seq)
   };
   std::vector<std::string> classes;  ///< DETECTIONS' class names (the model's, background last)
   std::map<int32_t, std::vector<Box>> frames;
-  int objects = 0;                           ///< in the last OBJECT_MAP
-  int frames_without_object_detections = 0;  ///< DETECTIONS with no OBJECT_DETECTIONS (an incomplete run)
-  int final_without_object = 0;              ///< boxes whose object the last OBJECT_MAP does not hold
-  std::map<int, int> roles;                  ///< boxes per OBJECT_DETECTIONS role
-  nlohmann::json object_map;                 ///< objectMapSummary() of the last OBJECT_MAP
+  int objects = 0;  ///< in the last OBJECT_MAP
+  int frames_without_object_detections =
+      0;                         ///< DETECTIONS with no OBJECT_DETECTIONS (an incomplete run)
+  int final_without_object = 0;  ///< boxes whose object the last OBJECT_MAP does not hold
+  std::map<int, int> roles;      ///< boxes per OBJECT_DETECTIONS role
+  nlohmann::json object_map;     ///< objectMapSummary() of the last OBJECT_MAP
 
   bool empty() const { return classes.empty(); }
 };
@@ -168,7 +175,8 @@ struct RecognitionEvalOptions {
 
 struct RecognitionResult {
   RecognitionScores single, online, final;
-  std::vector<std::string> classes;  ///< evaluated: the model's (background excluded) that the sequence lists
+  std::vector<std::string>
+      classes;  ///< evaluated: the model's (background excluded) that the sequence lists
 };
 
 /// The classes a sequence is evaluated on: the model's object classes that its sequence.yaml lists.

@@ -15,9 +15,9 @@ namespace slamaware {
 namespace {
 
 struct Figure {
-  const char* key;           ///< key in per_scene rows
-  const char* section;       ///< section of report["sequences"][name]
-  const char* field;         ///< field of that section
+  const char* key;      ///< key in per_scene rows
+  const char* section;  ///< section of report["sequences"][name]
+  const char* field;    ///< field of that section
   bool higher_is_better;
 };
 
@@ -34,7 +34,8 @@ const Figure kFigures[] = {
 void drawHistogram(const std::vector<double>& recalls, const std::string& path) {
   // 5-point bins from 0 to 100 %.
   std::vector<int> bins(20, 0);
-  for (double r : recalls) ++bins[static_cast<size_t>(std::clamp(static_cast<int>(r / 5.0), 0, 19))];
+  for (double r : recalls)
+    ++bins[static_cast<size_t>(std::clamp(static_cast<int>(r / 5.0), 0, 19))];
   const int most = std::max(1, *std::max_element(bins.begin(), bins.end()));
   cv::Mat canvas(420, 640, CV_8UC3, cv::Scalar(255, 255, 255));
   PlotAxis x{0, 100, false, {0, 20, 40, 60, 80, 85, 100}, "proposals recall at IoU 0.5 (%)"};

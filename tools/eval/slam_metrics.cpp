@@ -103,8 +103,8 @@ void SlamRecording::addCloud(int map_id, bool full, int64_t keyframe_id,
 
 // Semi-dense depth against depth/ (16-bit PNG, mm): each point's depth in its keyframe, scaled
 // by its map's Sim(3), against the true depth at the pixel it projects to; and points per keyframe.
-void addDepthFigures(const SlamRecording& run, const SequenceFolder& sequence, const std::map<int, MapAlignment>& maps,
-                     nlohmann::json& s) {
+void addDepthFigures(const SlamRecording& run, const SequenceFolder& sequence,
+                     const std::map<int, MapAlignment>& maps, nlohmann::json& s) {
   const int frames = static_cast<int>(sequence.size());
   std::map<int64_t, int> points_per_keyframe;
   int64_t total_points = 0;

@@ -11,7 +11,8 @@ double median(std::vector<T> v) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
   const size_t m = v.size() / 2;
-  return v.size() % 2 ? static_cast<double>(v[m]) : 0.5 * (static_cast<double>(v[m - 1]) + static_cast<double>(v[m]));
+  return v.size() % 2 ? static_cast<double>(v[m])
+                      : 0.5 * (static_cast<double>(v[m - 1]) + static_cast<double>(v[m]));
 }
 
 }  // namespace slamaware

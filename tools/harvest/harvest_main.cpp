@@ -49,13 +49,14 @@ using namespace slamaware::objectmap;
 namespace {
 
 struct HarvestOptions {
-  int min_size_px = 32;           ///< a crop's shorter side at least this
-  double min_visible = 0.5;       ///< share of the object's silhouette that must be visible
-  double occlusion_margin = 0.1;  ///< the object's front this much (of its depth) behind another's still counts
-  double margin = 0.05;           ///< the crop grows by this share of the box on every side
-  int border_px = 2;              ///< the box of all the object's voxels must stay this far inside
-  bool background = true;         ///< also the objects the map fused as background
-  int every = 1;                  ///< only every n-th camera frame of the recording (30 Hz repeats itself)
+  int min_size_px = 32;      ///< a crop's shorter side at least this
+  double min_visible = 0.5;  ///< share of the object's silhouette that must be visible
+  double occlusion_margin =
+      0.1;  ///< the object's front this much (of its depth) behind another's still counts
+  double margin = 0.05;    ///< the crop grows by this share of the box on every side
+  int border_px = 2;       ///< the box of all the object's voxels must stay this far inside
+  bool background = true;  ///< also the objects the map fused as background
+  int every = 1;           ///< only every n-th camera frame of the recording (30 Hz repeats itself)
 };
 
 /// One object to harvest: its folder names and its voxels' centres.
@@ -83,7 +84,8 @@ struct DepthBuffer {
   std::vector<NearestDepths> cells;
   /// The depth in front of which a voxel of `owner` at (x, y) is visible.
   float occluder(int x, int y, int owner) const {
-    return cells[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)].nearestOther(owner);
+    return cells[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)]
+        .nearestOther(owner);
   }
 };
 
@@ -114,18 +116,21 @@ DepthBuffer depthBuffer(const Segment3d& seg, const CameraModel& cam, const SE3&
     const int o = seg.owner[i];
     for (int y = std::max(0, v - r); y <= std::min(cam.height() - 1, v + r); ++y)
       for (int x = std::max(0, u - r); x <= std::min(cam.width() - 1, u + r); ++x)
-        b.cells[static_cast<size_t>(y) * static_cast<size_t>(cam.width()) + static_cast<size_t>(x)].add(d, o);
+        b.cells[static_cast<size_t>(y) * static_cast<size_t>(cam.width()) + static_cast<size_t>(x)]
+            .add(d, o);
   }
   return b;
 }
 
-View viewOf(const Target& t, int owner, const Segment3d& seg, const DepthBuffer& depth, const CameraModel& cam,
-            const SE3& T_cw, const HarvestOptions& o) {
+View viewOf(const Target& t, int owner, const Segment3d& seg, const DepthBuffer& depth,
+            const CameraModel& cam, const SE3& T_cw, const HarvestOptions& o) {
   View v;
   // The object's own front surface per pixel (its silhouette where finite).
-  cv::Mat front(cam.height(), cam.width(), CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+  cv::Mat front(cam.height(), cam.width(), CV_32F,
+                cv::Scalar(std::numeric_limits<float>::infinity()));
   bool any = false;
-  double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;  // all voxels, in the image or not
+  double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300,
+         hi_y = -1e300;  // all voxels, in the image or not
   Eigen::Vector2d px;
   for (const Eigen::Vector3d& p : t.voxels) {
     const Eigen::Vector3d q = T_cw * p;
@@ -151,9 +156,10 @@ View viewOf(const Target& t, int owner, const Segment3d& seg, const DepthBuffer&
   // Visible: the silhouette's pixels whose front no other owner's voxel lies before (by more than
   // occlusion_margin of the depth and a voxel).
   v.mask = cv::Mat::zeros(cam.height(), cam.width(), CV_8U);
-  const cv::Rect span = cv::Rect(cv::Point(static_cast<int>(lo_x), static_cast<int>(lo_y)),
-                                 cv::Point(static_cast<int>(hi_x) + 2, static_cast<int>(hi_y) + 2)) &
-                        cv::Rect(0, 0, cam.width(), cam.height());
+  const cv::Rect span =
+      cv::Rect(cv::Point(static_cast<int>(lo_x), static_cast<int>(lo_y)),
+               cv::Point(static_cast<int>(hi_x) + 2, static_cast<int>(hi_y) + 2)) &
+      cv::Rect(0, 0, cam.width(), cam.height());
   int silhouette = 0, visible = 0;
   for (int y = span.y; y < span.br().y; ++y)
     for (int x = span.x; x < span.br().x; ++x) {
@@ -173,7 +179,8 @@ View viewOf(const Target& t, int owner, const Segment3d& seg, const DepthBuffer&
             my = static_cast<int>(std::lround(o.margin * tight.height));
   v.box = cv::Rect(tight.x - mx, tight.y - my, tight.width + 2 * mx, tight.height + 2 * my) &
           cv::Rect(0, 0, cam.width(), cam.height());
-  v.result = std::min(v.box.width, v.box.height) < o.min_size_px ? ViewResult::kSmall : ViewResult::kWritten;
+  v.result = std::min(v.box.width, v.box.height) < o.min_size_px ? ViewResult::kSmall
+                                                                 : ViewResult::kWritten;
   return v;
 }
 
@@ -191,7 +198,8 @@ Recording readPoses(const std::string& log, const Channels& ch) {
     while (auto ev = reader.next()) {
       if (ev->channel == ch.slam_pose) {
         pose_t p;
-        if (decodeRecord(*ev, &p) && (p.state == pose_t::STATE_TRACKING || p.state == pose_t::STATE_RELOCALIZED))
+        if (decodeRecord(*ev, &p) &&
+            (p.state == pose_t::STATE_TRACKING || p.state == pose_t::STATE_RELOCALIZED))
           r.poses[p.seq] = p;
       } else if (ev->channel == ch.camera_info && !r.camera) {
         camera_info_t info;
@@ -208,13 +216,17 @@ Recording readPoses(const std::string& log, const Channels& ch) {
   return r;
 }
 
-std::string viewName(const Target& t, int32_t seq) { return fmt::format("{}_1_{}", t.instance, seq); }
+std::string viewName(const Target& t, int32_t seq) {
+  return fmt::format("{}_1_{}", t.instance, seq);
+}
 
-void writeView(const std::string& out, const Target& t, int32_t seq, const cv::Mat& frame, const View& v) {
+void writeView(const std::string& out, const Target& t, int32_t seq, const cv::Mat& frame,
+               const View& v) {
   const std::string dir = out + "/" + t.category + "/" + t.instance;
   std::filesystem::create_directories(dir);
   const std::string base = dir + "/" + viewName(t, seq);
-  if (!cv::imwrite(base + "_crop.png", frame(v.box)) || !cv::imwrite(base + "_maskcrop.png", v.mask(v.box)))
+  if (!cv::imwrite(base + "_crop.png", frame(v.box)) ||
+      !cv::imwrite(base + "_maskcrop.png", v.mask(v.box)))
     throw std::runtime_error("cannot write " + base + "_crop.png");
   std::ofstream(base + "_loc.txt") << v.box.x << "," << v.box.y << "\n";
 }
@@ -224,7 +236,8 @@ void writeView(const std::string& out, const Target& t, int32_t seq, const cv::M
 std::vector<Target> collectTargets(const ObjectMapEngine& engine, const HarvestOptions& o,
                                    std::map<int32_t, Segment3d>* segments, int* labelled) {
   const auto& classes = engine.classes();
-  const int background = classes.empty() || classes.back() != "background" ? -1 : static_cast<int>(classes.size()) - 1;
+  const int background =
+      classes.empty() || classes.back() != "background" ? -1 : static_cast<int>(classes.size()) - 1;
   std::vector<Target> targets;
   *labelled = 0;
   for (const auto& [sid, seg] : engine.segments()) {
@@ -278,21 +291,22 @@ void assignVoxelOwners(const ObjectMapEngine& engine, const std::vector<Target>&
 void finishSet(const std::string& out, const std::string& log, const std::string& map_dir,
                const std::vector<Target>& targets, int64_t unposed, int64_t seen) {
   std::filesystem::create_directories(out);
-  std::ofstream(out + "/set.yaml") << "name: " << std::filesystem::path(out).filename().string()
-                                   << "\nsource: harvest\nsession: " << log << "\nmap: " << map_dir
-                                   << "\nnotes: views of the objects labelled in the map (slamaware-harvest); "
-                                      "background: objects the map fused as background\n";
-  std::printf("%-8s %-24s %7s %8s %11s %9s %7s %6s %5s\n", "OBJECT", "INSTANCE", "FRAMES", "WRITTEN",
-              "OUT_OF_VIEW", "TRUNCATED", "HIDDEN", "SMALL", "PART");
+  std::ofstream(out + "/set.yaml")
+      << "name: " << std::filesystem::path(out).filename().string()
+      << "\nsource: harvest\nsession: " << log << "\nmap: " << map_dir
+      << "\nnotes: views of the objects labelled in the map (slamaware-harvest); "
+         "background: objects the map fused as background\n";
+  std::printf("%-8s %-24s %7s %8s %11s %9s %7s %6s %5s\n", "OBJECT", "INSTANCE", "FRAMES",
+              "WRITTEN", "OUT_OF_VIEW", "TRUNCATED", "HIDDEN", "SMALL", "PART");
   for (const Target& t : targets)
-    std::printf("%-8d %-24s %7d %8d %11d %9d %7d %6d %5d\n", t.object_id, t.instance.c_str(), t.frames, t.written,
-                t.out_of_view, t.truncated, t.hidden, t.small, t.part);
+    std::printf("%-8d %-24s %7d %8d %11d %9d %7d %6d %5d\n", t.object_id, t.instance.c_str(),
+                t.frames, t.written, t.out_of_view, t.truncated, t.hidden, t.small, t.part);
   std::printf("%lld of %lld frames had no localised pose\n", static_cast<long long>(unposed),
               static_cast<long long>(seen));
 }
 
-int harvest(const std::string& log, const std::string& map_dir, const std::string& out, const HarvestOptions& o,
-            const ObjectMapOptions& map_options, const Channels& ch) {
+int harvest(const std::string& log, const std::string& map_dir, const std::string& out,
+            const HarvestOptions& o, const ObjectMapOptions& map_options, const Channels& ch) {
   MapStore store(map_dir);
   std::optional<ObjectMapEngine> engine;
   const LoadReport report = store.load([&](const MapSnapshot& s) {
@@ -310,15 +324,18 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
   std::vector<Target> targets = collectTargets(*engine, o, &segments, &labelled);
   assignVoxelOwners(*engine, targets, &segments);
   if (labelled == 0)
-    spdlog::warn("{}: no object has a user's label (slamaware-ctl label OBJECT_ID CLASS); harvesting only "
-                 "background", report.json_path);
+    spdlog::warn(
+        "{}: no object has a user's label (slamaware-ctl label OBJECT_ID CLASS); harvesting only "
+        "background",
+        report.json_path);
   const Recording rec = readPoses(log, ch);
   if (!rec.camera) {
     spdlog::error("{}: no usable {} message", log, ch.camera_info);
     return 1;
   }
-  spdlog::info("{}: generation {}, {} object(s) to harvest ({} labelled); {}: {} frames, {} localised", map_dir,
-               report.generation, targets.size(), labelled, log, rec.frames, rec.poses.size());
+  spdlog::info(
+      "{}: generation {}, {} object(s) to harvest ({} labelled); {}: {} frames, {} localised",
+      map_dir, report.generation, targets.size(), labelled, log, rec.frames, rec.poses.size());
 
   ProgressBar bar("harvest", rec.frames);
   int64_t seen = 0, unposed = 0;
@@ -354,11 +371,20 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
           continue;
         }
         switch (v.result) {
-          case ViewResult::kOutOfView: ++t.out_of_view; continue;
-          case ViewResult::kTruncated: ++t.truncated; continue;
-          case ViewResult::kHidden: ++t.hidden; continue;
-          case ViewResult::kSmall: ++t.small; continue;
-          case ViewResult::kWritten: break;
+          case ViewResult::kOutOfView:
+            ++t.out_of_view;
+            continue;
+          case ViewResult::kTruncated:
+            ++t.truncated;
+            continue;
+          case ViewResult::kHidden:
+            ++t.hidden;
+            continue;
+          case ViewResult::kSmall:
+            ++t.small;
+            continue;
+          case ViewResult::kWritten:
+            break;
         }
         if (frame.empty()) {
           try {
@@ -368,8 +394,8 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
             break;
           }
           if (frame.cols != rec.camera->width() || frame.rows != rec.camera->height()) {
-            spdlog::warn("{} seq {}: {}x{} frame, the camera is {}x{}; skipped", ch.camera, msg.seq, frame.cols,
-                         frame.rows, rec.camera->width(), rec.camera->height());
+            spdlog::warn("{} seq {}: {}x{} frame, the camera is {}x{}; skipped", ch.camera, msg.seq,
+                         frame.cols, frame.rows, rec.camera->width(), rec.camera->height());
             break;
           }
         }
@@ -389,21 +415,30 @@ int harvest(const std::string& log, const std::string& map_dir, const std::strin
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-harvest: the views of the objects labelled in an object map, cut from the recording of "
-               "the session that built it, as an object set"};
+  CLI::App app{
+      "slamaware-harvest: the views of the objects labelled in an object map, cut from the "
+      "recording of "
+      "the session that built it, as an object set"};
   std::string log, map_dir, out, config, system;
   HarvestOptions o;
   bool no_background = false;
-  app.add_option("session", log, "recording of the session (CAMERA, CAMERA_INFO, SLAM_POSE)")->required();
-  app.add_option("--map", map_dir, "the object map's folder (its newest good generation is read)")->required();
-  app.add_option("--out", out, "object set folder to write (<class>/<class>_<object id>/...)")->required();
-  app.add_option("--config", config, "objectmap config (voxel size, grouping; default: built-in = config/objectmap.yaml)");
+  app.add_option("session", log, "recording of the session (CAMERA, CAMERA_INFO, SLAM_POSE)")
+      ->required();
+  app.add_option("--map", map_dir, "the object map's folder (its newest good generation is read)")
+      ->required();
+  app.add_option("--out", out, "object set folder to write (<class>/<class>_<object id>/...)")
+      ->required();
+  app.add_option(
+      "--config", config,
+      "objectmap config (voxel size, grouping; default: built-in = config/objectmap.yaml)");
   app.add_option("--system", system, "system config (channel names)");
   app.add_option("--min-size-px", o.min_size_px, "shorter side of a crop at least this (px)");
-  app.add_option("--min-visible", o.min_visible, "share of the object's silhouette that must be visible");
+  app.add_option("--min-visible", o.min_visible,
+                 "share of the object's silhouette that must be visible");
   app.add_option("--margin", o.margin, "crop margin, share of the box on every side");
   app.add_flag("--no-background", no_background, "do not harvest the objects fused as background");
-  app.add_option("--every", o.every, "only every n-th camera frame (a 30 Hz session repeats itself)")
+  app.add_option("--every", o.every,
+                 "only every n-th camera frame (a 30 Hz session repeats itself)")
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   o.background = !no_background;

@@ -19,20 +19,26 @@ using namespace slamaware;
 using Clock = std::chrono::steady_clock;
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-replay: replays an LCM log in real time or in lockstep with the pipeline"};
+  CLI::App app{
+      "slamaware-replay: replays an LCM log in real time or in lockstep with the pipeline"};
   NodeArgs node;
   std::string log_path, lockstep_channel, wait_for;
   std::string channels = ".*", exclude = "(.*_STATUS|PROC_.*)";
   double speed = 1.0;
   int64_t max_frames = -1;
   addNodeOptions(app, node, false);
-  app.add_option("log", log_path, "LCM log file (lcm-logger format)")->required()->check(CLI::ExistingFile);
-  app.add_option("--speed", speed, "real-time factor (0: as fast as possible)")->check(CLI::NonNegativeNumber);
+  app.add_option("log", log_path, "LCM log file (lcm-logger format)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--speed", speed, "real-time factor (0: as fast as possible)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--lockstep", lockstep_channel,
                  "lockstep: each CAMERA frame waits for the previous frame's seq on this channel");
-  app.add_option("--wait-for", wait_for, "comma-separated channels to hear from before the first event");
+  app.add_option("--wait-for", wait_for,
+                 "comma-separated channels to hear from before the first event");
   app.add_option("--channels", channels, "regular expression of channels to play");
-  app.add_option("--exclude", exclude, "regular expression of channels not to play (heartbeats by default)");
+  app.add_option("--exclude", exclude,
+                 "regular expression of channels not to play (heartbeats by default)");
   app.add_option("--max-frames", max_frames, "stop after this many CAMERA frames (-1: all)");
   CLI11_PARSE(app, argc, argv);
 
@@ -49,8 +55,10 @@ int main(int argc, char** argv) {
       gate = std::make_unique<LockstepGate>(bus, lockstep_channel);
       if (!app.count("--speed")) speed = 0;
     }
-    for (const auto& c : waitForChannels(bus, splitList(wait_for), sys.bus.lockstep_timeout_s, idle))
-      spdlog::warn("no message on {} after {:.0f} s; starting anyway", c, sys.bus.lockstep_timeout_s);
+    for (const auto& c :
+         waitForChannels(bus, splitList(wait_for), sys.bus.lockstep_timeout_s, idle))
+      spdlog::warn("no message on {} after {:.0f} s; starting anyway", c,
+                   sys.bus.lockstep_timeout_s);
     status.setState(StatusReporter::State::kRunning);
 
     int64_t events = 0, frames = 0, timeouts = 0, first_ts = -1;
@@ -70,13 +78,15 @@ int main(int argc, char** argv) {
           if (shutdownRequested()) break;
           ++timeouts;
           status.count("lockstep_timeouts");
-          spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on", last_frame_seq,
-                       lockstep_channel, sys.bus.lockstep_timeout_s);
+          spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on",
+                       last_frame_seq, lockstep_channel, sys.bus.lockstep_timeout_s);
         }
         if (speed > 0) {
-          const auto due = t0 + std::chrono::microseconds(static_cast<int64_t>((ev->timestamp - first_ts) / speed));
+          const auto due = t0 + std::chrono::microseconds(
+                                    static_cast<int64_t>((ev->timestamp - first_ts) / speed));
           while (Clock::now() < due && !shutdownRequested()) {
-            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(due - Clock::now()).count();
+            const auto left =
+                std::chrono::duration_cast<std::chrono::milliseconds>(due - Clock::now()).count();
             bus.handle(static_cast<int>(std::clamp<int64_t>(left, 0, 20)));
             idle();
           }

@@ -37,7 +37,8 @@ void writeFile(const std::string& path, const std::string& text) {
     out << text;
     if (!out) throw std::runtime_error(path + ": cannot write");
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename");
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+    throw std::runtime_error(path + ": cannot rename");
 }
 
 }  // namespace

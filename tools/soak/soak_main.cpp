@@ -82,8 +82,8 @@ struct ChaosEvent {
   std::string process;
   double t = 0;
   int old_pid = 0;
-  double back_s = -1;   ///< until it runs again with a new pid (-1: not back)
-  double limit_s = 0;   ///< the target for back_s
+  double back_s = -1;  ///< until it runs again with a new pid (-1: not back)
+  double limit_s = 0;  ///< the target for back_s
   std::string detail;
   std::set<int32_t> saved_objects;  ///< objects in the save it must reload
   std::set<int32_t> lost_objects;   ///< of those, not in its first OBJECT_MAP after the restart
@@ -117,7 +117,8 @@ std::string newestSave(const std::string& dir, const std::string& skip = "") {
   for (const auto& e : fs::directory_iterator(dir, ec)) {
     std::smatch m;
     const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, pattern) && std::stoll(m[1]) > best_g && e.path().string() != skip) {
+    if (std::regex_match(name, m, pattern) && std::stoll(m[1]) > best_g &&
+        e.path().string() != skip) {
       best_g = std::stoll(m[1]);
       best = e.path().string();
     }
@@ -405,20 +406,25 @@ void plotRss(const Watch& w, double duration, const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamaware-soak: the supervised system for a long time on a looping recording (and --chaos)"};
+  CLI::App app{
+      "slamaware-soak: the supervised system for a long time on a looping recording (and --chaos)"};
   double minutes = 30;
   bool chaos = false;
-  std::string source = "logs/sample.lcm", system = "config/system.yaml", out_dir, bin_dir = "build/bin";
+  std::string source = "logs/sample.lcm", system = "config/system.yaml", out_dir,
+              bin_dir = "build/bin";
   uint32_t seed = 1;
   double window_min = 5;
   app.add_option("--minutes", minutes, "duration")->check(CLI::PositiveNumber);
-  app.add_flag("--chaos", chaos, "kill, stop and damage as described at the top of tools/soak/soak_main.cpp");
+  app.add_flag("--chaos", chaos,
+               "kill, stop and damage as described at the top of tools/soak/soak_main.cpp");
   app.add_option("--source", source, "recording or sequence folder, played in real time in a loop");
   app.add_option("--system", system, "system.yaml of the supervisor");
   app.add_option("--bin-dir", bin_dir, "where slamaware-supervisor is");
-  app.add_option("--out-dir", out_dir, "report, logs, object map (default build/soak or build/chaos)");
+  app.add_option("--out-dir", out_dir,
+                 "report, logs, object map (default build/soak or build/chaos)");
   app.add_option("--seed", seed, "seed of the chaos schedule");
-  app.add_option("--window-min", window_min, "minutes per latency window")->check(CLI::PositiveNumber);
+  app.add_option("--window-min", window_min, "minutes per latency window")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   if (out_dir.empty()) out_dir = chaos ? "build/chaos" : "build/soak";
   try {
@@ -441,8 +447,8 @@ int main(int argc, char** argv) {
       while (watch.camera_at.size() > 2000) watch.camera_at.erase(watch.camera_at.begin());
     };
 
-    spdlog::info("soak{}: {} min on {} ({} frames per loop), reports in {}", chaos ? " with chaos" : "", minutes,
-                 source, loop_frames, out_dir);
+    spdlog::info("soak{}: {} min on {} ({} frames per loop), reports in {}",
+                 chaos ? " with chaos" : "", minutes, source, loop_frames, out_dir);
     ChildProcess supervisor(
         {bin_dir + "/slamaware-supervisor", "--system", soak_system, "--log-level", "warn"},
         out_dir + "/supervisor.log");

@@ -446,7 +446,6 @@ void addPictures(RenderScene* s, std::vector<WallSpan>* spans, const RoomOptions
       break;
     }
   }
-
 }
 
 // The table: its top (a receiver), its edge, and legs and aprons (rectangular) or a pedestal

@@ -33,8 +33,8 @@ SceneOptions randomSceneOptions(uint64_t seed, int frames) {
   // Table: shape, size 0.6-1.8 m, height 0.45-1.05 m, any top (cloth included).
   TableOptions& t = o.table;
   t.shape = rng.chance(0.4) ? "round" : "rect";
-  t.top = rng.pick(std::vector<std::string>{"wood", "laminate", "cloth", "marble", "checker",
-                                            "stone"});
+  t.top =
+      rng.pick(std::vector<std::string>{"wood", "laminate", "cloth", "marble", "checker", "stone"});
   if (t.shape == "round") {
     t.size = {q(rng.uniform(0.6, 1.4))};
   } else {

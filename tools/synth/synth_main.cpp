@@ -10,8 +10,8 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "common/config.h"
 #include "common/atomic_file.h"
+#include "common/config.h"
 #include "tools/synth/categories.h"
 #include "tools/synth/random_scene.h"
 #include "tools/synth/scene.h"
@@ -38,8 +38,9 @@ int main(int argc, char** argv) {
       "seed; the drawn config is written to <out>/scene.yaml");
   random_opt->check(CLI::NonNegativeNumber);
   config_opt->excludes(random_opt);
-  scene_cmd->add_option("--path-frames", path_frames,
-                        "--random: frames of the camera path (default 300)")
+  scene_cmd
+      ->add_option("--path-frames", path_frames,
+                   "--random: frames of the camera path (default 300)")
       ->needs(random_opt)
       ->check(CLI::Range(2, 100000));
   scene_cmd->add_option("--seed", seed, "scene seed (default: the config's)")->excludes(random_opt);

@@ -229,9 +229,11 @@ void turntableTextures(Rng& tt_rng, std::vector<TexturePtr>* tops, std::vector<T
 }
 
 // A camera at `dist` from `target` at elevation `el` and azimuth `az`, looking at it, x level.
-Eigen::Isometry3d lookAtFromSphere(const Eigen::Vector3d& target, double dist, double el, double az) {
+Eigen::Isometry3d lookAtFromSphere(const Eigen::Vector3d& target, double dist, double el,
+                                   double az) {
   const Eigen::Vector3d cam =
-      target + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      target + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                                      std::sin(el));
   const Eigen::Vector3d zc = (target - cam).normalized();
   const Eigen::Vector3d xc = zc.cross(Eigen::Vector3d::UnitZ()).normalized();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -243,25 +245,25 @@ Eigen::Isometry3d lookAtFromSphere(const Eigen::Vector3d& target, double dist, d
 }
 
 // The set's set.yaml: what was rendered and how the files are named.
-std::string objectSetYaml(const ObjectSetOptions& o, const std::vector<std::string>& cats, uint64_t set_seed,
-                          int views_per_instance) {
+std::string objectSetYaml(const ObjectSetOptions& o, const std::vector<std::string>& cats,
+                          uint64_t set_seed, int views_per_instance) {
   std::string e_list = "[", v_list = "[";
   for (size_t i = 0; i < o.elevations_deg.size(); ++i) {
     e_list += (i ? ", " : "") + std::to_string(static_cast<int>(std::lround(o.elevations_deg[i])));
     v_list += (i ? ", " : "") + std::to_string(o.video_ids[i]);
   }
-  return "name: " + o.name + "\nsource: synth (slamaware-synth objects)\nseed: " +
-                     std::to_string(set_seed) +
-                     "\ncategories: " + yamlList(cats) +
-                     "\ninstances_per_category: " + std::to_string(o.instances) +
-                     "\nelevations_deg: " + e_list + "]\nvideo_ids: " + v_list +
-                     "]\nazimuth_step_deg: " + std::to_string(o.azimuth_step_deg) +
-                     "\nviews_per_instance: " + std::to_string(views_per_instance) +
-                     "\nnotes: \"turntable views rendered by slamaware-synth; "
-                     "<instance>_<video>_<frame>: video = elevation, frame = "
-                     "azimuth step from 1; crop = object box plus margin; maskcrop = object "
-                     "pixels; loc = crop corner in the "
-                     "640x480 frame\"\n";
+  return "name: " + o.name +
+         "\nsource: synth (slamaware-synth objects)\nseed: " + std::to_string(set_seed) +
+         "\ncategories: " + yamlList(cats) +
+         "\ninstances_per_category: " + std::to_string(o.instances) +
+         "\nelevations_deg: " + e_list + "]\nvideo_ids: " + v_list +
+         "]\nazimuth_step_deg: " + std::to_string(o.azimuth_step_deg) +
+         "\nviews_per_instance: " + std::to_string(views_per_instance) +
+         "\nnotes: \"turntable views rendered by slamaware-synth; "
+         "<instance>_<video>_<frame>: video = elevation, frame = "
+         "azimuth step from 1; crop = object box plus margin; maskcrop = object "
+         "pixels; loc = crop corner in the "
+         "640x480 frame\"\n";
 }
 
 }  // namespace

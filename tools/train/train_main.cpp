@@ -30,20 +30,26 @@ int main(int argc, char** argv) {
   std::string show, base;
   bool replace = false;
   app.add_option("--report", show,
-                 "prints what the model file was trained on (object sets, scenes, options, validation) and exits");
+                 "prints what the model file was trained on (object sets, scenes, options, "
+                 "validation) and exits");
   app.add_option("--objects", objects, "object set folders (category/category_N/..._crop.png)");
-  app.add_option("--base", base,
-                 "adds the categories of --objects (e.g. slamaware-harvest's sets) to this model, keeping its "
-                 "classes, encoding and calibration; --scenes and --proposals are not used");
-  app.add_flag("--replace", replace, "with --base: a category the base model has is trained again from the new views");
-  app.add_option("--scenes,--negatives", scenes,
-                 "sequence folders with boxes.csv: their objects (jittered boxes) and background boxes");
-  app.add_option("--background-objects", background_objects,
-                 "object set folders of other categories: their crops are background (categories of --objects "
-                 "in them are left out)");
-  app.add_option("--proposals", proposals_dir,
-                 "folder of <scene>.csv proposal boxes (slamaware-eval --dump-proposals on the scenes): "
-                 "also trained on, labelled by their overlap with the ground truth")
+  app.add_option(
+      "--base", base,
+      "adds the categories of --objects (e.g. slamaware-harvest's sets) to this model, keeping its "
+      "classes, encoding and calibration; --scenes and --proposals are not used");
+  app.add_flag("--replace", replace,
+               "with --base: a category the base model has is trained again from the new views");
+  app.add_option(
+      "--scenes,--negatives", scenes,
+      "sequence folders with boxes.csv: their objects (jittered boxes) and background boxes");
+  app.add_option(
+      "--background-objects", background_objects,
+      "object set folders of other categories: their crops are background (categories of --objects "
+      "in them are left out)");
+  app.add_option(
+         "--proposals", proposals_dir,
+         "folder of <scene>.csv proposal boxes (slamaware-eval --dump-proposals on the scenes): "
+         "also trained on, labelled by their overlap with the ground truth")
       ->check(CLI::ExistingDirectory);
   app.add_option("--out", out, "model file to write");
   app.add_option("--config", config, "YAML file with a 'train' section (default: built-in options)")
@@ -66,7 +72,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (objects.empty() || out.empty()) {
-    std::cerr << "slamaware-train: --objects and --out are required to train (or --report MODEL to describe one)\n";
+    std::cerr << "slamaware-train: --objects and --out are required to train (or --report MODEL to "
+                 "describe one)\n";
     return 2;
   }
   if (!base.empty()) {
@@ -86,11 +93,13 @@ int main(int argc, char** argv) {
   size_t example_kb = 0;
   try {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
-    example_kb = ExampleSet(options.encoding.vladDims(), options.encoding.pca_dims).maxRowBytes() / 1000;
+    example_kb =
+        ExampleSet(options.encoding.vladDims(), options.encoding.pca_dims).maxRowBytes() / 1000;
     if (seed >= 0) options.seed = static_cast<int>(seed);
     options.threads = threads;
     TrainReport report;
-    const RecognizerModel model = trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
+    const RecognizerModel model =
+        trainModel(objects, scenes, options, &report, proposals_dir, background_objects);
     saveModel(model, out);
     std::cout << report.toText();
     std::cout << "model written to " << out << "\n";
@@ -101,10 +110,12 @@ int main(int argc, char** argv) {
     }
   } catch (const std::bad_alloc&) {
     // Every encoded example is held in memory (ExampleSet).
-    spdlog::error("out of memory: the training examples (up to {} kB each) did not fit; train on fewer: lower "
-                  "train.max_views_per_instance, train.negatives_per_frame or train.context_copies, or raise "
-                  "train.proposal_every (--config)",
-                  example_kb);
+    spdlog::error(
+        "out of memory: the training examples (up to {} kB each) did not fit; train on fewer: "
+        "lower "
+        "train.max_views_per_instance, train.negatives_per_frame or train.context_copies, or raise "
+        "train.proposal_every (--config)",
+        example_kb);
     return 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -76,7 +76,8 @@ double backgroundProbability(const float* s, int C) {
 struct Split {
   std::vector<bool> crop_val, frame_val;
   std::vector<std::string> held_out_instances;
-  std::vector<std::string> held_out_sequences;  ///< empty for a domain whose frames are held out one in n
+  std::vector<std::string>
+      held_out_sequences;  ///< empty for a domain whose frames are held out one in n
 };
 
 // Held out, separately for rendered and photographed data (so that both are validated, and a lone
@@ -106,7 +107,8 @@ Split makeSplit(const std::vector<LabeledCrop>& crops, const std::vector<SceneFr
     if (held.count(c.instance)) {
       s.crop_val[i] = true;
     } else if (instances[{c.category, c.real}].size() < 2) {
-      s.crop_val[i] = (view_counter[c.instance]++ % 5) == 4;  // single instance: hold out every 5th view
+      s.crop_val[i] =
+          (view_counter[c.instance]++ % 5) == 4;  // single instance: hold out every 5th view
     }
   }
   for (const bool real : {false, true}) {
@@ -197,8 +199,8 @@ cv::Rect pasteVaried(const cv::Mat& crop, const cv::Mat& mask, cv::Mat* scene, s
   const double sigma = uniform01(rng) * 1.0;
   if (sigma > 0.3) cv::GaussianBlur(obj, obj, cv::Size(0, 0), sigma);
   const cv::Rect r(static_cast<int>(rng() % static_cast<uint32_t>(scene->cols - size.width + 1)),
-                   static_cast<int>(rng() % static_cast<uint32_t>(scene->rows - size.height + 1)), size.width,
-                   size.height);
+                   static_cast<int>(rng() % static_cast<uint32_t>(scene->rows - size.height + 1)),
+                   size.width, size.height);
   if (m.empty())
     obj.copyTo((*scene)(r));
   else
@@ -225,10 +227,12 @@ std::string indentLines(const std::string& text, int n) {
 }
 
 // What a model was trained on and how (RecognizerModel::provenance; slamaware-train --report).
-nlohmann::json provenance(const std::vector<std::string>& object_dirs, const std::vector<std::string>& background_dirs,
-                          const std::vector<LabeledCrop>& crops, const std::vector<std::string>& scene_dirs,
-                          const std::string& proposals_dir,
-                          const TrainOptions& options, const TrainReport& report, double seconds) {
+nlohmann::json provenance(const std::vector<std::string>& object_dirs,
+                          const std::vector<std::string>& background_dirs,
+                          const std::vector<LabeledCrop>& crops,
+                          const std::vector<std::string>& scene_dirs,
+                          const std::string& proposals_dir, const TrainOptions& options,
+                          const TrainReport& report, double seconds) {
   nlohmann::json j;
   j["format"] = "slamaware training provenance 2";
   j["classes"] = report.classes;
@@ -244,7 +248,8 @@ nlohmann::json provenance(const std::vector<std::string>& object_dirs, const std
         if (c.path.rfind(set.dir(), 0) != 0) continue;
         ++used;
         categories.insert(c.category);
-        instances.insert(c.instance.rfind(named, 0) == 0 ? c.instance.substr(named.size()) : c.instance);
+        instances.insert(c.instance.rfind(named, 0) == 0 ? c.instance.substr(named.size())
+                                                         : c.instance);
       }
       list.push_back({{"path", dir},
                       {"kind", set.rendered() ? "rendered" : "photographed"},
@@ -328,12 +333,15 @@ ValidationSummary summarize(const LinearClassifier& clf, const ExampleSet& val, 
 ExampleSet pickExemplars(const ExampleSet& set, int classes, int background, int per_class) {
   std::vector<std::vector<int64_t>> of(static_cast<size_t>(std::max(classes, 0)));
   for (int64_t i = 0; i < set.size(); ++i)
-    if (set.label(i) >= 0 && set.label(i) < classes) of[static_cast<size_t>(set.label(i))].push_back(i);
+    if (set.label(i) >= 0 && set.label(i) < classes)
+      of[static_cast<size_t>(set.label(i))].push_back(i);
   std::vector<char> keep(static_cast<size_t>(set.size()), 0);
   for (int l = 0; l < classes; ++l) {
     const auto& idx = of[static_cast<size_t>(l)];
-    const size_t want = std::min(idx.size(), static_cast<size_t>(std::max(0, per_class * (l == background ? 4 : 1))));
-    for (size_t k = 0; k < want; ++k) keep[static_cast<size_t>(idx[(2 * k + 1) * idx.size() / (2 * want)])] = 1;
+    const size_t want = std::min(
+        idx.size(), static_cast<size_t>(std::max(0, per_class * (l == background ? 4 : 1))));
+    for (size_t k = 0; k < want; ++k)
+      keep[static_cast<size_t>(idx[(2 * k + 1) * idx.size() / (2 * want)])] = 1;
   }
   ExampleSet picked = set.select([&](int64_t i) { return keep[static_cast<size_t>(i)] != 0; });
   for (int64_t i = 0; i < picked.size(); ++i) picked.setWeight(i, 1.f);
@@ -345,7 +353,8 @@ void balanceDomains(ExampleSet* set, int classes, double real_share) {
   std::vector<double> count[2];
   count[0].assign(static_cast<size_t>(classes), 0);
   count[1].assign(static_cast<size_t>(classes), 0);
-  for (int64_t i = 0; i < set->size(); ++i) count[set->domain(i) ? 1 : 0][static_cast<size_t>(set->label(i))] += 1;
+  for (int64_t i = 0; i < set->size(); ++i)
+    count[set->domain(i) ? 1 : 0][static_cast<size_t>(set->label(i))] += 1;
   for (int64_t i = 0; i < set->size(); ++i) {
     const size_t c = static_cast<size_t>(set->label(i));
     const double rendered = count[0][c], real = count[1][c];
@@ -354,7 +363,8 @@ void balanceDomains(ExampleSet* set, int classes, double real_share) {
       continue;
     }
     const double share = set->domain(i) ? real_share : 1 - real_share;
-    set->setWeight(i, static_cast<float>(share * (rendered + real) / (set->domain(i) ? real : rendered)));
+    set->setWeight(
+        i, static_cast<float>(share * (rendered + real) / (set->domain(i) ? real : rendered)));
   }
 }
 
@@ -371,14 +381,16 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
           max_views_per_instance > 0 ? std::min(n, static_cast<size_t>(max_views_per_instance)) : n;
       for (size_t k = 0; k < keep; ++k) {
         const ObjectView* v = views[k * n / keep];
-        crops.push_back(LabeledCrop{v->crop_path, v->category, v->instance, v->mask_path, !set.rendered()});
+        crops.push_back(
+            LabeledCrop{v->crop_path, v->category, v->instance, v->mask_path, !set.rendered()});
       }
     }
   }
   return crops;
 }
 
-std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir, int max_views_per_instance) {
+std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir,
+                                           int max_views_per_instance) {
   const std::string set_name = folderName(object_dir);
   std::vector<LabeledCrop> crops = collectCrops({object_dir}, max_views_per_instance);
   for (auto& c : crops) c.instance = set_name + "/" + c.instance;
@@ -404,18 +416,20 @@ std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path
       v.push_back(x);
     }
     if (v.size() != 6 || v[0] < 0 || v[4] <= 0 || v[5] <= 0)
-      throw DatasetError(path + ":" + std::to_string(number) + ": expected frame,rank,x,y,w,h, got '" + line + "'");
+      throw DatasetError(path + ":" + std::to_string(number) +
+                         ": expected frame,rank,x,y,w,h, got '" + line + "'");
     boxes[static_cast<int>(v[0])].emplace_back(v[2], v[3], v[4], v[5]);
   }
   return boxes;
 }
 
-std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
-                                const TrainOptions& options) {
+std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes,
+                                int background, const TrainOptions& options) {
   std::vector<int> labels;
   std::vector<cv::Rect2d> kept;  // suppression in the file's (rank) order
   for (const auto& r : frame.proposals) {
-    if (std::any_of(kept.begin(), kept.end(), [&](const cv::Rect2d& k) { return iou(r, k) > options.proposal_nms_iou; })) {
+    if (std::any_of(kept.begin(), kept.end(),
+                    [&](const cv::Rect2d& k) { return iou(r, k) > options.proposal_nms_iou; })) {
       labels.push_back(-1);
       continue;
     }
@@ -451,11 +465,14 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
       by_frame[b.frame].object_classes.push_back(b.cls);
     }
     if (!proposals_dir.empty()) {
-      const std::string path = (std::filesystem::path(proposals_dir) / (folderName(dir) + ".csv")).string();
+      const std::string path =
+          (std::filesystem::path(proposals_dir) / (folderName(dir) + ".csv")).string();
       if (std::filesystem::exists(path)) {
-        for (auto& [frame, boxes] : readProposalBoxes(path)) by_frame[frame].proposals = std::move(boxes);
+        for (auto& [frame, boxes] : readProposalBoxes(path))
+          by_frame[frame].proposals = std::move(boxes);
       } else {
-        spdlog::warn("{}: no proposal boxes ({}): trained on its ground-truth boxes only", dir, path);
+        spdlog::warn("{}: no proposal boxes ({}): trained on its ground-truth boxes only", dir,
+                     path);
       }
     }
     for (size_t i = 0; i < seq.size(); ++i) {
@@ -470,8 +487,8 @@ std::vector<SceneFrame> collectSceneFrames(const std::vector<std::string>& seque
   return frames;
 }
 
-std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count, double min_iou,
-                                      uint32_t seed) {
+std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count,
+                                      double min_iou, uint32_t seed) {
   std::vector<cv::Rect2d> boxes;
   std::mt19937 rng(seed);
   const cv::Rect2d image(0, 0, width, height);
@@ -488,24 +505,30 @@ std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int h
   return boxes;
 }
 
-std::vector<cv::Rect2d> partialBoxes(const std::vector<cv::Rect2d>& objects, size_t index, int width, int height,
-                                     int count, double min_iou, double max_iou, uint32_t seed) {
+std::vector<cv::Rect2d> partialBoxes(const std::vector<cv::Rect2d>& objects, size_t index,
+                                     int width, int height, int count, double min_iou,
+                                     double max_iou, uint32_t seed) {
   std::vector<cv::Rect2d> boxes;
   if (index >= objects.size()) return boxes;
   std::mt19937 rng(seed);
   const cv::Rect2d& object = objects[index];
   const cv::Rect2d image(0, 0, width, height);
-  for (int attempt = 0; attempt < count * 100 && static_cast<int>(boxes.size()) < count; ++attempt) {
+  for (int attempt = 0; attempt < count * 100 && static_cast<int>(boxes.size()) < count;
+       ++attempt) {
     // Every other attempt a part (sides 0.3-0.8 of the object's, inside it), else the object's box
     // scaled by 0.35-2.5 and moved by up to 0.6 of its side (overhangs, neighbourhoods).
     const bool part = attempt % 2 == 0;
-    auto scale = [&](double lo, double hi) { return std::exp(std::log(lo) + uniform01(rng) * (std::log(hi) - std::log(lo))); };
+    auto scale = [&](double lo, double hi) {
+      return std::exp(std::log(lo) + uniform01(rng) * (std::log(hi) - std::log(lo)));
+    };
     const double w = object.width * (part ? scale(0.3, 0.8) : scale(0.35, 2.5));
     const double h = object.height * (part ? scale(0.3, 0.8) : scale(0.35, 2.5));
-    const double cx = part ? object.x + w / 2 + uniform01(rng) * (object.width - w)
-                           : object.x + object.width / 2 + (uniform01(rng) - 0.5) * 1.2 * object.width;
-    const double cy = part ? object.y + h / 2 + uniform01(rng) * (object.height - h)
-                           : object.y + object.height / 2 + (uniform01(rng) - 0.5) * 1.2 * object.height;
+    const double cx =
+        part ? object.x + w / 2 + uniform01(rng) * (object.width - w)
+             : object.x + object.width / 2 + (uniform01(rng) - 0.5) * 1.2 * object.width;
+    const double cy =
+        part ? object.y + h / 2 + uniform01(rng) * (object.height - h)
+             : object.y + object.height / 2 + (uniform01(rng) - 0.5) * 1.2 * object.height;
     const cv::Rect2d r = cv::Rect2d(cx - w / 2, cy - h / 2, w, h) & image;
     if (r.width < 16 || r.height < 16) continue;
     const double own = iou(r, object);
@@ -629,9 +652,11 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
                                   options.kmeans_iterations);
 }
 
-ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
-                       const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror,
-                       const std::function<void(int64_t, int64_t)>& progress, int other_label) {
+ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops,
+                       const std::vector<std::string>& classes,
+                       const std::vector<std::string>& instances, FrameEncoder& encoder,
+                       bool mirror, const std::function<void(int64_t, int64_t)>& progress,
+                       int other_label) {
   ExampleSet set(encoder.params().vladDims(), encoder.params().pca_dims);
   ReusableMatrix buffer;
   for (size_t i = 0; i < crops.size(); ++i) {
@@ -706,11 +731,12 @@ std::string TrainReport::toText() const {
                 static_cast<long long>(v.negatives), v.background_accuracy, v.nll);
   o << buf;
   if (v.real_crops + v.real_negatives > 0) {
-    std::snprintf(buf, sizeof(buf),
-                  "  of them photographed: %lld crops, best class overall right %.1f%%; %lld background "
-                  "boxes, classified background %.1f%%\n",
-                  static_cast<long long>(v.real_crops), v.real_accuracy, static_cast<long long>(v.real_negatives),
-                  v.real_background_accuracy);
+    std::snprintf(
+        buf, sizeof(buf),
+        "  of them photographed: %lld crops, best class overall right %.1f%%; %lld background "
+        "boxes, classified background %.1f%%\n",
+        static_cast<long long>(v.real_crops), v.real_accuracy,
+        static_cast<long long>(v.real_negatives), v.real_background_accuracy);
     o << buf;
   }
   o << "  confusion (rows: true, columns: predicted):\n";
@@ -749,7 +775,8 @@ TrainingData gatherTrainingData(const std::vector<std::string>& object_dirs,
     // dataset's coffee_mug_1, which photographed sets share.
     const bool rendered = ObjectSet::open(dir).rendered();
     // Photographed views are scarce: every one of them is used.
-    for (auto& c : rendered ? collectNamedCrops(dir, options.max_views_per_instance) : collectCrops({dir}, 0))
+    for (auto& c :
+         rendered ? collectNamedCrops(dir, options.max_views_per_instance) : collectCrops({dir}, 0))
       crops.push_back(std::move(c));
   }
   std::vector<SceneFrame> frames = collectSceneFrames(scene_dirs, proposals_dir);
@@ -763,7 +790,8 @@ TrainingData gatherTrainingData(const std::vector<std::string>& object_dirs,
   std::set<std::string> background_categories;
   if (!options.classes.empty()) {
     for (const auto& c : options.classes)
-      if (!category_set.count(c)) throw DatasetError("train.classes: no crops of '" + c + "' in the object sets");
+      if (!category_set.count(c))
+        throw DatasetError("train.classes: no crops of '" + c + "' in the object sets");
     category_set = std::set<std::string>(options.classes.begin(), options.classes.end());
     for (const auto& c : crops)
       if (!category_set.count(c.category)) {
@@ -781,7 +809,8 @@ TrainingData gatherTrainingData(const std::vector<std::string>& object_dirs,
   }
   for (const auto& c : crops) instance_set.insert(c.instance);
   if (category_set.size() < 2 && frames.empty() && background_crops == 0)
-    throw DatasetError("need at least two categories, or background from --negatives or --background-objects");
+    throw DatasetError(
+        "need at least two categories, or background from --negatives or --background-objects");
   std::vector<std::string> classes(category_set.begin(), category_set.end());
   const bool has_background = !frames.empty() || background_crops > 0;
   if (has_background) classes.push_back("background");
@@ -789,13 +818,19 @@ TrainingData gatherTrainingData(const std::vector<std::string>& object_dirs,
   std::vector<std::string> instances(instance_set.begin(), instance_set.end());
   Split split = makeSplit(crops, frames, options);
   spdlog::info(
-      "{} crops of {} instances in {} categories ({} of them of {} other categories: background; {} "
+      "{} crops of {} instances in {} categories ({} of them of {} other categories: background; "
+      "{} "
       "photographed), {} scene frames ({} photographed); held out: {} instances, {} frames{}",
-      crops.size(), instances.size(), category_set.size(), background_crops, background_categories.size(),
-      std::count_if(crops.begin(), crops.end(), [](const LabeledCrop& c) { return c.real; }), frames.size(),
+      crops.size(), instances.size(), category_set.size(), background_crops,
+      background_categories.size(),
+      std::count_if(crops.begin(), crops.end(), [](const LabeledCrop& c) { return c.real; }),
+      frames.size(),
       std::count_if(frames.begin(), frames.end(), [](const SceneFrame& f) { return f.real; }),
-      split.held_out_instances.size(), std::count(split.frame_val.begin(), split.frame_val.end(), true),
-      split.held_out_sequences.empty() ? "" : fmt::format(" (scenes {})", fmt::join(split.held_out_sequences, ", ")));
+      split.held_out_instances.size(),
+      std::count(split.frame_val.begin(), split.frame_val.end(), true),
+      split.held_out_sequences.empty()
+          ? ""
+          : fmt::format(" (scenes {})", fmt::join(split.held_out_sequences, ", ")));
   return {std::move(crops),     std::move(frames), std::move(classes),
           std::move(instances), has_background,    bg,
           std::move(split)};
@@ -835,7 +870,8 @@ void encodeCropExamples(const TrainingData& d, const TrainOptions& options, Fram
   for (size_t i = 0; i < crops.size(); ++i)
     for (size_t k = 0; k < per_crop; ++k) is_val[i * per_crop + k] = split.crop_val[i];
   if (per_crop > 1) {
-    held_out_mirrors = all.select([&](int64_t i) { return i % 2 == 1 && is_val[static_cast<size_t>(i)]; });
+    held_out_mirrors =
+        all.select([&](int64_t i) { return i % 2 == 1 && is_val[static_cast<size_t>(i)]; });
     std::vector<bool> keep(static_cast<size_t>(all.size()));
     for (size_t i = 0; i < keep.size(); ++i) keep[i] = !(i % 2 == 1 && is_val[i]);
     all.filter([&](int64_t i) { return keep[static_cast<size_t>(i)]; });
@@ -865,7 +901,8 @@ void encodeCropsInContext(const TrainingData& d, const TrainOptions& options, Fr
     // Each crop `context_copies` times at its own size, anywhere it fits; each photographed crop
     // `real_copies` times more, varied as a camera would see it (pasteVaried).
     std::vector<size_t> frames_of[2][2];  // [held out][photographed]
-    for (size_t f = 0; f < frames.size(); ++f) frames_of[split.frame_val[f] ? 1 : 0][frames[f].real ? 1 : 0].push_back(f);
+    for (size_t f = 0; f < frames.size(); ++f)
+      frames_of[split.frame_val[f] ? 1 : 0][frames[f].real ? 1 : 0].push_back(f);
     std::mt19937 rng(subSeed(static_cast<uint32_t>(options.seed), 7, 0));
     ProgressBar bar("encode crops in scene context", static_cast<int64_t>(crops.size()));
     std::map<size_t, cv::Mat> frame_cache;
@@ -896,7 +933,8 @@ void encodeCropsInContext(const TrainingData& d, const TrainOptions& options, Fr
         if (k < options.context_copies) {
           if (crop.cols > scene.cols || crop.rows > scene.rows) continue;
           r = cv::Rect(static_cast<int>(rng() % static_cast<uint32_t>(scene.cols - crop.cols + 1)),
-                       static_cast<int>(rng() % static_cast<uint32_t>(scene.rows - crop.rows + 1)), crop.cols, crop.rows);
+                       static_cast<int>(rng() % static_cast<uint32_t>(scene.rows - crop.rows + 1)),
+                       crop.cols, crop.rows);
           if (mask.empty())
             crop.copyTo(scene(r));
           else
@@ -908,8 +946,8 @@ void encodeCropsInContext(const TrainingData& d, const TrainOptions& options, Fr
         PyramidBox b;
         if (!encoder.snap(r.x, r.y, r.width, r.height, scene.cols, scene.rows, &b)) continue;
         encoder.encode(scene, {b}, EncoderKind::kDirect, &buffer);
-        all.add(buffer.row(0), labelOf(classes, crops[i].category, bg), indexOf(instances, crops[i].instance),
-                crops[i].real ? 1 : 0);
+        all.add(buffer.row(0), labelOf(classes, crops[i].category, bg),
+                indexOf(instances, crops[i].instance), crops[i].real ? 1 : 0);
         is_val.push_back(split.crop_val[i]);
       }
       bar.update(static_cast<int64_t>(i + 1));
@@ -1035,9 +1073,11 @@ void encodeSceneObjects(const TrainingData& d, const TrainOptions& options, Work
           is_val.resize(static_cast<size_t>(all.size()), split.frame_val[f]);
         });
     bar.finish();
-    spdlog::info("scene objects: {} boxes of the model's categories, {} of other objects or parts (background: {} "
-                 "parts); of them from the proposal boxes: {} of the model's categories, {} background",
-                 positives, others, partials, proposal_positives, proposal_others);
+    spdlog::info(
+        "scene objects: {} boxes of the model's categories, {} of other objects or parts "
+        "(background: {} "
+        "parts); of them from the proposal boxes: {} of the model's categories, {} background",
+        positives, others, partials, proposal_positives, proposal_others);
   }
 }
 
@@ -1095,10 +1135,11 @@ std::vector<int64_t> mineHardNegatives(
                     static_cast<uint32_t>(f)));
         // Parts and overhangs of the objects are candidates too.
         for (size_t o = 0; o < frames[f].objects.size(); ++o) {
-          const auto partial = partialBoxes(frames[f].objects, o, image.cols, image.rows, options.partial_negatives,
-                                            options.partial_min_iou, options.partial_max_iou,
-                                            subSeed(static_cast<uint32_t>(options.seed), 20 + static_cast<uint32_t>(round),
-                                                    static_cast<uint32_t>(f * 64 + o)));
+          const auto partial = partialBoxes(
+              frames[f].objects, o, image.cols, image.rows, options.partial_negatives,
+              options.partial_min_iou, options.partial_max_iou,
+              subSeed(static_cast<uint32_t>(options.seed), 20 + static_cast<uint32_t>(round),
+                      static_cast<uint32_t>(f * 64 + o)));
           boxes.insert(boxes.end(), partial.begin(), partial.end());
         }
         const ReusableMatrix rows = encodeRects(*worker, image, boxes);
@@ -1227,7 +1268,8 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     clf.uniform_mix = 0.01f;  // nothing to fit on: keep a floor so that views can still be summed
   }
   model.classifier = std::move(clf);
-  model.exemplars = pickExemplars(train, static_cast<int>(classes.size()), bg, options.exemplars_per_class);
+  model.exemplars =
+      pickExemplars(train, static_cast<int>(classes.size()), bg, options.exemplars_per_class);
   spdlog::info("{} exemplars kept in the model ({:.1f} MB)", model.exemplars.size(),
                static_cast<double>(model.exemplars.bytes()) / 1e6);
 
@@ -1240,9 +1282,10 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     (train.label(i) == bg ? r.train_negatives : r.train_crops) += 1;
   r.mined = mined;
   r.validation = summary;
-  model.provenance = provenance(object_dirs, background_object_dirs, crops, scene_dirs, proposals_dir,
-                                 options, r, std::chrono::duration<double>(Clock::now() - started).count())
-                         .dump();
+  model.provenance =
+      provenance(object_dirs, background_object_dirs, crops, scene_dirs, proposals_dir, options, r,
+                 std::chrono::duration<double>(Clock::now() - started).count())
+          .dump();
   model.check("trained model");
   return model;
 }
@@ -1250,9 +1293,11 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
 namespace {
 
 // `extra`: crops added to the training data of every fold (never tested).
-HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::vector<LabeledCrop>& extra,
-                            const std::vector<std::set<std::string>>& folds, const TrainOptions& options,
-                            const FoldProgress& progress, HeldOutResult result) {
+HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops,
+                            const std::vector<LabeledCrop>& extra,
+                            const std::vector<std::set<std::string>>& folds,
+                            const TrainOptions& options, const FoldProgress& progress,
+                            HeldOutResult result) {
   const size_t C = result.classes.size();
   result.confusion.assign(C, std::vector<int64_t>(C, 0));
   std::vector<std::string> instances = result.instances;
@@ -1263,9 +1308,11 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
     const std::set<std::string>& held = folds[fold];
     std::vector<LabeledCrop> train_crops = extra, test_crops;
     for (const auto& c : crops) (held.count(c.instance) ? test_crops : train_crops).push_back(c);
-    const std::string stage =
-        "fold " + std::to_string(fold + 1) + "/" + std::to_string(folds.size()) + " (" +
-        (held.size() > 3 ? std::to_string(held.size()) + " instances" : fmt::format("{}", fmt::join(held, ", "))) + ")";
+    const std::string stage = "fold " + std::to_string(fold + 1) + "/" +
+                              std::to_string(folds.size()) + " (" +
+                              (held.size() > 3 ? std::to_string(held.size()) + " instances"
+                                               : fmt::format("{}", fmt::join(held, ", "))) +
+                              ")";
     Pca pca;
     Vocabulary vocabulary;
     fitEncoding(train_crops, {}, options, &pca, &vocabulary, [&](int64_t d, int64_t t) {
@@ -1300,7 +1347,8 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
     }
     for (const auto& [inst, rt] : per_instance) {
       result.instance_accuracy[inst] = 100.0 * rt.first / rt.second;
-      spdlog::info("{}: {} {}/{} right ({:.1f}%)", stage, inst, rt.first, rt.second, result.instance_accuracy[inst]);
+      spdlog::info("{}: {} {}/{} right ({:.1f}%)", stage, inst, rt.first, rt.second,
+                   result.instance_accuracy[inst]);
     }
   }
   return result;
@@ -1308,20 +1356,22 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops, const std::ve
 
 // The crops of the extra training sets whose category the evaluated set has; `result.extra_crops`
 // counts them.
-std::vector<LabeledCrop> extraTrainingCrops(const std::vector<std::string>& extra_dirs, HeldOutResult& result,
-                                            const TrainOptions& options) {
+std::vector<LabeledCrop> extraTrainingCrops(const std::vector<std::string>& extra_dirs,
+                                            HeldOutResult& result, const TrainOptions& options) {
   std::vector<LabeledCrop> extra;
   for (const auto& dir : extra_dirs)
     for (auto& c : collectNamedCrops(dir, options.max_views_per_instance))
       if (indexOf(result.classes, c.category) >= 0) extra.push_back(std::move(c));
   if (!extra_dirs.empty() && extra.empty())
-    throw DatasetError(fmt::format("{}: no crops of the evaluated categories to add to the training",
-                                   fmt::join(extra_dirs, ", ")));
+    throw DatasetError(
+        fmt::format("{}: no crops of the evaluated categories to add to the training",
+                    fmt::join(extra_dirs, ", ")));
   result.extra_crops = static_cast<int64_t>(extra.size());
   return extra;
 }
 
-HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& object_dir, const char* protocol) {
+HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& object_dir,
+                      const char* protocol) {
   std::set<std::string> category_set, instance_set;
   for (const auto& c : crops) {
     category_set.insert(c.category);
@@ -1338,12 +1388,14 @@ HeldOutResult prepare(const std::vector<LabeledCrop>& crops, const std::string& 
 }  // namespace
 
 HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOptions& options,
-                                  const FoldProgress& progress, const std::vector<std::string>& extra_dirs,
+                                  const FoldProgress& progress,
+                                  const std::vector<std::string>& extra_dirs,
                                   const std::vector<std::string>& held_out) {
   const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
   HeldOutResult r = prepare(crops, object_dir, "leave-one-instance-out");
   for (const auto& inst : held_out)
-    if (indexOf(r.instances, inst) < 0) throw DatasetError(object_dir + ": no instance " + inst + " to hold out");
+    if (indexOf(r.instances, inst) < 0)
+      throw DatasetError(object_dir + ": no instance " + inst + " to hold out");
   std::vector<std::set<std::string>> folds;
   for (const auto& inst : held_out.empty() ? r.instances : held_out) folds.push_back({inst});
   const std::vector<LabeledCrop> extra = extraTrainingCrops(extra_dirs, r, options);
@@ -1351,25 +1403,29 @@ HeldOutResult leaveOneInstanceOut(const std::string& object_dir, const TrainOpti
 }
 
 HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const TrainOptions& options,
-                                        const FoldProgress& progress, const std::vector<std::string>& extra_dirs) {
+                                        const FoldProgress& progress,
+                                        const std::vector<std::string>& extra_dirs) {
   const std::vector<LabeledCrop> crops = collectCrops({object_dir}, options.max_views_per_instance);
   HeldOutResult r = prepare(crops, object_dir, "one held-out instance per category");
   TrainOptions o = options;
   o.validation = true;
   const Split split = makeSplit(crops, {}, o);
-  if (split.held_out_instances.empty()) throw DatasetError(object_dir + ": no category has two instances");
+  if (split.held_out_instances.empty())
+    throw DatasetError(object_dir + ": no category has two instances");
   const std::vector<LabeledCrop> extra = extraTrainingCrops(extra_dirs, r, options);
-  return evaluateFolds(crops, extra,
-                       {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
-                       options, progress, r);
+  return evaluateFolds(
+      crops, extra,
+      {std::set<std::string>(split.held_out_instances.begin(), split.held_out_instances.end())},
+      options, progress, r);
 }
 
 namespace {
 
 // The classes of a model with `categories` added to the base's (background stays last); fills
 // r.added and r.replaced. A category the base has is refused unless `replace`.
-std::vector<std::string> classesWithAdded(const RecognizerModel& base, const std::set<std::string>& categories,
-                                          bool replace, AddClassesReport& r) {
+std::vector<std::string> classesWithAdded(const RecognizerModel& base,
+                                          const std::set<std::string>& categories, bool replace,
+                                          AddClassesReport& r) {
   const std::vector<std::string>& old = base.classifier.classes;  // background last
   std::vector<std::string> classes(old.begin(), old.end() - 1);
   r.added.clear();
@@ -1378,7 +1434,9 @@ std::vector<std::string> classesWithAdded(const RecognizerModel& base, const std
     if (std::find(classes.begin(), classes.end(), c) == classes.end()) {
       r.added.push_back(c);
     } else if (!replace) {
-      throw std::runtime_error("class '" + c + "' is already in the base model (--replace trains it from these views instead)");
+      throw std::runtime_error(
+          "class '" + c +
+          "' is already in the base model (--replace trains it from these views instead)");
     } else {
       r.replaced.push_back(c);
     }
@@ -1410,8 +1468,10 @@ ExampleSet keptExemplars(const RecognizerModel& base, const std::vector<std::str
 
 // The base's classifier rows for the classes it keeps, `fresh`'s rows (one per `trained` class)
 // for the new and replaced ones; the base's calibration.
-LinearClassifier mergedClassifier(const RecognizerModel& base, const std::vector<std::string>& classes,
-                                  const std::vector<std::string>& trained, const LinearClassifier& fresh) {
+LinearClassifier mergedClassifier(const RecognizerModel& base,
+                                  const std::vector<std::string>& classes,
+                                  const std::vector<std::string>& trained,
+                                  const LinearClassifier& fresh) {
   const std::vector<std::string>& old = base.classifier.classes;
   const int C = static_cast<int>(classes.size());
   LinearClassifier clf;
@@ -1434,7 +1494,8 @@ LinearClassifier mergedClassifier(const RecognizerModel& base, const std::vector
   return clf;
 }
 
-std::string addedClassesProvenance(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
+std::string addedClassesProvenance(const RecognizerModel& base,
+                                   const std::vector<std::string>& object_dirs,
                                    const AddClassesReport& r) {
   nlohmann::json j;
   j["kind"] = "classes added";
@@ -1442,7 +1503,8 @@ std::string addedClassesProvenance(const RecognizerModel& base, const std::vecto
   j["replaced_classes"] = r.replaced;
   j["object_sets"] = object_dirs;
   j["views"] = r.views;
-  j["examples"] = {{"classes", r.positives}, {"background", r.background}, {"base_exemplars", r.exemplars}};
+  j["examples"] = {
+      {"classes", r.positives}, {"background", r.background}, {"base_exemplars", r.exemplars}};
   j["seconds"] = r.seconds;
   try {
     j["base"] = nlohmann::json::parse(base.provenance);
@@ -1462,7 +1524,8 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   if (!base.hasBackground()) throw std::runtime_error("the base model has no background class");
   if (base.exemplars.size() == 0)
     throw std::runtime_error(
-        "the base model holds no exemplars (trained before models kept them): train it again (make model, "
+        "the base model holds no exemplars (trained before models kept them): train it again (make "
+        "model, "
         "slamaware-train) to add classes to it");
   std::vector<LabeledCrop> crops;
   for (const auto& dir : object_dirs) {
@@ -1473,7 +1536,8 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   for (const auto& c : crops)
     if (c.category != "background") categories.insert(c.category);
   if (categories.empty())
-    throw DatasetError(fmt::format("{}: no views of any class (only background)", fmt::join(object_dirs, ", ")));
+    throw DatasetError(
+        fmt::format("{}: no views of any class (only background)", fmt::join(object_dirs, ", ")));
   const std::vector<std::string> classes = classesWithAdded(base, categories, replace, r);
   const int C = static_cast<int>(classes.size()), bg = C - 1;
 
@@ -1486,13 +1550,15 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
       if (indexOf(instances, c.instance) < 0) instances.push_back(c.instance);
     FrameEncoder encoder(base.params, base.pca, base.vocabulary);
     ProgressBar bar("encode views", static_cast<int64_t>(crops.size()));
-    fresh = encodeCrops(crops, classes, instances, encoder, options.mirror_crops,
-                        [&](int64_t done, int64_t) { bar.update(done); }, bg);
+    fresh = encodeCrops(
+        crops, classes, instances, encoder, options.mirror_crops,
+        [&](int64_t done, int64_t) { bar.update(done); }, bg);
     bar.finish();
   }
   r.views = static_cast<int64_t>(crops.size());
   r.positives = r.background = 0;
-  for (int64_t i = 0; i < fresh.size(); ++i) (fresh.label(i) == bg ? r.background : r.positives) += 1;
+  for (int64_t i = 0; i < fresh.size(); ++i)
+    (fresh.label(i) == bg ? r.background : r.positives) += 1;
   set.append(fresh);
 
   // The base's classifiers stay as the base learnt them from all its data. Only the new (and
@@ -1530,10 +1596,12 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
 
 std::string AddClassesReport::toText() const {
   return fmt::format(
-      "added classes: {}{}{}\n{} views read; trained on {} examples of the classes, {} background, {} exemplars of "
+      "added classes: {}{}{}\n{} views read; trained on {} examples of the classes, {} background, "
+      "{} exemplars of "
       "the base model, in {:.1f} s\n",
-      added.empty() ? "none" : fmt::format("{}", fmt::join(added, ", ")), replaced.empty() ? "" : "; retrained: ",
-      fmt::format("{}", fmt::join(replaced, ", ")), views, positives, background, exemplars, seconds);
+      added.empty() ? "none" : fmt::format("{}", fmt::join(added, ", ")),
+      replaced.empty() ? "" : "; retrained: ", fmt::format("{}", fmt::join(replaced, ", ")), views,
+      positives, background, exemplars, seconds);
 }
 
 std::string provenanceText(const RecognizerModel& model) {
@@ -1547,12 +1615,15 @@ std::string provenanceText(const RecognizerModel& model) {
   o << "classes: " << fmt::format("{}", fmt::join(model.classifier.classes, ", ")) << "\n";
   // Classes added to a base model (addClasses), possibly several times: each step, then the base.
   while (j.is_object() && j.value("kind", std::string()) == "classes added") {
-    o << fmt::format("classes {} added{} from {} views of {} (slamaware-train --base), to a model:\n",
-                     fmt::join(j["added_classes"].get<std::vector<std::string>>(), ", "),
-                     j["replaced_classes"].empty()
-                         ? std::string()
-                         : fmt::format(" ({} retrained)", fmt::join(j["replaced_classes"].get<std::vector<std::string>>(), ", ")),
-                     j.value("views", int64_t{0}), fmt::join(j["object_sets"].get<std::vector<std::string>>(), ", "));
+    o << fmt::format(
+        "classes {} added{} from {} views of {} (slamaware-train --base), to a model:\n",
+        fmt::join(j["added_classes"].get<std::vector<std::string>>(), ", "),
+        j["replaced_classes"].empty()
+            ? std::string()
+            : fmt::format(" ({} retrained)",
+                          fmt::join(j["replaced_classes"].get<std::vector<std::string>>(), ", ")),
+        j.value("views", int64_t{0}),
+        fmt::join(j["object_sets"].get<std::vector<std::string>>(), ", "));
     const nlohmann::json next = j["base"];
     j = next;
   }
@@ -1564,34 +1635,42 @@ std::string provenanceText(const RecognizerModel& model) {
     o << "provenance (older format):\n" << j.dump(2) << "\n";
     return o.str();
   }
-  o << fmt::format("trained in {:.1f} min, peak memory {:.0f} MB\n", j.value("training_s", 0.0) / 60,
-                   j.value("peak_rss_mb", 0.0));
+  o << fmt::format("trained in {:.1f} min, peak memory {:.0f} MB\n",
+                   j.value("training_s", 0.0) / 60, j.value("peak_rss_mb", 0.0));
   o << "object sets:\n";
   for (const auto& s : j["object_sets"])
-    o << fmt::format("  {:<12} {:<13} {:<48} {:>5} of {:>5} views, {:>3} instances ({})\n", s["role"].get<std::string>(),
-                     s["kind"].get<std::string>(), s["path"].get<std::string>(), s["crops_used"].get<int64_t>(),
+    o << fmt::format("  {:<12} {:<13} {:<48} {:>5} of {:>5} views, {:>3} instances ({})\n",
+                     s["role"].get<std::string>(), s["kind"].get<std::string>(),
+                     s["path"].get<std::string>(), s["crops_used"].get<int64_t>(),
                      s["views"].get<int64_t>(), s["instances_used"].get<int64_t>(),
                      fmt::join(s["categories_used"].get<std::vector<std::string>>(), ", "));
   o << "scenes:\n";
   for (const auto& s : j["scenes"])
     o << fmt::format("  {:<13} {:<48} {:>5} frames, {:>6} boxes\n", s["kind"].get<std::string>(),
-                     s["path"].get<std::string>(), s["frames"].get<int64_t>(), s["boxes"].get<int64_t>());
+                     s["path"].get<std::string>(), s["frames"].get<int64_t>(),
+                     s["boxes"].get<int64_t>());
   if (j.contains("proposals")) o << "proposal boxes: " << j["proposals"].get<std::string>() << "\n";
   const auto& r = j["report"];
   o << fmt::format("examples: {} of objects, {} background", r.value("train_crops", int64_t{0}),
                    r.value("train_negatives", int64_t{0}));
-  if (r.contains("mined_per_round")) o << fmt::format(" (hard negatives mined: {})", fmt::join(r["mined_per_round"].get<std::vector<int64_t>>(), ", "));
+  if (r.contains("mined_per_round"))
+    o << fmt::format(" (hard negatives mined: {})",
+                     fmt::join(r["mined_per_round"].get<std::vector<int64_t>>(), ", "));
   o << "\n";
   if (r.contains("validation")) {
     const auto& v = r["validation"];
     o << fmt::format(
-        "validation on held-out instances and frames: {} crops, best class right {:.1f}% (photographed: {} crops, "
-        "{:.1f}%); {} background boxes, {:.1f}% called background (photographed: {}, {:.1f}%); NLL {:.3f}\n",
+        "validation on held-out instances and frames: {} crops, best class right {:.1f}% "
+        "(photographed: {} crops, "
+        "{:.1f}%); {} background boxes, {:.1f}% called background (photographed: {}, {:.1f}%); NLL "
+        "{:.3f}\n",
         v.value("crops", int64_t{0}), v.value("accuracy", 0.0), v.value("real_crops", int64_t{0}),
-        v.value("real_accuracy", 0.0), v.value("negatives", int64_t{0}), v.value("background_accuracy", 0.0),
-        v.value("real_negatives", int64_t{0}), v.value("real_background_accuracy", 0.0), v.value("nll", 0.0));
+        v.value("real_accuracy", 0.0), v.value("negatives", int64_t{0}),
+        v.value("background_accuracy", 0.0), v.value("real_negatives", int64_t{0}),
+        v.value("real_background_accuracy", 0.0), v.value("nll", 0.0));
   }
-  o << "options (a config that trains it again with slamaware-train --config):\n" << j.value("config", std::string()) ;
+  o << "options (a config that trains it again with slamaware-train --config):\n"
+    << j.value("config", std::string());
   return o.str();
 }
 

@@ -21,10 +21,10 @@
 //     on a part of a mug, or on a mug and half the table, is not a mug detection (it scores as a
 //     false positive), and without these the classifier never saw one labelled so. With proposal
 //     boxes (`--proposals`: what the proposals stage drew on a SLAM run of each scene), every
-//     `proposal_every`-th frame also gives every proposal box: a view of the object it overlaps by IoU >=
-//     `proposal_positive_iou`, background below `proposal_background_iou` with every object (its
-//     parts, an object with table, several objects, the table), nothing in between. These are the
-//     boxes the recognizer is given at run time, framed as the pipeline frames them.
+//     `proposal_every`-th frame also gives every proposal box: a view of the object it overlaps by
+//     IoU >= `proposal_positive_iou`, background below `proposal_background_iou` with every object
+//     (its parts, an object with table, several objects, the table), nothing in between. These are
+//     the boxes the recognizer is given at run time, framed as the pipeline frames them.
 //  4. One-vs-all logistic regression (SGD, L2) over the categories + "background", then
 //     `mining_rounds` rounds of hard-negative mining: `mining_candidates_per_frame` new random
 //     background boxes per training frame are scored and those the current model takes for an
@@ -59,9 +59,9 @@ struct TrainOptions {
   int kmeans_iterations = 100;
   int max_views_per_instance = 72;  ///< 0 = every view (72: every 3rd of a 216-view turntable)
   int background_views_per_instance = 16;  ///< views per instance of a background object set
-  int context_copies = 1;          ///< crops also encoded pasted into scene frames
-  int real_copies = 0;             ///< photographed crops also pasted varied (scale, colour, blur)
-  bool mirror_crops = true;        ///< crops also encoded mirrored left-right
+  int context_copies = 1;                  ///< crops also encoded pasted into scene frames
+  int real_copies = 0;       ///< photographed crops also pasted varied (scale, colour, blur)
+  bool mirror_crops = true;  ///< crops also encoded mirrored left-right
   /// Encoded training examples kept in the model per object class (background: 4 times as many),
   /// evenly spread over the training data, so that `slamaware-train --base` can add classes later.
   int exemplars_per_class = 40;
@@ -74,18 +74,20 @@ struct TrainOptions {
   int negative_min_size_px = 24;
   double negative_max_size = 0.6;  ///< of the image width / height
   bool validation = true;          ///< hold out data for calibration and the summary
-  int holdout_frame_every = 5;      ///< (one scene only) every n-th frame is held out
-  int scene_positive_every = 4;     ///< every n-th scene frame gives its objects' boxes (0: none)
-  int positive_jitter = 2;          ///< jittered boxes per ground-truth box
-  double positive_min_iou = 0.6;    ///< a jittered box overlaps its object at least this much
-  int partial_negatives = 2;        ///< background boxes cutting or overhanging each scene object
-  double partial_min_iou = 0.1;     ///< ... that overlap it at least this much
-  double partial_max_iou = 0.4;     ///< ... and it (and every other object) less than this
-  int proposal_every = 2;                ///< every n-th scene frame gives its proposal boxes (0: none)
-  double proposal_positive_iou = 0.5;    ///< a proposal box this close to an object is an example of it
-  double proposal_background_iou = 0.4;  ///< a proposal box below this with every object is background
-  /// A proposal box overlapping one ranked ahead of it (earlier in the file) by more than this IoU is
-  /// not used (>= 1: every box). The dumps hold every box the proposals stage draws (the
+  int holdout_frame_every = 5;     ///< (one scene only) every n-th frame is held out
+  int scene_positive_every = 4;    ///< every n-th scene frame gives its objects' boxes (0: none)
+  int positive_jitter = 2;         ///< jittered boxes per ground-truth box
+  double positive_min_iou = 0.6;   ///< a jittered box overlaps its object at least this much
+  int partial_negatives = 2;       ///< background boxes cutting or overhanging each scene object
+  double partial_min_iou = 0.1;    ///< ... that overlap it at least this much
+  double partial_max_iou = 0.4;    ///< ... and it (and every other object) less than this
+  int proposal_every = 2;          ///< every n-th scene frame gives its proposal boxes (0: none)
+  double proposal_positive_iou =
+      0.5;  ///< a proposal box this close to an object is an example of it
+  double proposal_background_iou =
+      0.4;  ///< a proposal box below this with every object is background
+  /// A proposal box overlapping one ranked ahead of it (earlier in the file) by more than this IoU
+  /// is not used (>= 1: every box). The dumps hold every box the proposals stage draws (the
   /// recognizer suppresses after classifying them); the shipped model was trained on them
   /// suppressed at 0.5 in the stage's order, and twice the boxes would need about twice the memory.
   double proposal_nms_iou = 0.5;
@@ -98,9 +100,11 @@ struct TrainOptions {
   void visit(V& v) {
     v.section("encoding", encoding);
     v("classes", classes,
-      "the model's categories; the object sets' other categories are background (empty: all of them)");
+      "the model's categories; the object sets' other categories are background (empty: all of "
+      "them)");
     v("real_share", real_share,
-      "share of each class's weight carried by its photographed examples when it also has rendered ones "
+      "share of each class's weight carried by its photographed examples when it also has rendered "
+      "ones "
       "(<= 0: all examples weigh the same)");
     v("seed", seed, "seed of every random choice of the trainer");
     v("vocabulary_descriptors", vocabulary_descriptors, "features sampled for PCA and k-means");
@@ -110,10 +114,12 @@ struct TrainOptions {
       "views used per instance of the --background-objects sets (0 = all)");
     v("context_copies", context_copies, "copies of each crop pasted into random scene frames");
     v("real_copies", real_copies,
-      "copies of each photographed crop pasted into scene frames scaled, mirrored, recoloured and blurred");
+      "copies of each photographed crop pasted into scene frames scaled, mirrored, recoloured and "
+      "blurred");
     v("mirror_crops", mirror_crops, "training crops also encoded mirrored left-right");
     v("exemplars_per_class", exemplars_per_class,
-      "encoded examples kept in the model per object class (background: 4x) for adding classes later");
+      "encoded examples kept in the model per object class (background: 4x) for adding classes "
+      "later");
     v.section("sgd", sgd);
     v("negatives_per_frame", negatives_per_frame, "initial background boxes per scene frame");
     v("mining_rounds", mining_rounds, "rounds of hard-negative mining");
@@ -126,21 +132,26 @@ struct TrainOptions {
     v("negative_max_size", negative_max_size, "largest background box side, fraction of the image");
     v("validation", validation,
       "hold out instances and frames for calibration and the validation summary");
-    v("holdout_frame_every", holdout_frame_every, "with one scene sequence, every n-th frame is held out");
-    v("scene_positive_every", scene_positive_every, "every n-th scene frame gives its objects' boxes (0: none)");
+    v("holdout_frame_every", holdout_frame_every,
+      "with one scene sequence, every n-th frame is held out");
+    v("scene_positive_every", scene_positive_every,
+      "every n-th scene frame gives its objects' boxes (0: none)");
     v("positive_jitter", positive_jitter, "jittered boxes per ground-truth box of a scene");
-    v("positive_min_iou", positive_min_iou, "a jittered box overlaps its object at least this much");
+    v("positive_min_iou", positive_min_iou,
+      "a jittered box overlaps its object at least this much");
     v("partial_negatives", partial_negatives,
       "background boxes cutting or overhanging each object of a scene frame that gives positives");
     v("partial_min_iou", partial_min_iou, "a partial box overlaps its object at least this much");
     v("partial_max_iou", partial_max_iou, "a partial box overlaps every object less than this");
-    v("proposal_every", proposal_every, "every n-th scene frame gives its proposal boxes (0: none)");
+    v("proposal_every", proposal_every,
+      "every n-th scene frame gives its proposal boxes (0: none)");
     v("proposal_positive_iou", proposal_positive_iou,
       "a scene's proposal box with this IoU with an object is an example of that object");
     v("proposal_background_iou", proposal_background_iou,
       "a scene's proposal box with less IoU than this with every object is background");
     v("proposal_nms_iou", proposal_nms_iou,
-      "a scene's proposal box overlapping one ranked ahead by more than this IoU is not used (>= 1: all)");
+      "a scene's proposal box overlapping one ranked ahead by more than this IoU is not used (>= "
+      "1: all)");
   }
 };
 
@@ -160,8 +171,8 @@ struct SceneFrame {
   int index = 0;
   std::vector<cv::Rect2d> objects;
   std::vector<std::string> object_classes;  ///< category of each of `objects`
-  std::vector<cv::Rect2d> proposals;        ///< boxes the proposals stage drew in this frame (if known)
-  bool real = false;                        ///< photographed (false: rendered by the generator)
+  std::vector<cv::Rect2d> proposals;  ///< boxes the proposals stage drew in this frame (if known)
+  bool real = false;                  ///< photographed (false: rendered by the generator)
 };
 
 /// The crops of the object sets (categories merged by name across sets), at most
@@ -170,7 +181,8 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
                                       int max_views_per_instance);
 /// The crops of one object set with their instances named after the set ("<set>/<instance>": two
 /// sets may both hold a "ball_1").
-std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir, int max_views_per_instance);
+std::vector<LabeledCrop> collectNamedCrops(const std::string& object_dir,
+                                           int max_views_per_instance);
 /// The frames of sequence folders with boxes.csv. Throws DatasetError (also for a folder without
 /// boxes.csv: its background is unknown). With `proposals_dir`, each frame also gets the boxes of
 /// `<proposals_dir>/<sequence folder name>.csv` (`frame,rank,x,y,w,h`, written by
@@ -186,8 +198,8 @@ std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path
 /// object of a category the model lacks is `background`), or -1 for a box between the two IoU
 /// thresholds (neither a view of an object nor background) and for a box suppressed by one ahead
 /// of it (proposal_nms_iou).
-std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes, int background,
-                                const TrainOptions& options);
+std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes,
+                                int background, const TrainOptions& options);
 
 /// Sets the weights of `set`'s examples (ExampleSet::weight, ExampleSet::domain: 1 photographed) so
 /// that in every class holding both domains the photographed examples carry `real_share` of the
@@ -205,12 +217,13 @@ ExampleSet pickExemplars(const ExampleSet& set, int classes, int background, int
 
 /// `count` boxes around `object` (scaled and shifted at random) that overlap it by IoU >= min_iou
 /// and lie in the image.
-std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count, double min_iou,
-                                      uint32_t seed);
+std::vector<cv::Rect2d> jitteredBoxes(const cv::Rect2d& object, int width, int height, int count,
+                                      double min_iou, uint32_t seed);
 /// `count` boxes on a part of `objects[index]` or overhanging it (scaled and shifted at random,
 /// in the image) with IoU in [min_iou, max_iou) with it and < max_iou with each of `objects`.
-std::vector<cv::Rect2d> partialBoxes(const std::vector<cv::Rect2d>& objects, size_t index, int width, int height,
-                                     int count, double min_iou, double max_iou, uint32_t seed);
+std::vector<cv::Rect2d> partialBoxes(const std::vector<cv::Rect2d>& objects, size_t index,
+                                     int width, int height, int count, double min_iou,
+                                     double max_iou, uint32_t seed);
 /// `count` random boxes of an image that overlap each of `objects` by IoU < max_iou.
 std::vector<cv::Rect2d> randomBackgroundBoxes(int width, int height,
                                               const std::vector<cv::Rect2d>& objects, int count,
@@ -224,9 +237,12 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
 /// Encodes each crop as one box covering it into an ExampleSet (label = index of its category in
 /// `classes`, `other_label` for a category not in it; group = index of its instance in
 /// `instances`); with `mirror`, each crop is followed by its left-right mirror image.
-ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops, const std::vector<std::string>& classes,
-                       const std::vector<std::string>& instances, FrameEncoder& encoder, bool mirror = false,
-                       const std::function<void(int64_t, int64_t)>& progress = {}, int other_label = -1);
+ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops,
+                       const std::vector<std::string>& classes,
+                       const std::vector<std::string>& instances, FrameEncoder& encoder,
+                       bool mirror = false,
+                       const std::function<void(int64_t, int64_t)>& progress = {},
+                       int other_label = -1);
 
 struct ValidationSummary {
   bool available = false;
@@ -239,8 +255,8 @@ struct ValidationSummary {
   int64_t real_crops = 0;          ///< held-out crops of photographed instances
   double real_accuracy = 0;        ///< % of them whose best class overall is right
   int64_t real_negatives = 0;      ///< held-out background boxes of photographed frames and objects
-  double real_background_accuracy = 0;  ///< % of them classified background
-  double nll = 0;                  ///< mean negative log-likelihood after calibration
+  double real_background_accuracy = 0;          ///< % of them classified background
+  double nll = 0;                               ///< mean negative log-likelihood after calibration
   std::vector<std::vector<int64_t>> confusion;  ///< [true class][predicted class]
 };
 
@@ -261,9 +277,9 @@ std::string provenanceText(const RecognizerModel& model);
 /// What addClasses() did.
 struct AddClassesReport {
   std::vector<std::string> added, replaced;  ///< classes new to the model, and retrained ones
-  int64_t views = 0;                         ///< crops read (each also mirrored: train.mirror_crops)
-  int64_t positives = 0, background = 0;     ///< encoded examples of the classes, of background
-  int64_t exemplars = 0;                     ///< the base model's exemplars trained on
+  int64_t views = 0;                      ///< crops read (each also mirrored: train.mirror_crops)
+  int64_t positives = 0, background = 0;  ///< encoded examples of the classes, of background
+  int64_t exemplars = 0;                  ///< the base model's exemplars trained on
   double seconds = 0;
   std::string toText() const;
 };
@@ -274,8 +290,8 @@ struct AddClassesReport {
 /// classifiers are kept as they are; a classifier for each new category is trained on its views
 /// against the base's exemplars (RecognizerModel::exemplars) and the sets' background. A category
 /// the base already has is refused unless `replace` (then its exemplars are dropped and its
-/// classifier is trained anew the same way). Throws std::runtime_error (DatasetError for unreadable sets)
-/// for a base without exemplars or background, or sets without views of a class.
+/// classifier is trained anew the same way). Throws std::runtime_error (DatasetError for unreadable
+/// sets) for a base without exemplars or background, or sets without views of a class.
 RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::string>& object_dirs,
                            const TrainOptions& options, bool replace, AddClassesReport* report);
 
@@ -311,9 +327,8 @@ HeldOutResult oneInstancePerCategoryOut(const std::string& object_dir, const Tra
 /// `background_views_per_instance` views per instance; their categories that the model has are
 /// left out.
 RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
-                           const std::vector<std::string>& scene_dirs,
-                           const TrainOptions& options, TrainReport* report,
-                           const std::string& proposals_dir = "",
+                           const std::vector<std::string>& scene_dirs, const TrainOptions& options,
+                           TrainReport* report, const std::string& proposals_dir = "",
                            const std::vector<std::string>& background_object_dirs = {});
 
 }  // namespace slamaware::recognizer

@@ -166,8 +166,7 @@ void DepthFilter::addHost(const DepthKeyframeInput& kf) {
               min_depth = static_cast<float>(kf.min_depth);
   for (const Eigen::Vector2i& px : selectSeedPixels(kf.grey)) {
     const Eigen::Vector3f f =
-        Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f)
-            .normalized();
+        Eigen::Vector3f(float((px.x() - cx_) / fx_), float((px.y() - cy_) / fy_), 1.f).normalized();
     DepthSeed seed = makeSeed(float(px.x()), float(px.y()), f, mean_depth, min_depth);
     if (!kf.bgr.empty()) rgbAt(kf.bgr, px, seed.rgb);
     host.seeds.push_back(seed);
@@ -199,7 +198,8 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       used = true;
       if (converged.empty()) continue;
       std::lock_guard<std::mutex> lock(store_mutex_);
-      const auto provisional = static_cast<int64_t>(std::count_if(converged.begin(), converged.end(), isProvisional));
+      const auto provisional =
+          static_cast<int64_t>(std::count_if(converged.begin(), converged.end(), isProvisional));
       converged_per_map_[input.map_id] += static_cast<int64_t>(converged.size()) - provisional;
       host.store->provisional += static_cast<size_t>(provisional);
       host.store->points.insert(host.store->points.end(), converged.begin(), converged.end());
@@ -217,9 +217,11 @@ std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
       // Once the map's seeds have converged, a keyframe's map points were only stand-ins: they
       // are snapshots from before bundle adjustment, and copies of one map point in several
       // keyframes would pass for surfaces that many keyframes agree on.
-      if ((kf.from_features > 0 || kf.provisional > 0) && converged_per_map_[kf.map_id] >= options_.young_map_points) {
+      if ((kf.from_features > 0 || kf.provisional > 0) &&
+          converged_per_map_[kf.map_id] >= options_.young_map_points) {
         kf.points.erase(kf.points.begin(), kf.points.begin() + static_cast<long>(kf.from_features));
-        kf.points.erase(std::remove_if(kf.points.begin(), kf.points.end(), isProvisional), kf.points.end());
+        kf.points.erase(std::remove_if(kf.points.begin(), kf.points.end(), isProvisional),
+                        kf.points.end());
         stats_.points -= static_cast<int64_t>(kf.from_features + kf.provisional);
         kf.from_features = kf.provisional = 0;
         kf.features_dropped = true;
@@ -281,7 +283,8 @@ std::vector<DepthFilter::LiveKeyframe> DepthFilter::liveKeyframes(int map_id) co
   std::lock_guard<std::mutex> lock(store_mutex_);
   std::vector<LiveKeyframe> out;
   for (const auto& [id, kf] : store_)
-    if (kf.map_id == map_id && !kf.finished) out.push_back({id, kf.points.size(), kf.from_features});
+    if (kf.map_id == map_id && !kf.finished)
+      out.push_back({id, kf.points.size(), kf.from_features});
   return out;
 }
 

@@ -71,8 +71,9 @@ struct SemiDenseKeyframe {
   std::vector<SemiDensePoint> points;
   size_t from_features = 0;  ///< the first points are its map points (a young map's keyframe)
   size_t provisional = 0;    ///< points of provisional seeds (SemiDensePoint::provisional)
-  bool features_dropped = false;  ///< ...which it dropped, and those, when it finished (DepthFilter::process)
-  bool finished = false;          ///< no seeds left: the points are final
+  bool features_dropped =
+      false;  ///< ...which it dropped, and those, when it finished (DepthFilter::process)
+  bool finished = false;  ///< no seeds left: the points are final
 };
 
 struct DepthFilterStats {

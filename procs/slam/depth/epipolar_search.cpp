@@ -26,8 +26,8 @@ inline bool sample(const cv::Mat& img, float x, float y, float* value) {
 
 // The host's patch along its epipolar line, `scale` host pixels per frame pixel, less its mean;
 // false when it leaves the image or has too little gradient along the line to match.
-bool referencePatch(const cv::Mat& host, const Eigen::Vector2f& u, const Eigen::Vector2f& dir_host, float scale,
-                    float min_gradient, float ref[kSamples]) {
+bool referencePatch(const cv::Mat& host, const Eigen::Vector2f& u, const Eigen::Vector2f& dir_host,
+                    float scale, float min_gradient, float ref[kSamples]) {
   for (int k = 0; k < kSamples; ++k) {
     const Eigen::Vector2f s = u + (float(k - kHalf) / scale) * dir_host;
     if (!sample(host, s.x(), s.y(), &ref[k])) return false;
@@ -147,7 +147,8 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
     if (std::abs(c - best) > 1) second = std::min(second, costs[c]);
   if (second < inf && best_cost > p.uniqueness_ratio * second) return m;
 
-  const Eigen::Vector2f px = px_far + (float(best) + subPixelOffset(costs.data(), best, steps)) * dir;
+  const Eigen::Vector2f px =
+      px_far + (float(best) + subPixelOffset(costs.data(), best, steps)) * dir;
   // Triangulation along the host ray: z_h R f + t = z_c f_cur, least squares in (z_h, z_c).
   const Eigen::Vector3f f_cur =
       Eigen::Vector3f((px.x() - p.cx) / p.fx, (px.y() - p.cy) / p.fy, 1.f).normalized();

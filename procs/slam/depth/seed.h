@@ -16,7 +16,8 @@ struct DepthSeed {
   float a = 10, b = 10;  ///< Beta parameters: evidence for inlier / outlier measurements
   float z_range = 1;     ///< largest inverse distance (1 / nearest scene distance)
   int updates = 0;       ///< measurements fused
-  bool provisional = false;  ///< published as a provisional point (DepthFilterOptions::young_convergence_ratio)
+  bool provisional =
+      false;  ///< published as a provisional point (DepthFilterOptions::young_convergence_ratio)
   uint8_t rgb[3] = {0, 0, 0};
 
   /// Expected inlier ratio a / (a + b).

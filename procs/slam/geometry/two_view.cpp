@@ -325,7 +325,10 @@ struct Matches {
   std::mt19937_64 rng;
 
   Matches(const Points& ref, const Points& cur, const Eigen::Matrix3d& k, uint64_t seed)
-      : px_ref(ref), px_cur(cur), K(k), n(static_cast<int>(std::min(ref.size(), cur.size()))),
+      : px_ref(ref),
+        px_cur(cur),
+        K(k),
+        n(static_cast<int>(std::min(ref.size(), cur.size()))),
         rng(seed) {
     T1 = normalize(px_ref, &n1);
     T2 = normalize(px_cur, &n2);
@@ -583,8 +586,8 @@ TwoViewResult reconstructTwoView(const Points& px_ref, const Points& px_cur,
       refineWithTwins(rankCandidates(candidates, m, inliers, opt), m, inliers, opt, seed);
   const int best = pickRefined(refined);
   if (best < 0) {
-    r.reason = std::string("ambiguous ") + (use_h ? "homography" : "essential-matrix") +
-               " decomposition";
+    r.reason =
+        std::string("ambiguous ") + (use_h ? "homography" : "essential-matrix") + " decomposition";
     return r;
   }
   const Hypothesis& h = refined[static_cast<size_t>(best)].h;
