@@ -29,6 +29,14 @@ std::string show(const YAML::Node& node) {
   return "nothing";
 }
 
+// A mapping's key as text; a key that is not a plain scalar (a list, a map, an alias to one) is
+// refused naming the file and line.
+std::string keyName(const YAML::Node& key, const std::string& file) {
+  if (!key.IsScalar())
+    throw ConfigError(where(file, key) + ": a key must be a plain name, got " + show(key));
+  return key.Scalar();
+}
+
 template <class T>
 T scalarAs(const YAML::Node& node, const std::string& file, const std::string& key,
            const char* type_name) {
@@ -112,7 +120,7 @@ void checkKeys(const YAML::Node& node, const std::string& prefix,
                const std::set<std::string>& fields, const std::set<std::string>& sections,
                const std::string& file, const std::string& section) {
   for (const auto& kv : node) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = keyName(kv.first, file);
     const std::string key = prefix + name;
     if (fields.count(key)) continue;
     if (sections.count(key)) {
@@ -274,7 +282,7 @@ void ConfigFile::loadNode(const void* node_ptr, const std::string& what, OptionL
 
 void ConfigFile::checkSections(const std::vector<std::string>& known) const {
   for (const auto& kv : impl_->root) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = keyName(kv.first, path_);
     bool ok = false;
     for (const auto& k : known) ok = ok || k == name;
     if (!ok) {

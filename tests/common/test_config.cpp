@@ -106,6 +106,16 @@ TEST(Config, UnknownKeyNamesKeyFileAndLine) {
   EXPECT_NE(e.find("count"), std::string::npos) << "lists the known keys: " << e;
 }
 
+TEST(Config, AKeyThatIsNotAPlainNameIsRefusedNamingTheFile) {
+  // Found by fuzz_config (tests/fuzz/regressions/fuzz_config/scene-key-not-a-plain-name): a key
+  // that is a list or a map escaped as a yaml-cpp exception without the file.
+  for (const std::string yaml : {"toy:\n  ? [a, b]\n  : 1\n", "? {a: 1}\n: 2\n"}) {
+    const std::string e = errorOf(yaml);
+    EXPECT_NE(e.find("bad.yaml"), std::string::npos) << yaml << " -> " << e;
+    EXPECT_NE(e.find("a key must be a plain name"), std::string::npos) << yaml << " -> " << e;
+  }
+}
+
 TEST(Config, UnknownNestedKey) {
   const std::string e = errorOf("toy:\n  filter:\n    min_dpth: 1\n");
   EXPECT_NE(e.find("unknown key 'filter.min_dpth'"), std::string::npos) << e;
