@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "common/atomic_file.h"
+#include "procs/objectmap/json_int.h"
 
 namespace slamaware::objectmap {
 
@@ -123,16 +124,16 @@ MapSnapshot MapStore::readGeneration(int64_t generation, std::map<int32_t, FileR
   try {
     const std::string format = doc.at("format").get<std::string>();
     if (format != kFormat) fail("not a slamaware object map (format '" + format + "')");
-    const int version = doc.at("version").get<int>();
+    const int version = jsonInt<int>(doc.at("version"));
     if (version != kVersion)
       fail("format version " + std::to_string(version) + ", this build reads version " +
            std::to_string(kVersion));
-    const int64_t g = doc.at("generation").get<int64_t>();
+    const int64_t g = jsonInt<int64_t>(doc.at("generation"));
     if (g != generation) fail("header says generation " + std::to_string(g) + " (damaged)");
-    content_bytes = doc.at("content_bytes").get<int64_t>();
-    content_crc = doc.at("content_crc32").get<uint32_t>();
+    content_bytes = jsonInt<int64_t>(doc.at("content_bytes"));
+    content_crc = jsonInt<uint32_t>(doc.at("content_crc32"));
     if (!doc.at("content").is_object()) fail("content is not an object");
-  } catch (const nlohmann::json::exception& e) {
+  } catch (const std::exception& e) {  // nlohmann's, and jsonInt's out-of-range integers
     fail(std::string("header field missing or of the wrong type: ") + e.what());
   }
   // The checksum covers the content's bytes as written (not a re-serialisation).
@@ -152,10 +153,10 @@ MapSnapshot MapStore::readGeneration(int64_t generation, std::map<int32_t, FileR
   try {
     for (const auto& seg : snapshot.content.at("segments")) {
       FileRef ref;
-      const int32_t id = seg.at("id").get<int32_t>();
+      const int32_t id = jsonInt<int32_t>(seg.at("id"));
       ref.name = seg.at("file").get<std::string>();
-      ref.bytes = seg.at("bytes").get<size_t>();
-      ref.crc = seg.at("crc32").get<uint32_t>();
+      ref.bytes = jsonInt<size_t>(seg.at("bytes"));
+      ref.crc = jsonInt<uint32_t>(seg.at("crc32"));
       if (ref.name.find('/') != std::string::npos || !std::regex_match(ref.name, kSegmentPattern))
         fail("segment " + std::to_string(id) + " names an unexpected file '" + ref.name + "'");
       const std::string ot = (fs::path(dir_) / ref.name).string();
@@ -170,7 +171,7 @@ MapSnapshot MapStore::readGeneration(int64_t generation, std::map<int32_t, FileR
       snapshot.segment_files[id] = std::move(bytes);
       (*files)[id] = ref;
     }
-  } catch (const nlohmann::json::exception& e) {
+  } catch (const std::exception& e) {  // nlohmann's, and jsonInt's out-of-range integers
     fail(std::string("segment list missing or of the wrong type: ") + e.what());
   }
   return snapshot;
@@ -190,7 +191,12 @@ LoadReport MapStore::load(const std::function<void(const MapSnapshot&)>& accept)
     std::map<int32_t, FileRef> files;
     try {
       const MapSnapshot snapshot = readGeneration(g, &files);
-      accept(snapshot);
+      try {
+        accept(snapshot);
+      } catch (
+          const std::exception& e) {  // a table the map cannot take: refused by its file's name
+        throw std::runtime_error((fs::path(dir_) / jsonName(g)).string() + ": " + e.what());
+      }
     } catch (const std::exception& e) {
       report.failures.push_back(e.what());
       continue;
@@ -214,7 +220,7 @@ SaveReport MapStore::save(const MapSnapshot& snapshot) {
   // 1. The segments' .ot files: an unchanged one (same size and checksum as in the previous good
   // generation, still on disk) is referenced again instead of written again.
   for (auto& seg : content.at("segments")) {
-    const int32_t id = seg.at("id").get<int32_t>();
+    const int32_t id = jsonInt<int32_t>(seg.at("id"));
     auto blob = snapshot.segment_files.find(id);
     if (blob == snapshot.segment_files.end())
       throw std::runtime_error("object map snapshot: no .ot bytes for segment " +

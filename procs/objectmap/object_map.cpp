@@ -14,6 +14,7 @@
 #include "common/geometry.h"
 #include "procs/objectmap/candidate_voxels.h"
 #include "procs/objectmap/frame_labels.h"
+#include "procs/objectmap/json_int.h"
 
 namespace slamaware::objectmap {
 
@@ -748,15 +749,15 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
       throw std::runtime_error("empty or repeated class names");
     const size_t nc = fresh.classes_.size();
     where = "header fields";
-    fresh.next_object_id_ = c.at("next_object_id").get<int32_t>();
-    fresh.sessions_ = c.at("sessions").get<int64_t>();
-    fresh.last_pose_utime_ = c.at("session").at("last_pose_utime").get<int64_t>();
-    fresh.last_pose_seq_ = c.at("session").at("last_pose_seq").get<int32_t>();
-    fresh.last_utime_ = c.at("last_frame").at("utime").get<int64_t>();
-    fresh.last_seq_ = c.at("last_frame").at("seq").get<int32_t>();
-    fresh.current_segment_ = c.at("current_segment").get<int32_t>();
+    fresh.next_object_id_ = jsonInt<int32_t>(c.at("next_object_id"));
+    fresh.sessions_ = jsonInt<int64_t>(c.at("sessions"));
+    fresh.last_pose_utime_ = jsonInt<int64_t>(c.at("session").at("last_pose_utime"));
+    fresh.last_pose_seq_ = jsonInt<int32_t>(c.at("session").at("last_pose_seq"));
+    fresh.last_utime_ = jsonInt<int64_t>(c.at("last_frame").at("utime"));
+    fresh.last_seq_ = jsonInt<int32_t>(c.at("last_frame").at("seq"));
+    fresh.current_segment_ = jsonInt<int32_t>(c.at("current_segment"));
     for (const auto& s : c.at("segments")) {
-      const int32_t id = s.at("id").get<int32_t>();
+      const int32_t id = jsonInt<int32_t>(s.at("id"));
       where = "segment " + std::to_string(id);
       auto bytes = snap.segment_files.find(id);
       if (bytes == snap.segment_files.end()) throw std::runtime_error("no .ot file");
@@ -764,33 +765,33 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
       OccupancyMap map =
           OccupancyMap::deserialize(bytes->second, options_.occupancy, "its .ot file");
       fresh.segments_.emplace(
-          id, std::make_unique<Segment>(id, s.at("slam_map_id").get<int32_t>(), std::move(map)));
+          id, std::make_unique<Segment>(id, jsonInt<int32_t>(s.at("slam_map_id")), std::move(map)));
     }
     where = "session maps";
     for (const auto& m : c.at("session").at("maps")) {
-      const int32_t seg = m.at(1).get<int32_t>();
+      const int32_t seg = jsonInt<int32_t>(m.at(1));
       if (!fresh.segments_.count(seg))
         throw std::runtime_error("unknown segment " + std::to_string(seg));
-      fresh.session_maps_[m.at(0).get<int32_t>()] = seg;
+      fresh.session_maps_[jsonInt<int32_t>(m.at(0))] = seg;
     }
     std::set<int32_t> object_ids;
     for (const auto& jo : c.at("objects")) {
-      const int32_t oid = jo.at("id").get<int32_t>();
+      const int32_t oid = jsonInt<int32_t>(jo.at("id"));
       where = "object " + std::to_string(oid);
       if (!object_ids.insert(oid).second) throw std::runtime_error("listed twice");
       if (oid >= fresh.next_object_id_) throw std::runtime_error("id not below next_object_id");
-      auto seg = fresh.segments_.find(jo.at("segment").get<int32_t>());
+      auto seg = fresh.segments_.find(jsonInt<int32_t>(jo.at("segment")));
       if (seg == fresh.segments_.end()) throw std::runtime_error("unknown segment");
       ObjectTable& table = seg->second->table;
       std::vector<int32_t> cids;
       for (const auto& jc : jo.at("candidates")) {
-        const int32_t cid = jc.at("id").get<int32_t>();
+        const int32_t cid = jsonInt<int32_t>(jc.at("id"));
         where = "object " + std::to_string(oid) + " candidate " + std::to_string(cid);
         if (table.findCandidate(cid)) throw std::runtime_error("listed twice");
         Candidate& cand = table.restoreCandidate(cid);
         cand.id = cid;
-        cand.voting_views = jc.at("voting_views").get<int32_t>();
-        const auto flat = jc.at("votes").get<std::vector<int64_t>>();
+        cand.voting_views = jsonInt<int32_t>(jc.at("voting_views"));
+        const auto flat = jsonInts<int64_t>(jc.at("votes"));
         if (flat.size() % 4) throw std::runtime_error("votes are not groups of 4");
         for (size_t i = 0; i < flat.size(); i += 4) {
           for (size_t a = 0; a < 3; ++a)
@@ -801,7 +802,7 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
               static_cast<uint32_t>(flat[i + 2]))] = static_cast<int32_t>(flat[i + 3]);
         }
         cand.box_position_sum = vec3From(jc.at("box_position_sum"));
-        cand.box_positions = jc.at("box_positions").get<int32_t>();
+        cand.box_positions = jsonInt<int32_t>(jc.at("box_positions"));
         cand.box_size = jc.at("box_size").get<double>();
         cand.user_label = jc.value("user_label", std::string());
         if (!cand.user_label.empty() && !validUserLabel(cand.user_label))
@@ -810,8 +811,8 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
           if (!jv.is_array() || jv.size() != 3 + nc)
             throw std::runtime_error("a view is not 3 + classes numbers");
           View v;
-          v.utime = jv[0].get<int64_t>();
-          v.seq = jv[1].get<int32_t>();
+          v.utime = jsonInt<int64_t>(jv[0]);
+          v.seq = jsonInt<int32_t>(jv[1]);
           v.area = jv[2].get<float>();
           for (size_t k = 0; k < nc; ++k) v.log_prob.push_back(jv[3 + k].get<float>());
           const ViewKey key{v.utime, v.seq};
