@@ -173,6 +173,21 @@ void registerSourceScheme(const std::string& scheme, SourceFactory factory) {
   schemes()[scheme] = std::move(factory);
 }
 
+namespace {
+
+// The registered source of `scheme` opened on `arg`; SourceError naming `spec` if none is.
+std::unique_ptr<FrameSource> openScheme(const std::string& spec, const std::string& scheme,
+                                        const std::string& arg) {
+  std::lock_guard<std::mutex> lock(g_schemes_mutex);
+  auto it = schemes().find(scheme);
+  if (it == schemes().end())
+    throw SourceError(spec + (scheme == "log" ? ": LCM logs are not a source in this program"
+                                              : ": unknown source scheme '" + scheme + ":'"));
+  return it->second(arg);
+}
+
+}  // namespace
+
 std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOptions& options) {
   if (spec.empty()) throw SourceError("no --source given");
   if (spec.rfind("v4l:", 0) == 0) {
@@ -185,23 +200,11 @@ std::unique_ptr<FrameSource> openSource(const std::string& spec, const SourceOpt
     return std::make_unique<VideoSource>(spec, options, true, index);
   }
   const size_t colon = spec.find(':');
-  if (colon != std::string::npos && colon > 1 && !fs::exists(spec)) {
-    const std::string scheme = spec.substr(0, colon);
-    std::lock_guard<std::mutex> lock(g_schemes_mutex);
-    auto it = schemes().find(scheme);
-    if (it == schemes().end())
-      throw SourceError(spec + ": unknown source scheme '" + scheme + ":'");
-    return it->second(spec.substr(colon + 1));
-  }
+  if (colon != std::string::npos && colon > 1 && !fs::exists(spec))
+    return openScheme(spec, spec.substr(0, colon), spec.substr(colon + 1));
   if (fs::is_directory(spec)) return std::make_unique<SequenceSource>(spec);
-  if (fs::path(spec).extension() == ".lcm") {
-    // Logs are read by the bus layer: the camera registers the "log" scheme.
-    std::lock_guard<std::mutex> lock(g_schemes_mutex);
-    auto it = schemes().find("log");
-    if (it == schemes().end())
-      throw SourceError(spec + ": LCM logs are not a source in this program");
-    return it->second(spec);
-  }
+  // Logs are read by the bus layer: the camera registers the "log" scheme.
+  if (fs::path(spec).extension() == ".lcm") return openScheme(spec, "log", spec);
   if (fs::is_regular_file(spec)) return std::make_unique<VideoSource>(spec, options, false, -1);
   throw SourceError(spec + ": no such sequence folder or video file");
 }

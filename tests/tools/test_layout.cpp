@@ -17,17 +17,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // The .cpp files of `add_library(slamaware_<stage> STATIC ...)` in <folder>/CMakeLists.txt.
 std::vector<std::string> librarySources(const fs::path& root, const std::string& folder,
                                         const std::string& stage) {
-  const std::string cmake = readText(root / folder / "CMakeLists.txt");
+  const std::string cmake =
+      slamaware::test::readTextFile((root / folder / "CMakeLists.txt").string());
   const std::regex lib("add_library\\(slamaware_" + stage + " STATIC([^)]*)\\)");
   std::smatch m;
   if (!std::regex_search(cmake, m, lib)) return {};

@@ -1446,10 +1446,6 @@ std::vector<std::string> classesWithAdded(const RecognizerModel& base,
   return classes;
 }
 
-bool contains(const std::vector<std::string>& v, const std::string& s) {
-  return std::find(v.begin(), v.end(), s) != v.end();
-}
-
 // The base's exemplars, relabelled to `classes`, but those of the replaced classes.
 ExampleSet keptExemplars(const RecognizerModel& base, const std::vector<std::string>& classes,
                          const std::vector<std::string>& replaced) {
@@ -1459,7 +1455,7 @@ ExampleSet keptExemplars(const RecognizerModel& base, const std::vector<std::str
   std::vector<float> row(static_cast<size_t>(dims));
   for (int64_t i = 0; i < base.exemplars.size(); ++i) {
     const std::string& name = old[static_cast<size_t>(base.exemplars.label(i))];
-    if (contains(replaced, name)) continue;
+    if (indexOf(replaced, name) >= 0) continue;
     base.exemplars.get(i, row.data());
     set.add(row.data(), indexOf(classes, name), -1, base.exemplars.domain(i));
   }
@@ -1479,7 +1475,7 @@ LinearClassifier mergedClassifier(const RecognizerModel& base,
   clf.weights.resize(C, base.params.vladDims());
   clf.bias.resize(C);
   for (size_t i = 0; i < old.size(); ++i) {
-    if (contains(trained, old[i])) continue;
+    if (indexOf(trained, old[i]) >= 0) continue;
     const int c = indexOf(classes, old[i]);
     clf.weights.row(c) = base.classifier.weights.row(static_cast<int64_t>(i));
     clf.bias[c] = base.classifier.bias[static_cast<int64_t>(i)];
@@ -1567,7 +1563,7 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
   // classes), which all take one label here.
   std::vector<std::string> trained;
   for (const auto& c : classes)
-    if (contains(r.added, c) || contains(r.replaced, c)) trained.push_back(c);
+    if (indexOf(r.added, c) >= 0 || indexOf(r.replaced, c) >= 0) trained.push_back(c);
   ExampleSet relabelled = set.select([](int64_t) { return true; });
   const int rest = static_cast<int>(trained.size());
   for (int64_t i = 0; i < relabelled.size(); ++i) {
