@@ -17,7 +17,7 @@
 #include <stdexcept>
 
 #include "common/atomic_file.h"
-#include "procs/objectmap/json_int.h"
+#include "procs/objectmap/json_number.h"
 
 namespace slamaware::objectmap {
 

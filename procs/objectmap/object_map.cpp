@@ -14,7 +14,7 @@
 #include "common/geometry.h"
 #include "procs/objectmap/candidate_voxels.h"
 #include "procs/objectmap/frame_labels.h"
-#include "procs/objectmap/json_int.h"
+#include "procs/objectmap/json_number.h"
 
 namespace slamaware::objectmap {
 
@@ -70,7 +70,7 @@ json vec3(const Eigen::Vector3d& v) {
 
 Eigen::Vector3d vec3From(const json& a) {
   if (!a.is_array() || a.size() != 3) throw std::runtime_error("expected 3 numbers");
-  return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>());
+  return Eigen::Vector3d(jsonFloat<double>(a[0]), jsonFloat<double>(a[1]), jsonFloat<double>(a[2]));
 }
 
 }  // namespace
@@ -803,7 +803,7 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
         }
         cand.box_position_sum = vec3From(jc.at("box_position_sum"));
         cand.box_positions = jsonInt<int32_t>(jc.at("box_positions"));
-        cand.box_size = jc.at("box_size").get<double>();
+        cand.box_size = jsonFloat<double>(jc.at("box_size"));
         cand.user_label = jc.value("user_label", std::string());
         if (!cand.user_label.empty() && !validUserLabel(cand.user_label))
           throw std::runtime_error("bad user_label '" + cand.user_label + "'");
@@ -813,8 +813,8 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
           View v;
           v.utime = jsonInt<int64_t>(jv[0]);
           v.seq = jsonInt<int32_t>(jv[1]);
-          v.area = jv[2].get<float>();
-          for (size_t k = 0; k < nc; ++k) v.log_prob.push_back(jv[3 + k].get<float>());
+          v.area = jsonFloat<float>(jv[2]);
+          for (size_t k = 0; k < nc; ++k) v.log_prob.push_back(jsonFloat<float>(jv[3 + k]));
           const ViewKey key{v.utime, v.seq};
           cand.views[key] = std::move(v);
         }

@@ -214,6 +214,35 @@ TEST(MapFiles, DamagedFilesAreRefusedNamingTheFileAndThePreviousGenerationIsLoad
   EXPECT_EQ(loadFolder(dir).report.generation, 3);
 }
 
+// A number past its type's range behind good checksums (found by fuzz_map_store: a view's area of
+// 1e100 became infinity in a float, the next save wrote it as null, and that save did not load).
+// Such a table is refused by the load that reads it, naming the file and the field.
+TEST(MapFiles, ANumberOutOfItsRangeIsRefusedWhereItIsRead) {
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  ObjectMapEngine e{ObjectMapOptions{}};
+  feed(e, w, 0, 10);
+  const MapSnapshot good = e.snapshot();
+  ASSERT_FALSE(good.content.at("objects").empty());
+  const std::vector<std::pair<const char*, std::function<void(nlohmann::json&)>>> damages = {
+      {"view area", [](nlohmann::json& c) { c["views"][0][2] = 1e100; }},
+      {"log p", [](nlohmann::json& c) { c["views"][0][3] = -1e60; }},
+  };
+  for (const auto& [name, damage] : damages) {
+    SCOPED_TRACE(name);
+    const std::string dir = test::tempDir("objectmap_out_of_range");
+    MapSnapshot bad = good;
+    nlohmann::json& cand = bad.content["objects"][0]["candidates"][0];
+    ASSERT_FALSE(cand.at("views").empty());
+    damage(cand);
+    const SaveReport saved = MapStore(dir).save(bad);
+    const Loaded l = loadFolder(dir);
+    EXPECT_EQ(l.report.generation, -1);
+    ASSERT_EQ(l.report.failures.size(), 1u);
+    EXPECT_NE(l.report.failures[0].find(saved.json_path), std::string::npos)
+        << l.report.failures[0];
+    EXPECT_NE(l.report.failures[0].find("candidate"), std::string::npos) << l.report.failures[0];
+  }
+}
 TEST(MapFiles, ConvertOctreeReadsTheSavedMapAndItsColoursAreTheLabels) {
   const std::string dir = test::tempDir("objectmap_octovis");
   const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());

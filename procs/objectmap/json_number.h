@@ -1,7 +1,8 @@
 #pragma once
-// Integers read from a saved object map's JSON. nlohmann's get<int>() converts a floating-point
+// Numbers read from a saved object map's JSON. nlohmann's get<int>() converts a floating-point
 // number with a plain cast, which is undefined behaviour for one out of the type's range (a
-// damaged file can hold 1e94 where an id belongs); these reads refuse it instead.
+// damaged file can hold 1e94 where an id belongs), and get<float>() turns 1e100 into infinity,
+// which the next save writes as null and the next load refuses; these reads refuse both instead.
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -50,6 +51,19 @@ std::vector<T> jsonInts(const nlohmann::json& j) {
   out.reserve(j.size());
   for (const auto& e : j) out.push_back(jsonInt<T>(e));
   return out;
+}
+
+/// `j` as a finite number of floating-point type T (an integer or a float within T's range);
+/// otherwise std::runtime_error.
+template <class T>
+T jsonFloat(const nlohmann::json& j) {
+  if (!j.is_number())
+    throw std::runtime_error("object map: expected a number, got " + std::string(j.type_name()));
+  const double v = j.get<double>();
+  if (!std::isfinite(v) || std::abs(v) > static_cast<double>(std::numeric_limits<T>::max()))
+    throw std::runtime_error("object map: " + j.dump() +
+                             " is not a finite number of the expected range");
+  return static_cast<T>(v);
 }
 
 }  // namespace slamaware::objectmap
