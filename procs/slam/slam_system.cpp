@@ -73,6 +73,8 @@ void SlamSystem::restart() {
   last_state_ = PoseState::kInitializing;
   first_map_id_ = -1;
   last_full_map_id_ = -1;
+  culled_for_depth_.clear();
+  live_published_.clear();
 }
 
 SlamOutput SlamSystem::skipFrame(int64_t utime, int32_t seq) {
@@ -111,6 +113,7 @@ void SlamSystem::postDepthWork(const TrackResult& r, const Frame& frame) {
   input->located = true;
   input->grey = frame.grey;
   input->T_world_camera = frame.T_camera_world.inverse();
+  input->culled_keyframes.swap(culled_for_depth_);
   {
     // Snapshot of keyframe poses now, so that the filter never reads the live map.
     std::shared_lock<std::shared_mutex> lock(r.map->mutex);
@@ -341,6 +344,9 @@ void SlamSystem::collect(int64_t utime, int32_t seq,
     KeyframeOutput k = describeKeyframe(*kf);
     k.culled = true;
     out->keyframes.push_back(k);
+    // Its semi-dense points go too; consumers lose them with the next full map.
+    culled_for_depth_.push_back(kf->id);
+    live_published_.erase(kf->id);
   }
 
   std::vector<int64_t> finished;

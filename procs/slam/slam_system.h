@@ -177,6 +177,8 @@ class SlamSystem {
   /// Unfinished keyframe -> its converged points when last published (0: not yet), and whether
   /// it was published at all (a young map's keyframe is, with its map points alone).
   std::map<int64_t, std::pair<size_t, bool>> live_published_;
+  /// Keyframes culled since the depth filter's last input (they go with its next one).
+  std::vector<int64_t> culled_for_depth_;
 
   mutable std::mutex finished_mutex_;
   std::vector<int64_t>

@@ -215,6 +215,46 @@ TEST(DepthFilter, SeedsWithoutUsableFramesStillEndAfterMaxKeyframesPlusMinFrames
   EXPECT_EQ(filter.keyframe(7).points.size(), 0u);
 }
 
+// A keyframe that local mapping culls takes its seeds and points with it: one culled while its
+// seeds converge stops being searched, one culled after it finished leaves the stored map; the
+// others are untouched. (Driving the same path again makes keyframes that are culled again; kept,
+// their points would grow the map with every pass.)
+TEST(DepthFilter, ACulledKeyframesSeedsAndPointsGo) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 5);
+  DepthFilterOptions options;
+  options.max_keyframes = 3;
+  options.min_frames = 6;
+  options.young_convergence_ratio = 0;
+  DepthFilter filter(options, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy);
+  ASSERT_EQ(frameThatFinishesTheFirstKeyframe(filter, texture, cam, 0.05), 6);
+  // Keyframe 7 finished; 8..13 (seeded by frames 1..6) live.
+  ASSERT_GT(filter.keyframe(7).points.size(), 1000u);
+  std::vector<int64_t> live_before;
+  for (const auto& kf : filter.liveKeyframes(1)) live_before.push_back(kf.id);
+  ASSERT_EQ(live_before, (std::vector<int64_t>{8, 9, 10, 11, 12, 13}));
+  const int64_t seeds_before = filter.stats().active_seeds;
+
+  DepthFrameInput f = slidingFrame(texture, cam, 7, 0.05, false);
+  f.culled_keyframes = {7, 9};
+  const std::vector<int64_t> finished = filter.process(f);
+  EXPECT_TRUE(std::find(finished.begin(), finished.end(), 9) == finished.end())
+      << "a culled keyframe is not finished (nothing is published for it)";
+  EXPECT_EQ(filter.keyframe(7).id, -1);
+  EXPECT_EQ(filter.keyframe(9).id, -1);
+  std::vector<int64_t> stored, live;
+  for (const auto& kf : filter.mapKeyframes(1)) stored.push_back(kf.id);
+  for (const auto& kf : filter.liveKeyframes(1)) live.push_back(kf.id);
+  EXPECT_EQ(stored, (std::vector<int64_t>{8, 10, 11, 12, 13}));
+  EXPECT_EQ(live, stored);
+  EXPECT_LT(filter.stats().active_seeds, seeds_before);
+  // The count of stored points lost the culled ones' points.
+  int64_t stored_points = 0;
+  for (const auto& kf : filter.mapKeyframes(1))
+    stored_points += static_cast<int64_t>(kf.points.size());
+  EXPECT_EQ(filter.stats().points, stored_points);
+}
+
 // A young map's keyframe takes its map points (triangulated features) as its first points, at
 // once: at low frame rates its seeds need several frames to converge, and the map would show
 // nothing until then. Once the map's seeds have converged to young_map_points, new keyframes

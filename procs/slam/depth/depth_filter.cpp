@@ -174,9 +174,19 @@ void DepthFilter::addHost(const DepthKeyframeInput& kf) {
   if (options_.enabled) hosts_[kf.id] = std::move(host);
 }
 
+void DepthFilter::dropKeyframe(int64_t id) {
+  hosts_.erase(id);
+  std::lock_guard<std::mutex> lock(store_mutex_);
+  auto it = store_.find(id);
+  if (it == store_.end()) return;
+  stats_.points -= static_cast<int64_t>(it->second.points.size());
+  store_.erase(it);
+}
+
 std::vector<int64_t> DepthFilter::process(const DepthFrameInput& input) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<int64_t> finished;
+  for (int64_t id : input.culled_keyframes) dropKeyframe(id);
   {
     std::lock_guard<std::mutex> lock(store_mutex_);
     for (const auto& [id, T] : input.keyframe_poses) {

@@ -6,7 +6,10 @@
 // adjustment moves the keyframe. A keyframe's seeds live until max_keyframes newer keyframes exist
 // and they were searched in min_frames frames (at low frame rates, when every frame is a keyframe,
 // max_keyframes alone would give each seed too few measurements to converge); then the keyframe is
-// finished and its points are final.
+// finished and its points are final. A keyframe that local mapping culls (its view is redundant:
+// other keyframes see what it sees) takes its seeds and points with it, so that the semi-dense map
+// grows with the surfaces seen, not with the time spent looking at them (a robot driving the same
+// path again makes new keyframes there that are culled again).
 //
 // The filter works only on the data handed to process() (images, poses snapshotted by the
 // caller), never on the live map, so that it can run on its own thread deterministically.
@@ -49,6 +52,9 @@ struct DepthFrameInput {
   std::vector<DepthKeyframeInput> new_keyframes;  ///< created with this frame
   std::vector<std::pair<int64_t, SE3>>
       keyframe_poses;  ///< current T_world_camera of live keyframes
+  /// Keyframes that local mapping culled since the previous input: their seeds stop and their
+  /// points are dropped (DepthFilter::process).
+  std::vector<int64_t> culled_keyframes;
 };
 
 /// A converged seed.
@@ -91,8 +97,9 @@ class DepthFilter {
   DepthFilter(const DepthFilterOptions& options, int width, int height, double fx, double fy,
               double cx, double cy);
 
-  /// Updates the seeds with the frame, finishes keyframes that are too old (or of another map),
-  /// then seeds the new keyframes. Returns the ids of keyframes finished by this call.
+  /// Drops the culled keyframes, updates the seeds with the frame, finishes keyframes that are too
+  /// old (or of another map), then seeds the new keyframes. Returns the ids of keyframes finished
+  /// by this call.
   std::vector<int64_t> process(const DepthFrameInput& input);
 
   /// A copy of a keyframe's points (empty when unknown). Thread-safe.
@@ -127,6 +134,8 @@ class DepthFilter {
   /// A new keyframe becomes a host: its store entry (with its features while the map is young)
   /// and its seeds.
   void addHost(const DepthKeyframeInput& kf);
+  /// A culled keyframe: its seeds and stored points go (nothing is published for it).
+  void dropKeyframe(int64_t id);
 
   DepthFilterOptions options_;
   EpipolarSearchParams search_;
