@@ -1,5 +1,7 @@
 #pragma once
-// Image file codecs (JPEG, PNG) over OpenCV, with errors that say what was wrong.
+// Image file codecs (JPEG through libjpeg, PNG through libpng, with the settings OpenCV uses),
+// with errors that say what was wrong. (Not OpenCV's imgcodecs: it brings some 120 shared
+// libraries that every process would load at each start.)
 // Colour images are 8-bit BGR (OpenCV's order) in memory.
 #include <cstdint>
 #include <opencv2/core/mat.hpp>
