@@ -465,8 +465,9 @@ int main(int argc, char** argv) {
         continue;
       }
       lcm_failures = 0;
-      // Drain what else is waiting before the periodic work.
-      for (int i = 0; i < 1000 && bus.handle(0) > 0; ++i) {
+      // Drain what else is waiting before the periodic work. Each message may be a cloud that
+      // takes a while to insert: a shutdown request is answered after the one in hand.
+      for (int i = 0; i < 1000 && !shutdownRequested() && bus.handle(0) > 0; ++i) {
       }
       map.tick();
       status.tick();

@@ -378,8 +378,6 @@ int main(int argc, char** argv) {
 
   return runNode("recognizer", node, [&]() -> int {
     const SystemConfig sys = loadSystem(node);
-    // SLAM goes first (common/thread_priority.h); threads started later inherit this.
-    lowerThreadPriority(sys.scheduling.recognizer_nice, "the recognizer");
     RecognizerOptions options = loadConfig<RecognizerOptions>(node.config, "recognizer");
     if (!model.empty()) options.model = model;
     checkOptions(options, node.config.empty() ? std::string("defaults") : node.config);
@@ -388,6 +386,11 @@ int main(int argc, char** argv) {
                           sys.channels.statusOf(node.nameOr("recognizer")));
     RecognizerNode rec(bus, status, sys, options, node.nameOr("recognizer"));
     rec.ensureModel();
+    // SLAM goes first (common/thread_priority.h): the recognizer lowers its priority before its
+    // first frame, not before loading and warming up its model, so that a restart under load is
+    // short (about a second of start-up at the normal priority). Threads started later (a live
+    // reload's) inherit the lowered value.
+    lowerThreadPriority(sys.scheduling.recognizer_nice, "the recognizer");
     status.publish();
     spdlog::info("{} -> {}, {}", sys.channels.proposals, sys.channels.detections,
                  sys.bus.lockstep ? "lockstep: one DETECTIONS per PROPOSALS"
