@@ -95,32 +95,47 @@ class Pacer {
   Clock::time_point t0_;
 };
 
+/// The camera's command line.
+struct CameraArgs {
+  NodeArgs node;
+  std::string source, lockstep_channel, wait_for;
+  double speed = 1.0;
+  bool loop = false;
+  int64_t max_frames = -1;
+};
+
+void addCameraOptions(CLI::App& app, CameraArgs* a) {
+  addNodeOptions(app, a->node, false);
+  app.add_option("--source", a->source,
+                 "sequence folder, video file, LCM log (.lcm), v4l:N or synth:CONFIG")
+      ->required();
+  app.add_option("--speed", a->speed, "1 = real time, 2 = twice as fast, 0 = as fast as possible")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--lockstep", a->lockstep_channel,
+                 "publish frame n+1 only after a message with seq n appeared on this channel");
+  app.add_option(
+      "--wait-for", a->wait_for,
+      "comma-separated *_STATUS channels to hear from before the first frame (lockstep start)");
+  app.add_flag("--loop", a->loop, "start again at the end of the source");
+  app.add_option("--max-frames", a->max_frames, "stop after this many frames (-1: all)");
+  addPrintConfigOption(app, [] { return defaultConfigFileText<CameraOptions>("camera"); });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "slamaware-camera: publishes CAMERA_INFO and CAMERA frames from a sequence folder, a video "
       "file, a V4L device (v4l:N) or the synthetic generator (synth:CONFIG)"};
-  NodeArgs node;
-  std::string source, lockstep_channel, wait_for;
-  double speed = 1.0;
-  bool loop = false;
-  int64_t max_frames = -1;
-  addNodeOptions(app, node, false);
-  app.add_option("--source", source,
-                 "sequence folder, video file, LCM log (.lcm), v4l:N or synth:CONFIG")
-      ->required();
-  app.add_option("--speed", speed, "1 = real time, 2 = twice as fast, 0 = as fast as possible")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--lockstep", lockstep_channel,
-                 "publish frame n+1 only after a message with seq n appeared on this channel");
-  app.add_option(
-      "--wait-for", wait_for,
-      "comma-separated *_STATUS channels to hear from before the first frame (lockstep start)");
-  app.add_flag("--loop", loop, "start again at the end of the source");
-  app.add_option("--max-frames", max_frames, "stop after this many frames (-1: all)");
-  addPrintConfigOption(app, [] { return defaultConfigFileText<CameraOptions>("camera"); });
+  CameraArgs args;
+  addCameraOptions(app, &args);
   CLI11_PARSE(app, argc, argv);
+  NodeArgs& node = args.node;
+  const std::string &source = args.source, &lockstep_channel = args.lockstep_channel,
+                    &wait_for = args.wait_for;
+  double& speed = args.speed;
+  const bool loop = args.loop;
+  const int64_t max_frames = args.max_frames;
 
   return runNode("camera", node, [&]() -> int {
     registerBuiltinSourceSchemes();

@@ -286,7 +286,11 @@ std::vector<int> ObjectMapEngine::classIndices(const std::vector<std::string>& n
   return to_map;
 }
 
-bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, FrameReport* report) {
+namespace {
+
+/// Whether a DETECTIONS message's arrays agree with its counts and its class names are usable;
+/// otherwise `*why` says what is wrong.
+bool consistentDetections(const detections_t& d, std::string* why) {
   const size_t nb = static_cast<size_t>(std::max(0, d.num_boxes));
   const size_t nc = static_cast<size_t>(std::max(0, d.num_classes));
   const std::string what = "detections of seq " + std::to_string(d.seq);
@@ -306,6 +310,31 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
       *why = what + ": empty or repeated class name '" + name + "'";
       return false;
     }
+  return true;
+}
+
+/// Why a frame's boxes cannot vote for voxels (empty: they can): its pose, proposals and the
+/// camera must be there, localised, in the detections' map.
+std::string whyNoGeometry(const detections_t& d, const pose_t* pose, const proposals_t* proposals,
+                          bool have_camera) {
+  if (!pose) return "no SLAM_POSE for seq " + std::to_string(d.seq);
+  if (!localisedState(pose->state))
+    return std::string("frame not localised (") + stateName(pose->state) + ")";
+  if (pose->map_id != d.map_id)
+    return "pose in map " + std::to_string(pose->map_id) + ", detections in map " +
+           std::to_string(d.map_id);
+  if (!proposals || proposals->map_id != d.map_id)
+    return "no PROPOSALS of map " + std::to_string(d.map_id) + " for seq " + std::to_string(d.seq);
+  if (!have_camera) return "no CAMERA_INFO yet";
+  return std::string();
+}
+
+}  // namespace
+
+bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, FrameReport* report) {
+  if (!consistentDetections(d, why)) return false;
+  const size_t nb = static_cast<size_t>(d.num_boxes);
+  const size_t nc = static_cast<size_t>(d.num_classes);
   FrameReport r;
   last_utime_ = d.utime;
   last_seq_ = d.seq;
@@ -330,18 +359,7 @@ bool ObjectMapEngine::onDetections(const detections_t& d, std::string* why, Fram
     pose = &it->second;
   if (auto it = proposals_.find(d.seq); it != proposals_.end() && it->second.utime == d.utime)
     proposals = &it->second;
-  if (!pose)
-    r.no_geometry = "no SLAM_POSE for seq " + std::to_string(d.seq);
-  else if (!localisedState(pose->state))
-    r.no_geometry = std::string("frame not localised (") + stateName(pose->state) + ")";
-  else if (pose->map_id != d.map_id)
-    r.no_geometry = "pose in map " + std::to_string(pose->map_id) + ", detections in map " +
-                    std::to_string(d.map_id);
-  else if (!proposals || proposals->map_id != d.map_id)
-    r.no_geometry =
-        "no PROPOSALS of map " + std::to_string(d.map_id) + " for seq " + std::to_string(d.seq);
-  else if (!have_camera_)
-    r.no_geometry = "no CAMERA_INFO yet";
+  r.no_geometry = whyNoGeometry(d, pose, proposals, have_camera_);
   r.localised = r.no_geometry.empty();
 
   // One box per candidate and frame (the larger, if the recognizer sent two).

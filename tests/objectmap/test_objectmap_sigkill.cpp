@@ -57,21 +57,34 @@ size_t temporaryFiles(const std::string& dir, const std::string& kind = ".tmp.")
   return n;
 }
 
+/// The node's files: a save every 0.2 s, at the normal priority (what is tested is persistence,
+/// and at the object map's usual background priority a busy machine (tests in parallel) starves
+/// it of CPU).
+void writeConfigs(const std::string& dir) {
+  std::ofstream(dir + "/objectmap.yaml") << "objectmap:\n  persistence:\n    save_period_s: 0.2\n";
+  std::ofstream(dir + "/system.yaml") << "scheduling:\n  background_nice: 0\n";
+}
+
+/// A fresh load of the folder, as the next start will do; `*ms` grows to the slowest so far.
+LoadReport loadFolder(const std::string& map_dir, std::optional<ObjectMapEngine>* loaded,
+                      double* ms) {
+  const auto t0 = Clock::now();
+  MapStore store(map_dir);
+  const LoadReport report = store.load([&](const MapSnapshot& s) {
+    ObjectMapEngine e{ObjectMapOptions{}};
+    e.restore(s);
+    *loaded = std::move(e);
+  });
+  *ms = std::max(*ms, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  return report;
+}
+
 }  // namespace
 
 TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
   const std::string dir = test::tempDir("objectmap_sigkill");
   const std::string map_dir = dir + "/map";
-  {
-    std::ofstream f(dir + "/objectmap.yaml");
-    f << "objectmap:\n  persistence:\n    save_period_s: 0.2\n";
-  }
-  {
-    // The normal priority: what is tested is persistence, and at the object map's usual
-    // background priority a busy machine (tests in parallel) starves it of CPU.
-    std::ofstream f(dir + "/system.yaml");
-    f << "scheduling:\n  background_nice: 0\n";
-  }
+  writeConfigs(dir);
   test::SyntheticWorldOptions wo;
   wo.frames = 200;  // one pass of the arc; the replay goes back and forth over it with rising seq
   const test::SyntheticWorld world(wo, test::SyntheticWorld::defaultObjects());
@@ -150,17 +163,8 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
     saves_seen += committed > committed_before_run;
     saving_runs_saved += saved;
 
-    // A fresh load of the folder, as the next start will do.
-    const auto t0 = Clock::now();
-    MapStore store(map_dir);
     std::optional<ObjectMapEngine> loaded;
-    const LoadReport report = store.load([&](const MapSnapshot& s) {
-      ObjectMapEngine e{ObjectMapOptions{}};
-      e.restore(s);
-      loaded = std::move(e);
-    });
-    load_ms_max =
-        std::max(load_ms_max, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    const LoadReport report = loadFolder(map_dir, &loaded, &load_ms_max);
     ASSERT_TRUE(report.failures.empty()) << "a damaged file was visible: " << report.failures[0];
     if (committed < 0) {
       EXPECT_EQ(report.generation, -1);

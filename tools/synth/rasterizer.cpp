@@ -504,6 +504,44 @@ inline I8 sample8(const Texture& t, F8 u, F8 v, F8 dudx, F8 dvdx, F8 dudy, F8 dv
   return lerpTexel8(fetch8(t, first, u, v, mask), fetch8(t, second, u, v, mask), weight);
 }
 
+// The shadow and ambient-occlusion maps (same size) at (su, sv), bilinear, for the lanes of
+// `mask`: the operations of shadePixel's lookup, in its order.
+inline void shadowAndAo8(const ScalarMap& A, const ScalarMap& B, F8 su, F8 sv, I8 mask, F8* a,
+                         F8* b) {
+  const int W = A.width(), H = A.height();
+  F8 px = _mm256_sub_ps(_mm256_mul_ps(su, splat(static_cast<float>(W))), splat(0.5f));
+  F8 py = _mm256_sub_ps(_mm256_mul_ps(sv, splat(static_cast<float>(H))), splat(0.5f));
+  px = vmin(vmax(px, _mm256_setzero_ps()), splat(static_cast<float>(W - 1)));
+  py = vmin(vmax(py, _mm256_setzero_ps()), splat(static_cast<float>(H - 1)));
+  const I8 x0 = _mm256_cvttps_epi32(px), y0 = _mm256_cvttps_epi32(py);
+  const I8 x1 = imin(_mm256_add_epi32(x0, splati(1)), splati(W - 1)),
+           y1 = imin(_mm256_add_epi32(y0, splati(1)), splati(H - 1));
+  const F8 fx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(x0)),
+           fy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(y0));
+  const F8 one = splat(1.f);
+  const F8 w00 = _mm256_mul_ps(_mm256_sub_ps(one, fx), _mm256_sub_ps(one, fy)),
+           w10 = _mm256_mul_ps(fx, _mm256_sub_ps(one, fy));
+  const F8 w01 = _mm256_mul_ps(_mm256_sub_ps(one, fx), fy), w11 = _mm256_mul_ps(fx, fy);
+  const I8 wv = splati(W);
+  const I8 i00 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x0),
+           i10 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x1);
+  const I8 i01 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x0),
+           i11 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x1);
+  const F8 maskf = _mm256_castsi256_ps(mask), zf = _mm256_setzero_ps();
+  auto bil = [&](const float* d) {
+    const F8 a00 = _mm256_mask_i32gather_ps(zf, d, i00, maskf, 4),
+             a10 = _mm256_mask_i32gather_ps(zf, d, i10, maskf, 4);
+    const F8 a01 = _mm256_mask_i32gather_ps(zf, d, i01, maskf, 4),
+             a11 = _mm256_mask_i32gather_ps(zf, d, i11, maskf, 4);
+    return _mm256_add_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, a00), _mm256_mul_ps(w10, a10)),
+                      _mm256_mul_ps(w01, a01)),
+        _mm256_mul_ps(w11, a11));
+  };
+  *a = bil(A.data());
+  *b = bil(B.data());
+}
+
 }  // namespace
 
 void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n,
@@ -589,42 +627,8 @@ void Rasterizer::shadeSpan8(const Setup& S, int x, float y, size_t index, int n,
   }
   F8 shadow = splat(1.f), ao = splat(1.f);
   if (mat.shadow) {
-    const ScalarMap& A = *mat.shadow;
-    const ScalarMap& B = *mat.ao;
-    const F8 su = interp(S.uw0[0], S.duw1[0], S.duw2[0]);
-    const F8 sv = interp(S.uw0[1], S.duw1[1], S.duw2[1]);
-    const int W = A.width(), H = A.height();
-    F8 px = _mm256_sub_ps(_mm256_mul_ps(su, splat(static_cast<float>(W))), splat(0.5f));
-    F8 py = _mm256_sub_ps(_mm256_mul_ps(sv, splat(static_cast<float>(H))), splat(0.5f));
-    px = vmin(vmax(px, _mm256_setzero_ps()), splat(static_cast<float>(W - 1)));
-    py = vmin(vmax(py, _mm256_setzero_ps()), splat(static_cast<float>(H - 1)));
-    const I8 x0 = _mm256_cvttps_epi32(px), y0 = _mm256_cvttps_epi32(py);
-    const I8 x1 = imin(_mm256_add_epi32(x0, splati(1)), splati(W - 1)),
-             y1 = imin(_mm256_add_epi32(y0, splati(1)), splati(H - 1));
-    const F8 fx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(x0)),
-             fy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(y0));
-    const F8 one = splat(1.f);
-    const F8 w00 = _mm256_mul_ps(_mm256_sub_ps(one, fx), _mm256_sub_ps(one, fy)),
-             w10 = _mm256_mul_ps(fx, _mm256_sub_ps(one, fy));
-    const F8 w01 = _mm256_mul_ps(_mm256_sub_ps(one, fx), fy), w11 = _mm256_mul_ps(fx, fy);
-    const I8 wv = splati(W);
-    const I8 i00 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x0),
-             i10 = _mm256_add_epi32(_mm256_mullo_epi32(y0, wv), x1);
-    const I8 i01 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x0),
-             i11 = _mm256_add_epi32(_mm256_mullo_epi32(y1, wv), x1);
-    const F8 maskf = _mm256_castsi256_ps(mask), zf = _mm256_setzero_ps();
-    auto bil = [&](const float* d) {
-      const F8 a00 = _mm256_mask_i32gather_ps(zf, d, i00, maskf, 4),
-               a10 = _mm256_mask_i32gather_ps(zf, d, i10, maskf, 4);
-      const F8 a01 = _mm256_mask_i32gather_ps(zf, d, i01, maskf, 4),
-               a11 = _mm256_mask_i32gather_ps(zf, d, i11, maskf, 4);
-      return _mm256_add_ps(
-          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, a00), _mm256_mul_ps(w10, a10)),
-                        _mm256_mul_ps(w01, a01)),
-          _mm256_mul_ps(w11, a11));
-    };
-    shadow = bil(A.data());
-    ao = bil(B.data());
+    shadowAndAo8(*mat.shadow, *mat.ao, interp(S.uw0[0], S.duw1[0], S.duw2[0]),
+                 interp(S.uw0[1], S.duw1[1], S.duw2[1]), mask, &shadow, &ao);
   }
   const F8 rx = _mm256_maskload_ps(T.rx + index, mask), ry = _mm256_maskload_ps(T.ry + index, mask);
   const F8 rz = _mm256_maskload_ps(T.rz + index, mask);
