@@ -171,26 +171,8 @@ int pngType(int bit_depth, int color_type, bool has_trns, PngRead mode) {
   return CV_MAKETYPE(bit_depth == 16 ? CV_16U : CV_8U, channels);
 }
 
-/// The OpenCV type (pngType) a PNG is read into, from its header.
-bool pngHeaderType(PngInput* in, PngRead mode, int* type, PngError* err) {
-  png_structp png =
-      png_create_read_struct(PNG_LIBPNG_VER_STRING, err, onPngError, ignorePngWarning);
-  if (!png) return false;
-  png_infop info = png_create_info_struct(png);
-  if (!info || setjmp(err->jump)) {
-    png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
-    return false;
-  }
-  png_set_read_fn(png, in, readPngBytes);
-  png_read_info(png, info);
-  *type = pngType(png_get_bit_depth(png, info), png_get_color_type(png, info),
-                  png_get_valid(png, info, PNG_INFO_tRNS) != 0, mode);
-  png_destroy_read_struct(&png, &info, nullptr);
-  return true;
-}
-
-/// Decodes a PNG into `out`, made by the caller with pngHeaderType's type and the header's size,
-/// with the transforms OpenCV's decoder asks libpng for.
+/// Decodes a PNG (its size checked by the caller) into `out`, of type pngType, with the transforms
+/// OpenCV's decoder asks libpng for.
 bool decodePngInto(PngInput* in, PngRead mode, cv::Mat* out, PngError* err) {
   png_structp png =
       png_create_read_struct(PNG_LIBPNG_VER_STRING, err, onPngError, ignorePngWarning);
@@ -207,11 +189,7 @@ bool decodePngInto(PngInput* in, PngRead mode, cv::Mat* out, PngError* err) {
   const int type = pngType(bit_depth, color_type, has_trns, mode);
   const int width = static_cast<int>(png_get_image_width(png, info));
   const int height = static_cast<int>(png_get_image_height(png, info));
-  if (out->rows != height || out->cols != width || out->type() != type) {
-    std::snprintf(err->message, sizeof err->message, "the header changed while reading");
-    png_destroy_read_struct(&png, &info, nullptr);
-    return false;
-  }
+  out->create(height, width, type);
   const bool colour = CV_MAT_CN(type) > 1;
   if (CV_MAT_DEPTH(type) == CV_8U && bit_depth == 16)
     png_set_strip_16(png);
@@ -370,15 +348,10 @@ cv::Mat decodeJpeg(const uint8_t* data, size_t size, bool grey, int width, int h
 }
 
 /// Decodes PNG bytes (checked by the caller) as `mode` asks.
-cv::Mat decodePng(const uint8_t* data, size_t size, PngRead mode, int width, int height,
-                  const std::string& what) {
+cv::Mat decodePng(const uint8_t* data, size_t size, PngRead mode, const std::string& what) {
   PngError err{};
   PngInput in{data, size, 0};
-  int type = 0;
-  if (!pngHeaderType(&in, mode, &type, &err))
-    throw ImageError(what + ": corrupt image: " + err.message);
-  cv::Mat img(height, width, type);
-  in.at = 0;
+  cv::Mat img;
   if (!decodePngInto(&in, mode, &img, &err))
     throw ImageError(what + ": corrupt image: " + err.message);
   return img;
@@ -413,7 +386,7 @@ cv::Mat decodeImage(const uint8_t* data, size_t size, const std::string& what, b
                     cv::Size expected) {
   const cv::Size s = checkImageBytes(data, size, what, expected);
   if (isJpeg(data, size)) return decodeJpeg(data, size, grey, s.width, s.height, what);
-  return decodePng(data, size, grey ? PngRead::kGrey : PngRead::kColour, s.width, s.height, what);
+  return decodePng(data, size, grey ? PngRead::kGrey : PngRead::kColour, what);
 }
 
 namespace {
@@ -433,7 +406,7 @@ cv::Mat readImageUnchanged(const std::string& path) {
   const std::vector<uint8_t> bytes = readFile(path);
   const cv::Size s = checkImageBytes(bytes.data(), bytes.size(), path, cv::Size());
   if (isPng(bytes.data(), bytes.size()))
-    return decodePng(bytes.data(), bytes.size(), PngRead::kUnchanged, s.width, s.height, path);
+    return decodePng(bytes.data(), bytes.size(), PngRead::kUnchanged, path);
   // A JPEG as stored: grey when it has one component, else BGR.
   const bool grey = bytes[jpegFrameHeader(bytes.data(), bytes.size()) + 9] == 1;
   return decodeJpeg(bytes.data(), bytes.size(), grey, s.width, s.height, path);
