@@ -213,8 +213,10 @@ namespace {
 /// Checks the bytes of a ColorOcTree file before OctoMap reads them. OctoMap's reader trusts them:
 /// past the end of the data it goes on creating the children a damaged byte asks for, and a chain
 /// deeper than the tree's 16 levels, so 3 kB can make it build millions of nodes or write beyond
-/// its keys. The file: text header lines (comments, "id", "size", "res") up to "data", then each
-/// node depth first as its log-odds (float), colour (3 bytes) and a byte of child flags.
+/// its keys. And an occupied leaf above the deepest level stands for every voxel below it, which
+/// the map's list of occupied voxels holds one by one: a damaged root marked occupied would be
+/// 2.8e14 of them. The file: text header lines (comments, "id", "size", "res") up to "data", then
+/// each node depth first as its log-odds (float), colour (3 bytes) and a byte of child flags.
 void checkOctreeFile(const std::string& bytes, const std::string& what) {
   auto fail = [&](const std::string& why) {
     throw std::runtime_error(what + ": not a valid OctoMap file: " + why);
@@ -250,6 +252,7 @@ void checkOctreeFile(const std::string& bytes, const std::string& what) {
   constexpr int kDepth = 16;        // OctoMap's tree depth: nodes at this level have no children
   constexpr size_t kNodeBytes = 8;  // float log-odds, r, g, b, child flags
   long long nodes = 0;
+  double occupied_voxels = 0;
   if (declared > 0) {
     std::vector<int> pending = {0};  // depths of the nodes still to read, depth first
     while (!pending.empty()) {
@@ -264,6 +267,13 @@ void checkOctreeFile(const std::string& bytes, const std::string& what) {
       at += kNodeBytes;
       ++nodes;
       if (children && depth == kDepth) fail("a node below the deepest level");
+      // An occupied leaf (the occupancy threshold is 0.5, log-odds 0) covers 8^(16 - depth) voxels.
+      if (!children && log_odds >= 0) {
+        occupied_voxels += std::ldexp(1.0, 3 * (kDepth - depth));
+        if (occupied_voxels > static_cast<double>(kMaxOccupiedVoxels))
+          fail("its occupied nodes cover more than " + std::to_string(kMaxOccupiedVoxels) +
+               " voxels");
+      }
       for (int i = 0; i < 8; ++i)
         if (children & (1u << i)) pending.push_back(depth + 1);
     }

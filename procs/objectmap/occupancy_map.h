@@ -33,6 +33,11 @@ struct OccupiedVoxel {
   Eigen::Vector3f centre;  ///< map units
 };
 
+/// The most occupied voxels a loaded segment may hold (about 400 MB as the occupied list): 16.7M
+/// voxels of 4 cm are some 27,000 m² of surface, far beyond a room; a file asking for more is
+/// damaged (OccupancyMap::deserialize refuses it).
+constexpr int64_t kMaxOccupiedVoxels = int64_t{1} << 24;
+
 struct InsertStats {
   size_t points = 0;   ///< points inserted
   size_t dropped = 0;  ///< not finite, outside the grid, or beyond max_range

@@ -511,4 +511,20 @@ TEST(MapFiles, DamagedTreeBytesBehindAGoodChecksumAreRefusedQuickly) {
   std::string other_type = good;
   other_type.replace(other_type.find("id ColorOcTree"), 14, "id OcTree");
   EXPECT_NE(errorOf(other_type).find("expected ColorOcTree"), std::string::npos);
+  // A root that is an occupied leaf stands for 8^16 voxels, which the occupied list would hold one
+  // by one (found by fuzz_map_store: a 5 kB file asked for 3 GB).
+  std::string header = good.substr(0, data);
+  const size_t size_at = header.find("size ");
+  header.replace(size_at, header.find('\n', size_at) - size_at, "size 1");
+  std::string occupied_root = header + std::string(8, '\0');
+  const float occupied = 2.f;
+  std::memcpy(&occupied_root[occupied_root.size() - 8], &occupied, sizeof(float));
+  EXPECT_NE(errorOf(occupied_root).find("seg1.ot: not a valid OctoMap file: its occupied nodes"),
+            std::string::npos)
+      << errorOf(occupied_root);
+  std::string free_root = header + std::string(8, '\0');  // log-odds 0.0 is occupied: make it free
+  const float free_log_odds = -2.f;
+  std::memcpy(&free_root[free_root.size() - 8], &free_log_odds, sizeof(float));
+  EXPECT_NO_THROW(OccupancyMap::deserialize(free_root, OccupancyOptions{}, "seg1.ot"))
+      << "a free root (an empty map's space) is fine";
 }
