@@ -49,13 +49,12 @@ void trimmedRange(std::vector<float>& v, double trim_pct, double gap, float* lo,
   *hi = v[i1];
 }
 
-}  // namespace
-
-std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates,
-                                           const CameraModel& camera, const SE3& T_world_camera,
-                                           const ProposalOptions& o, ProjectionStats* stats) {
-  ProjectionStats st;
-  const SE3 T_cw = T_world_camera.inverse();
+/// The sampled points of each candidate that project into the image (at most
+/// max_points_per_candidate of each); a candidate with fewer than min_visible_fraction of its
+/// samples in the image is left out.
+std::vector<Projected> projectInView(const std::vector<Candidate>& candidates,
+                                     const CameraModel& camera, const SE3& T_cw,
+                                     const ProposalOptions& o) {
   const int W = camera.width(), H = camera.height();
   std::vector<Projected> projected;
   for (size_t ci = 0; ci < candidates.size(); ++ci) {
@@ -79,6 +78,58 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
       continue;
     projected.push_back(std::move(p));
   }
+  return projected;
+}
+
+/// The boxes in ranking order (below), each dropped that overlaps a better one by more than
+/// nms_iou, at most max_boxes.
+std::vector<ProposalBox> rankAndSuppress(std::vector<ProposalBox> boxes, const ProposalOptions& o,
+                                         ProjectionStats* st) {
+  // Ranking: candidates the last clustering found before those it lost (keep_lost_s); among them,
+  // the clusters on position first (those of the colour pass fill in where they leave
+  // an object uncovered), then those that do not split into two parts at the next finer scale
+  // (two touching objects that a coarser threshold joins are often found alike at several scales,
+  // and their box would suppress that of the larger one alone), then clusters found alike at
+  // more density scales (an isolated object), then finer ones (a coarser cluster that holds the
+  // same object also holds the smeared points around it and often a neighbour), then the ones
+  // with more points.
+  std::stable_sort(boxes.begin(), boxes.end(), [](const ProposalBox& a, const ProposalBox& b) {
+    if (a.lost != b.lost) return b.lost;
+    if (a.by_colour != b.by_colour) return b.by_colour;
+    if ((a.parts > 1) != (b.parts > 1)) return b.parts > 1;
+    if (a.stability != b.stability) return a.stability > b.stability;
+    if (a.scale != b.scale) return a.scale < b.scale;
+    if (a.points != b.points) return a.points > b.points;
+    return a.candidate_id < b.candidate_id;
+  });
+  std::vector<ProposalBox> kept;
+  const bool suppress = o.nms_iou < 1;  // else the recognizer does it (config/recognizer.yaml)
+  for (const auto& b : boxes) {
+    bool suppressed = false;
+    for (size_t k = 0; suppress && k < kept.size(); ++k)
+      if (boxIou(b, kept[k]) > o.nms_iou) {
+        suppressed = true;
+        break;
+      }
+    if (suppressed) {
+      ++st->suppressed;
+      continue;
+    }
+    if (static_cast<int>(kept.size()) >= o.max_boxes) break;
+    kept.push_back(b);
+  }
+  return kept;
+}
+
+}  // namespace
+
+std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candidates,
+                                           const CameraModel& camera, const SE3& T_world_camera,
+                                           const ProposalOptions& o, ProjectionStats* stats) {
+  ProjectionStats st;
+  const SE3 T_cw = T_world_camera.inverse();
+  const int W = camera.width(), H = camera.height();
+  const std::vector<Projected> projected = projectInView(candidates, camera, T_cw, o);
   st.in_view = static_cast<int>(projected.size());
   // Depth buffer of every candidate in view.
   const int cell = std::max(1, o.depth_buffer_cell_px);
@@ -141,39 +192,7 @@ std::vector<ProposalBox> projectCandidates(const std::vector<Candidate>& candida
     b.points = static_cast<int>(p.pixels.size());
     boxes.push_back(b);
   }
-  // Ranking: candidates the last clustering found before those it lost (keep_lost_s); among them,
-  // the clusters on position first (those of the colour pass fill in where they leave
-  // an object uncovered), then those that do not split into two parts at the next finer scale
-  // (two touching objects that a coarser threshold joins are often found alike at several scales,
-  // and their box would suppress that of the larger one alone), then clusters found alike at
-  // more density scales (an isolated object), then finer ones (a coarser cluster that holds the
-  // same object also holds the smeared points around it and often a neighbour), then the ones
-  // with more points.
-  std::stable_sort(boxes.begin(), boxes.end(), [](const ProposalBox& a, const ProposalBox& b) {
-    if (a.lost != b.lost) return b.lost;
-    if (a.by_colour != b.by_colour) return b.by_colour;
-    if ((a.parts > 1) != (b.parts > 1)) return b.parts > 1;
-    if (a.stability != b.stability) return a.stability > b.stability;
-    if (a.scale != b.scale) return a.scale < b.scale;
-    if (a.points != b.points) return a.points > b.points;
-    return a.candidate_id < b.candidate_id;
-  });
-  std::vector<ProposalBox> kept;
-  const bool suppress = o.nms_iou < 1;  // else the recognizer does it (config/recognizer.yaml)
-  for (const auto& b : boxes) {
-    bool suppressed = false;
-    for (size_t k = 0; suppress && k < kept.size(); ++k)
-      if (boxIou(b, kept[k]) > o.nms_iou) {
-        suppressed = true;
-        break;
-      }
-    if (suppressed) {
-      ++st.suppressed;
-      continue;
-    }
-    if (static_cast<int>(kept.size()) >= o.max_boxes) break;
-    kept.push_back(b);
-  }
+  std::vector<ProposalBox> kept = rankAndSuppress(std::move(boxes), o, &st);
   if (stats) *stats = st;
   return kept;
 }
