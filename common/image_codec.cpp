@@ -29,9 +29,9 @@ uint32_t bigEndian(const uint8_t* p, int n) {
 }
 
 /// Refuses an image whose header is missing, asks for more than kMaxImagePixels or for another size
-/// than a non-empty `expected`, before any decoder allocates for it.
-void checkImageHeader(const uint8_t* data, size_t size, const std::string& what,
-                      cv::Size expected = cv::Size()) {
+/// than a non-empty `expected`, before any decoder allocates for it; returns its size.
+cv::Size checkImageHeader(const uint8_t* data, size_t size, const std::string& what,
+                          cv::Size expected = cv::Size()) {
   int w = 0, h = 0;
   if (!peekImageSize(data, size, &w, &h))
     throw ImageError(what + ": no image header (JPEG frame header or PNG IHDR) found");
@@ -43,6 +43,7 @@ void checkImageHeader(const uint8_t* data, size_t size, const std::string& what,
     throw ImageError(what + ": the header says " + std::to_string(w) + "x" + std::to_string(h) +
                      " pixels (at most " + std::to_string(kMaxImagePixels / 1000000) +
                      " megapixels are decoded)");
+  return cv::Size(w, h);
 }
 
 // libjpeg and libpng report errors through a callback that must not return: it long-jumps back to
@@ -375,10 +376,7 @@ cv::Size checkImageBytes(const uint8_t* data, size_t size, const std::string& wh
     if (size < 20 || !std::equal(iend, iend + 8, data + size - 8))
       throw ImageError(what + ": truncated PNG (no IEND chunk)");
   }
-  checkImageHeader(data, size, what, expected);
-  int w = 0, h = 0;
-  peekImageSize(data, size, &w, &h);
-  return cv::Size(w, h);
+  return checkImageHeader(data, size, what, expected);
 }
 }  // namespace
 
