@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 
 #include "common/geometry.h"
 
@@ -11,24 +10,38 @@ namespace slamaware::objectmap {
 
 namespace {
 
-double logMean(const std::vector<double>& p) {
-  return std::log(
-      std::max(1e-300, std::accumulate(p.begin(), p.end(), 0.0) / static_cast<double>(p.size())));
+/// Objectness of a candidate's views: each value with the frames its view stands for.
+using Sample = std::vector<std::pair<double, int32_t>>;
+
+double logMean(const Sample& p) {
+  double sum = 0, n = 0;
+  for (const auto& [v, frames] : p) {
+    sum += v * frames;
+    n += frames;
+  }
+  return std::log(std::max(1e-300, sum / n));
 }
 
-double logMedian(std::vector<double> p) {
-  const size_t n = p.size(), m = n / 2;
-  std::nth_element(p.begin(), p.begin() + static_cast<long>(m), p.end());
-  const double upper = p[m];
-  const double median =
-      n % 2 ? upper : (*std::max_element(p.begin(), p.begin() + static_cast<long>(m)) + upper) / 2;
+/// The median of the sample with each value repeated as often as its frames.
+double logMedian(Sample p) {
+  std::sort(p.begin(), p.end());
+  int64_t n = 0;
+  for (const auto& s : p) n += s.second;
+  // The values at positions (n - 1) / 2 and n / 2 of the repeated sample (the same for odd n).
+  auto at = [&p](int64_t pos) {
+    for (const auto& [v, frames] : p)
+      if ((pos -= frames) < 0) return v;
+    return p.back().first;
+  };
+  const double median = (at((n - 1) / 2) + at(n / 2)) / 2;
   return std::log(std::max(1e-300, median));
 }
 
 // p(object | view) of every view of a candidate.
-void addObjectness(const Candidate& c, std::vector<double>* out) {
+void addObjectness(const Candidate& c, Sample* out) {
   for (const auto& [key, v] : c.views)
-    if (!v.log_prob.empty()) out->push_back(std::exp(logObjectness(v.log_prob.back())));
+    if (!v.log_prob.empty())
+      out->emplace_back(std::exp(logObjectness(v.log_prob.back())), v.frames);
 }
 
 }  // namespace
@@ -72,14 +85,14 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
   for (const FrameBox& b : boxes) {
     const Object* o = table.objectOfCandidate(b.candidate);
     if (o && o->log_evidence.size() == num_classes && !object_median.count(o->id)) {
-      std::vector<double> p;
+      Sample p;
       for (int32_t c : o->candidates)
         if (auto it = table.candidates().find(c); it != table.candidates().end())
           addObjectness(it->second, &p);
       if (!p.empty()) object_median[o->id] = logMedian(p);
     }
     if (candidate_mean.count(b.candidate)) continue;
-    std::vector<double> p;
+    Sample p;
     if (auto it = table.candidates().find(b.candidate); it != table.candidates().end())
       addObjectness(it->second, &p);
     if (p.empty()) continue;
@@ -101,10 +114,14 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
                it != table.candidates().end() && !it->second.views.empty()) {
       // Its own views, fused as the map fuses an object's.
       std::vector<const std::vector<float>*> views;
-      for (const auto& [key, v] : it->second.views) views.push_back(&v.log_prob);
+      std::vector<int32_t> frames;
+      for (const auto& [key, v] : it->second.views) {
+        views.push_back(&v.log_prob);
+        frames.push_back(v.frames);
+      }
       double weight = 0;
       const std::vector<double> evidence =
-          sumLogProbabilities(views, num_classes, fusion.objectness_weights, &weight);
+          sumLogProbabilities(views, num_classes, fusion.objectness_weights, &weight, frames);
       log_posterior = logPosteriorFromLogEvidence(evidence, weight, fusion.views_exponent);
     } else {
       log_posterior.assign(num_classes, kMinLogProb);

@@ -5,6 +5,7 @@
 // so the maximum-likelihood label is argmax_c sum_i log p(c | x_i). The object map keeps that sum
 // (the log evidence) per class; the posterior is its softmax.
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace slamaware::objectmap {
@@ -28,9 +29,12 @@ struct FusionOptions {
 /// takes for background (the object cut by the image border, hidden, or the box off the object)
 /// says little about which object it is and counts little; views of the whole object count fully.
 /// total_weight (if given): sum_i w_i (the number of views without objectness weights).
+/// frames (empty: 1 each): how many frames each view stands for (a view that stayed when the
+/// object map thinned old views); its term counts that many times.
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
                                         size_t num_classes, bool objectness_weights = false,
-                                        double* total_weight = nullptr);
+                                        double* total_weight = nullptr,
+                                        const std::vector<int32_t>& frames = {});
 
 /// p(c | all views) = softmax of the summed log evidence (shifted by its maximum, so that sums of
 /// hundreds of views do not underflow). Empty in, empty out.

@@ -134,7 +134,8 @@ Segment& ObjectMapEngine::segmentFor(int32_t slam_map_id) {
   if (id < 0 || segments_.count(id))
     id = segments_.empty() ? 0 : std::max(0, segments_.rbegin()->first + 1);
   auto seg = std::make_unique<Segment>(
-      id, slam_map_id, OccupancyMap(options_.occupancy, options_.occupancy.resolution));
+      id, slam_map_id, OccupancyMap(options_.occupancy, options_.occupancy.resolution),
+      options_.views_full_rate_s);
   Segment& ref = *seg;
   segments_.emplace(id, std::move(seg));
   session_maps_[slam_map_id] = id;
@@ -740,10 +741,12 @@ MapSnapshot ObjectMapEngine::snapshot() const {
         jc["box_positions"] = cand.box_positions;
         jc["box_size"] = cand.box_size;
         if (!cand.user_label.empty()) jc["user_label"] = cand.user_label;
-        json views = json::array();  // utime, seq, area, log p per class
+        // utime, seq, area, log p per class, and the frames it stands for if more than one.
+        json views = json::array();
         for (const auto& [key, v] : cand.views) {
           json jv = {v.utime, v.seq, compactFloat(v.area)};
           for (float lp : v.log_prob) jv.push_back(compactFloat(lp));
+          if (v.frames > 1) jv.push_back(v.frames);
           views.push_back(std::move(jv));
         }
         jc["views"] = std::move(views);
@@ -783,7 +786,8 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
       OccupancyMap map =
           OccupancyMap::deserialize(bytes->second, options_.occupancy, "its .ot file");
       fresh.segments_.emplace(
-          id, std::make_unique<Segment>(id, jsonInt<int32_t>(s.at("slam_map_id")), std::move(map)));
+          id, std::make_unique<Segment>(id, jsonInt<int32_t>(s.at("slam_map_id")), std::move(map),
+                                        options_.views_full_rate_s));
     }
     where = "session maps";
     for (const auto& m : c.at("session").at("maps")) {
@@ -826,13 +830,18 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
         if (!cand.user_label.empty() && !validUserLabel(cand.user_label))
           throw std::runtime_error("bad user_label '" + cand.user_label + "'");
         for (const auto& jv : jc.at("views")) {
-          if (!jv.is_array() || jv.size() != 3 + nc)
-            throw std::runtime_error("a view is not 3 + classes numbers");
+          if (!jv.is_array() || (jv.size() != 3 + nc && jv.size() != 4 + nc))
+            throw std::runtime_error("a view is not 3 + classes (+ 1) numbers");
           View v;
           v.utime = jsonInt<int64_t>(jv[0]);
           v.seq = jsonInt<int32_t>(jv[1]);
           v.area = jsonFloat<float>(jv[2]);
           for (size_t k = 0; k < nc; ++k) v.log_prob.push_back(jsonFloat<float>(jv[3 + k]));
+          if (jv.size() == 4 + nc) {
+            v.frames = jsonInt<int32_t>(jv[3 + nc]);
+            if (v.frames < 1 || (v.frames & (v.frames - 1)))
+              throw std::runtime_error("a view's frames are not a power of two");
+          }
           const ViewKey key{v.utime, v.seq};
           cand.views[key] = std::move(v);
         }

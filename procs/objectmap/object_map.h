@@ -61,11 +61,11 @@ struct Segment {
   /// one). SLAM republishes a keyframe as its points converge, appending to them: only the new
   /// ones are inserted.
   std::map<int32_t, size_t> inserted;
-  Segment(int32_t id, int32_t slam_map_id, OccupancyMap map)
+  Segment(int32_t id, int32_t slam_map_id, OccupancyMap map, double views_full_rate_s)
       : id(id),
         slam_map_id(slam_map_id),
         occupancy(std::move(map)),
-        table(occupancy.resolution()) {}
+        table(occupancy.resolution(), views_full_rate_s) {}
 };
 
 struct CloudReport {

@@ -1,6 +1,7 @@
 #include "procs/objectmap/object_table.h"
 
 #include <algorithm>
+#include <climits>
 #include <iterator>
 #include <numeric>
 #include <set>
@@ -148,8 +149,64 @@ std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vecto
 void ObjectTable::addView(int32_t candidate, View view) {
   Candidate& c = candidates_[candidate];
   c.id = candidate;
+  newest_view_utime_ = std::max(newest_view_utime_, view.utime);
   const ViewKey key{view.utime, view.seq};
   c.views[key] = std::move(view);
+}
+
+namespace {
+
+/// The frame's hash (splitmix64 of its capture time and seq): which frames stay when old views are
+/// thinned, the same for every candidate.
+uint64_t frameHash(int64_t utime, int32_t seq) {
+  uint64_t z = static_cast<uint64_t>(utime) * 0x9e3779b97f4a7c15ull + static_cast<uint32_t>(seq);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+/// k such that a view `age_us` old stands for 2^k frames: 0 within one period, k for an age in
+/// [period 2^(k-1), period 2^k).
+int thinningLevel(int64_t age_us, int64_t period_us) {
+  int k = 0;
+  for (int64_t limit = period_us; age_us >= limit && k < 30; limit *= 2) ++k;
+  return k;
+}
+
+}  // namespace
+
+size_t ObjectTable::thinViews(int64_t now_utime) {
+  if (full_rate_us_ <= 0) return 0;
+  size_t forgotten = 0;
+  for (auto c = candidates_.begin(); c != candidates_.end();) {
+    if (!c->second.user_label.empty()) {
+      ++c;
+      continue;
+    }
+    auto& views = c->second.views;
+    const size_t before = views.size();
+    // Oldest first; stops at the first view within the full-rate period.
+    for (auto it = views.begin(); it != views.end();) {
+      const int k = thinningLevel(now_utime - it->first.first, full_rate_us_);
+      if (k == 0) break;
+      const int32_t frames = int32_t{1} << k;
+      if (it->second.frames >= frames) {
+        ++it;
+      } else if ((frameHash(it->first.first, it->first.second) & (uint64_t(frames) - 1)) == 0) {
+        it->second.frames = frames;
+        ++it;
+      } else {
+        it = views.erase(it);
+      }
+    }
+    if (views.empty() && before > 0) {
+      c = candidates_.erase(c);
+      ++forgotten;
+    } else {
+      ++c;
+    }
+  }
+  return forgotten;
 }
 
 void ObjectTable::addVotes(int32_t candidate, const std::vector<VoxelKey>& keys,
@@ -239,7 +296,8 @@ class ObjectTable::GroupFacts {
   struct Fused {
     std::map<ViewKey, const View*> views;
     std::vector<double> evidence;
-    double weight = 0;  ///< the views' total weight
+    double weight = 0;   ///< the views' total weight
+    int64_t frames = 0;  ///< the frames the views stand for
   };
   GroupFacts(const ObjectTable& table, size_t num_classes, const FusionOptions& fusion)
       : table_(table), num_classes_(num_classes), fusion_(fusion) {}
@@ -256,8 +314,14 @@ class ObjectTable::GroupFacts {
           view->second = &v;
       }
     std::vector<const std::vector<float>*> evidence;
-    for (const auto& [key, v] : f.views) evidence.push_back(&v->log_prob);
-    f.evidence = sumLogProbabilities(evidence, num_classes_, fusion_.objectness_weights, &f.weight);
+    std::vector<int32_t> frames;
+    for (const auto& [key, v] : f.views) {
+      evidence.push_back(&v->log_prob);
+      frames.push_back(v->frames);
+      f.frames += v->frames;
+    }
+    f.evidence =
+        sumLogProbabilities(evidence, num_classes_, fusion_.objectness_weights, &f.weight, frames);
     return f;
   }
   const std::vector<VoxelKey>& voxels(const std::vector<int32_t>& members) {
@@ -349,6 +413,10 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
                          const FusionOptions& fusion) {
+  if (full_rate_us_ > 0 && newest_view_utime_ >= next_thinning_utime_) {
+    thinViews(newest_view_utime_);
+    next_thinning_utime_ = newest_view_utime_ + full_rate_us_ / 8;
+  }
   deriveVoxels(occupied, options);
   std::vector<std::vector<int32_t>> groups = groupOverlapping(grouping);
   GroupFacts facts(*this, num_classes, fusion);
@@ -445,7 +513,7 @@ Object ObjectTable::describeGroup(int32_t id, const std::vector<int32_t>& member
   o.evidence_weight = f.weight;
   o.posterior = posteriorFromLogEvidence(o.log_evidence, f.weight, fusion.views_exponent);
   o.label = argmaxClass(o.log_evidence);
-  o.num_views = static_cast<int32_t>(f.views.size());
+  o.num_views = static_cast<int32_t>(std::min<int64_t>(f.frames, INT32_MAX));
   if (!f.views.empty()) {
     o.first_seen_utime = f.views.begin()->first.first;
     o.last_seen_utime = f.views.rbegin()->first.first;

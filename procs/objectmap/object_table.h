@@ -16,6 +16,7 @@
 // its view finds most object-like: the lowest p(background | box), then the larger), so merging
 // never counts a view twice and splitting gives each part exactly its own candidates' views.
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -36,6 +37,9 @@ struct View {
   int32_t seq = -1;             ///< seq of the frame
   float area = 0;               ///< px², area of the box
   std::vector<float> log_prob;  ///< natural log p(class | box), classes in the map's order
+  /// Frames this view stands for: 1, or 2^k once older views around it were thinned out
+  /// (ObjectTable::update(), views_full_rate_s).
+  int32_t frames = 1;
 };
 /// Views are identified by their frame: (utime, seq).
 using ViewKey = std::pair<int64_t, int32_t>;
@@ -64,8 +68,8 @@ struct Object {
   double evidence_weight = 0;        ///< the views' total weight in log_evidence
   std::vector<double> posterior;     ///< posteriorFromLogEvidence() of log_evidence (fusion.h)
   int label = -1;                    ///< argmax class, -1 without classes
-  int32_t num_views = 0;
-  bool has_position = false;                           ///< false: never seen from a localised frame
+  int32_t num_views = 0;             ///< frames its fused views stand for (one per frame)
+  bool has_position = false;         ///< false: never seen from a localised frame
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< map units
   Eigen::Vector3d extent = Eigen::Vector3d::Zero();    ///< map units, axis-aligned size
   int32_t num_voxels = 0;
@@ -77,7 +81,11 @@ struct Object {
 
 class ObjectTable {
  public:
-  explicit ObjectTable(double resolution) : resolution_(resolution) {}
+  /// views_full_rate_s: every view of the last views_full_rate_s seconds (before the table's
+  /// newest view) is kept, older ones are thinned (thinViews()); <= 0: every view is kept.
+  explicit ObjectTable(double resolution, double views_full_rate_s = 0)
+      : resolution_(resolution),
+        full_rate_us_(static_cast<int64_t>(std::max(0.0, views_full_rate_s) * 1e6)) {}
 
   double resolution() const { return resolution_; }
 
@@ -89,9 +97,20 @@ class ObjectTable {
   /// Where a box of the candidate puts it (see Candidate::box_position_sum).
   void addBoxPosition(int32_t candidate, const Eigen::Vector3d& p_world, double size);
 
-  /// Recomputes the candidates' voxels (voted in >= min_votes and >= min_vote_share of the voting
-  /// views, and occupied now), the groups (GroupingOptions: pairs of candidates are tried from the
-  /// most overlapping, and two groups merge when their voxel unions pass the test), the object ids
+  /// Bounds the views of a long session. A view older than the full-rate period P (before
+  /// `now_utime`) by between P 2^(k-1) and P 2^k stays only when its frame's hash has its k lowest
+  /// bits zero (the same frames for every candidate, so a frame still counts once per object) and
+  /// then stands for 2^k frames (View::frames): the expected evidence of a candidate is unchanged,
+  /// and it keeps about rate x P x (1 + log2(age / P) / 2) views. A candidate left without views
+  /// (one seen in a few frames long ago: a tentative cluster of the proposals stage, most often) is
+  /// forgotten. A candidate holding a user's label keeps every view. Run by update() whenever the
+  /// newest view is P / 8 past the last run. Returns the candidates forgotten.
+  size_t thinViews(int64_t now_utime);
+
+  /// Thins the views (thinViews(), when due), then recomputes the candidates' voxels (voted in >=
+  /// min_votes and >= min_vote_share of the voting views, and occupied now), the groups
+  /// (GroupingOptions: pairs of candidates are tried from the most overlapping, and two groups
+  /// merge when their voxel unions pass the test), the object ids
   /// (new_id() for groups that continue no previous object) and every object's evidence and
   /// geometry.
   void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
@@ -147,6 +166,9 @@ class ObjectTable {
                        const FusionOptions& fusion) const;
 
   double resolution_;
+  int64_t full_rate_us_ = 0;
+  int64_t newest_view_utime_ = 0;
+  int64_t next_thinning_utime_ = 0;
   std::map<int32_t, Candidate> candidates_;
   std::map<int32_t, Object> objects_;
 };

@@ -124,6 +124,11 @@ struct ObjectMapOptions {
   /// (procs/objectmap/fusion.h: 0 = views independent, 1 = the average view). Labels do not change.
   double posterior_views_exponent = 1;
   FusionOptions fusion() const { return {objectness_weights, posterior_views_exponent}; }
+  /// s: every view of the last views_full_rate_s is kept; older ones are thinned as they age, the
+  /// same frames for every candidate, each kept view standing for the frames around it
+  /// (ObjectTable::thinViews: memory and fusion cost grow with the log of the session's length,
+  /// not with it; <= 0: every view is kept).
+  double views_full_rate_s = 30;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
   int seq_buffer = 64;
   PersistenceOptions persistence;
@@ -147,6 +152,9 @@ struct ObjectMapOptions {
     v("posterior_views_exponent", posterior_views_exponent,
       "posterior = softmax(fused sum / W^e), W the views' total weight (0: views independent, 1: "
       "the average view)");
+    v("views_full_rate_s", views_full_rate_s,
+      "s of the newest views all kept; older ones are thinned, each kept view standing for 2^k "
+      "frames (<= 0: every view kept)");
     v("seq_buffer", seq_buffer,
       "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
     v.section("persistence", persistence);

@@ -564,6 +564,73 @@ TEST(ObjectTable, RarelyVotedVoxelsAreForgotten) {
   EXPECT_EQ(t.candidates().at(1).votes.at(always), 20);
 }
 
+// A long session: two candidates of one object seen in every frame for 300 s at 30 Hz, a full-rate
+// period of 10 s. The views older than it are thinned to the same frames for both candidates (a
+// frame still counts once per object), each standing for the frames around it, so the evidence
+// stays what all the frames give while the views kept grow with the log of the session's length.
+// Candidates seen in a few frames long ago are forgotten; one holding a user's label is not.
+TEST(ObjectTable, OldViewsAreThinnedToTheSameFramesAndStandForTheFramesAround) {
+  VotingOptions vo;
+  ObjectTable t(0.01, 10.0), every(0.01, 0);
+  for (int v = 0; v < 3; ++v)
+    for (ObjectTable* x : {&t, &every})
+      x->addVotes(1, lineOfVoxels(0, 20), vo), x->addVotes(2, lineOfVoxels(0, 20), vo);
+  const int frames = 9000;
+  auto utime = [](int f) { return 1000000 + int64_t{f} * 33333; };
+  // 40 tentative clusters seen in 3 frames each during the first 4 s; cluster 140 labelled.
+  for (int c = 100; c < 140 + 1; ++c)
+    for (int f = (c - 100) * 3; f < (c - 100) * 3 + 3; ++f)
+      t.addView(c, View{utime(f), f, 10, logs({0.3, 0.3, 0.4})});
+  int32_t next = 1;
+  auto update = [&](ObjectTable& x) {
+    x.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
+  };
+  update(t);
+  ASSERT_TRUE(t.setUserLabel(t.objectOfCandidate(140)->id, "temple"));
+  for (int f = 0; f < frames; ++f) {
+    // Views that vary over the session: mostly class 0, now and then class 1.
+    const double p0 = 0.5 + 0.3 * std::sin(f * 0.01);
+    for (ObjectTable* x : {&t, &every}) {
+      x->addView(1, View{utime(f), f, 50, logs({p0, 0.9 - p0, 0.1})});
+      x->addView(2, View{utime(f), f, 80, logs({p0, 0.85 - p0, 0.15})});
+    }
+    if (f % 100 == 99) update(t);
+  }
+  update(t);
+  update(every);
+  const Candidate& c1 = t.candidates().at(1);
+  const Candidate& c2 = t.candidates().at(2);
+  std::vector<ViewKey> k1, k2;
+  int64_t stood_for = 0;
+  for (const auto& [k, v] : c1.views) k1.push_back(k), stood_for += v.frames;
+  for (const auto& [k, v] : c2.views) k2.push_back(k);
+  EXPECT_EQ(k1, k2) << "the same frames for every candidate";
+  // About rate x P x (1 + log2(age / P) / 2) = 300 x (1 + 4.9 / 2) views; without thinning 9000.
+  EXPECT_LT(c1.views.size(), 1200u);
+  EXPECT_GT(c1.views.size(), 800u);
+  EXPECT_NEAR(static_cast<double>(stood_for), frames, 0.1 * frames);
+  // The newest 10 s are all there, one frame each.
+  EXPECT_EQ(c1.views.rbegin()->second.frames, 1);
+  EXPECT_EQ(std::prev(c1.views.end(), 300)->second.frames, 1);
+
+  const Object& o = *t.objectOfCandidate(1);
+  const Object& all = *every.objectOfCandidate(1);
+  EXPECT_EQ(o.candidates, (std::vector<int32_t>{1, 2}));
+  EXPECT_EQ(o.num_views, stood_for) << "a frame counts once per object";
+  EXPECT_EQ(all.num_views, frames);
+  EXPECT_EQ(o.label, all.label);
+  for (size_t c = 0; c < 3; ++c)
+    EXPECT_NEAR(o.log_evidence[c], all.log_evidence[c], 0.1 * std::abs(all.log_evidence[c]))
+        << "class " << c;
+  EXPECT_NEAR(o.posterior[0], all.posterior[0], 0.05);
+
+  int tentative_left = 0;
+  for (int c = 100; c < 140; ++c) tentative_left += t.candidates().count(c) > 0;
+  EXPECT_LE(tentative_left, 8) << "seen in 3 frames 300 s ago: kept with p = 1 - (1 - 1/32)^3";
+  ASSERT_TRUE(t.candidates().count(140)) << "a user's label is never forgotten";
+  EXPECT_EQ(t.candidates().at(140).views.size(), 3u);
+}
+
 // ---- The engine -----------------------------------------------------------------------------
 
 TEST(ObjectMapEngine, FusesASyntheticSceneIntoLabelledObjectsAtTheirPlaces) {
@@ -598,6 +665,27 @@ TEST(ObjectMapEngine, FusesASyntheticSceneIntoLabelledObjectsAtTheirPlaces) {
   ObjectMapEngine again(o);
   feed(again, w, 1, 0, 40);
   EXPECT_EQ(encode(again.objectMap()), encode(m));
+}
+
+// Thinned views go into the saved table with the frames they stand for and come back with them.
+TEST(ObjectMapEngine, ThinnedViewsAreSavedWithTheFramesTheyStandFor) {
+  ObjectMapOptions o;
+  o.views_full_rate_s = 0.3;  // 40 frames at 30 Hz: views up to 4 periods old
+  ObjectMapEngine e(o);
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  feed(e, w, 1, 0, 40);
+  const object_map_t m = e.objectMap();
+  ASSERT_EQ(m.num_objects, 3);
+  int thinned = 0;
+  for (const auto& [id, c] : e.segments().at(1)->table.candidates())
+    for (const auto& [k, v] : c.views) thinned += v.frames > 1;
+  EXPECT_GT(thinned, 0);
+  // 9 views at full rate, 31 older frames sampled by a handful of views: a loose estimate.
+  for (const auto& ob : m.objects) EXPECT_NEAR(ob.num_views, 40, 20);
+  ObjectMapEngine back(o);
+  back.restore(e.snapshot());
+  EXPECT_EQ(encode(back.objectMap()), encode(m));
+  EXPECT_EQ(back.snapshot().content, e.snapshot().content);
 }
 
 // The evaluator's accessor: a candidate id (of a SLAM map) leads to the object holding it now.
