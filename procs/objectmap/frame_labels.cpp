@@ -113,15 +113,11 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
     } else if (auto it = table.candidates().find(b.candidate);
                it != table.candidates().end() && !it->second.views.empty()) {
       // Its own views, fused as the map fuses an object's.
-      std::vector<const std::vector<float>*> views;
-      std::vector<int32_t> frames;
-      for (const auto& [key, v] : it->second.views) {
-        views.push_back(&v.log_prob);
-        frames.push_back(v.frames);
-      }
+      std::vector<const View*> views;
+      for (const auto& [key, v] : it->second.views) views.push_back(&v);
       double weight = 0;
       const std::vector<double> evidence =
-          sumLogProbabilities(views, num_classes, fusion.objectness_weights, &weight, frames);
+          sumViewEvidence(views, num_classes, fusion.objectness_weights, &weight);
       log_posterior = logPosteriorFromLogEvidence(evidence, weight, fusion.views_exponent);
     } else {
       log_posterior.assign(num_classes, kMinLogProb);

@@ -175,9 +175,8 @@ int thinningLevel(int64_t age_us, int64_t period_us) {
 
 }  // namespace
 
-size_t ObjectTable::thinViews(int64_t now_utime) {
-  if (full_rate_us_ <= 0) return 0;
-  size_t forgotten = 0;
+void ObjectTable::thinViews(int64_t now_utime) {
+  if (full_rate_us_ <= 0) return;
   for (auto c = candidates_.begin(); c != candidates_.end();) {
     if (!c->second.user_label.empty()) {
       ++c;
@@ -199,14 +198,19 @@ size_t ObjectTable::thinViews(int64_t now_utime) {
         it = views.erase(it);
       }
     }
-    if (views.empty() && before > 0) {
-      c = candidates_.erase(c);
-      ++forgotten;
-    } else {
-      ++c;
-    }
+    c = views.empty() && before > 0 ? candidates_.erase(c) : std::next(c);
   }
-  return forgotten;
+}
+
+std::vector<double> sumViewEvidence(const std::vector<const View*>& views, size_t num_classes,
+                                    bool objectness_weights, double* total_weight) {
+  std::vector<const std::vector<float>*> log_p;
+  std::vector<int32_t> frames;
+  for (const View* v : views) {
+    log_p.push_back(&v->log_prob);
+    frames.push_back(v->frames);
+  }
+  return sumLogProbabilities(log_p, num_classes, objectness_weights, total_weight, frames);
 }
 
 void ObjectTable::addVotes(int32_t candidate, const std::vector<VoxelKey>& keys,
@@ -313,15 +317,12 @@ class ObjectTable::GroupFacts {
             moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
           view->second = &v;
       }
-    std::vector<const std::vector<float>*> evidence;
-    std::vector<int32_t> frames;
+    std::vector<const View*> views;
     for (const auto& [key, v] : f.views) {
-      evidence.push_back(&v->log_prob);
-      frames.push_back(v->frames);
+      views.push_back(v);
       f.frames += v->frames;
     }
-    f.evidence =
-        sumLogProbabilities(evidence, num_classes_, fusion_.objectness_weights, &f.weight, frames);
+    f.evidence = sumViewEvidence(views, num_classes_, fusion_.objectness_weights, &f.weight);
     return f;
   }
   const std::vector<VoxelKey>& voxels(const std::vector<int32_t>& members) {

@@ -44,6 +44,10 @@ struct View {
 /// Views are identified by their frame: (utime, seq).
 using ViewKey = std::pair<int64_t, int32_t>;
 
+/// sumLogProbabilities() (fusion.h) of views, each counted for the frames it stands for.
+std::vector<double> sumViewEvidence(const std::vector<const View*>& views, size_t num_classes,
+                                    bool objectness_weights, double* total_weight);
+
 struct Candidate {
   int32_t id = -1;
   std::map<ViewKey, View> views;
@@ -73,6 +77,8 @@ struct Object {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< map units
   Eigen::Vector3d extent = Eigen::Vector3d::Zero();    ///< map units, axis-aligned size
   int32_t num_voxels = 0;
+  /// Its first and last views' frames (the first within 2^k frames of it once old views were
+  /// thinned).
   int64_t first_seen_utime = 0, last_seen_utime = 0;
   /// The user's class: the user_label held by most of its candidates (ties: the first name in
   /// order), "" if none holds one.
@@ -104,8 +110,8 @@ class ObjectTable {
   /// and it keeps about rate x P x (1 + log2(age / P) / 2) views. A candidate left without views
   /// (one seen in a few frames long ago: a tentative cluster of the proposals stage, most often) is
   /// forgotten. A candidate holding a user's label keeps every view. Run by update() whenever the
-  /// newest view is P / 8 past the last run. Returns the candidates forgotten.
-  size_t thinViews(int64_t now_utime);
+  /// newest view is P / 8 past the last run.
+  void thinViews(int64_t now_utime);
 
   /// Thins the views (thinViews(), when due), then recomputes the candidates' voxels (voted in >=
   /// min_votes and >= min_vote_share of the voting views, and occupied now), the groups
