@@ -210,12 +210,12 @@ LoadReport MapStore::load(const std::function<void(const MapSnapshot&)>& accept)
   return report;
 }
 
-SaveReport MapStore::save(const MapSnapshot& snapshot) {
+SaveReport MapStore::save(MapSnapshot snapshot) {
   const auto t0 = std::chrono::steady_clock::now();
   SaveReport report;
   const int64_t generation = nextGeneration();
   report.generation = generation;
-  nlohmann::json content = snapshot.content;
+  nlohmann::json& content = snapshot.content;
   std::map<int32_t, FileRef> files;
   // 1. The segments' .ot files: an unchanged one (same size and checksum as in the previous good
   // generation, still on disk) is referenced again instead of written again.
@@ -248,6 +248,7 @@ SaveReport MapStore::save(const MapSnapshot& snapshot) {
   // 2. The JSON: its rename commits the generation.
   // Class names come from other processes: bytes that are not UTF-8 are replaced, not fatal.
   const std::string body = content.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  content = nlohmann::json();  // the tree is several times the text: freed before the file is built
   std::string text =
       "{\"format\":\"" + std::string(kFormat) + "\",\"version\":" + std::to_string(kVersion) +
       ",\"generation\":" + std::to_string(generation) +

@@ -69,8 +69,9 @@ class MapStore {
 
   /// Writes a new generation and commits it; then removes the generations older than the previous
   /// good one (loaded or saved by this store). Throws std::runtime_error naming the file when a
-  /// write fails: the previous generation is then still the newest good one.
-  SaveReport save(const MapSnapshot& snapshot);
+  /// write fails: the previous generation is then still the newest good one. The snapshot is taken
+  /// by value and consumed (move it in: a large table is not copied).
+  SaveReport save(MapSnapshot snapshot);
 
   /// The generation that the next save writes.
   int64_t nextGeneration();

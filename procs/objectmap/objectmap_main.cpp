@@ -10,6 +10,7 @@
 // whenever they were and every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and
 // never stops the process; a damaged map file is refused with a message naming it, and the
 // previous good generation is used.
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -282,8 +283,7 @@ class ObjectMapNode {
     try {
       const auto t0 = Clock::now();
       BusyHeartbeat busy(status_, kBusyLimitS);
-      const MapSnapshot snapshot = engine_.snapshot();
-      const SaveReport r = store_.save(snapshot);
+      const SaveReport r = store_.save(engine_.snapshot());
       const double ms = secondsSince(t0) * 1000;
       saved_changes_ = changes;
       auto seg = r.segment_paths.find(engine_.currentSegment());
@@ -309,6 +309,10 @@ class ObjectMapNode {
       save_failed_ = true;
       spdlog::error("{} save failed (the previous generation stays): {}", why, e.what());
     }
+    // A save builds the table's JSON tree and text, more than the table's own memory, and frees
+    // them. glibc keeps freed pages mapped; handing them back keeps a long session's RSS at
+    // the table's size instead of the largest save's peak.
+    malloc_trim(0);
   }
 
   void updateCounters() {
