@@ -63,6 +63,31 @@ std::vector<int64_t> voxelSet(const std::vector<Eigen::Vector3f>& points, double
   return keys;
 }
 
+/// A new cluster n and an old candidate o, and the share of key voxels they have in common.
+struct Pair {
+  double overlap;
+  size_t n, o;
+};
+
+/// Keeps of `pairs` those a one-to-one matching takes, greedily by overlap, and marks both sides.
+void matchGreedily(std::vector<Pair>* pairs, std::vector<bool>* new_done,
+                   std::vector<bool>* old_done) {
+  std::stable_sort(pairs->begin(), pairs->end(),
+                   [](const Pair& a, const Pair& b) { return a.overlap > b.overlap; });
+  std::vector<Pair> kept;
+  for (const auto& p : *pairs) {
+    if ((*new_done)[p.n] || (*old_done)[p.o]) continue;
+    (*new_done)[p.n] = (*old_done)[p.o] = true;
+    kept.push_back(p);
+  }
+  *pairs = std::move(kept);
+}
+
+/// False when the bounds of `c` and [min, max] are apart (then they share no voxel).
+bool boundsMeet(const Candidate& c, const Eigen::Vector3f& min, const Eigen::Vector3f& max) {
+  return !(c.min.cwiseMax(min).array() > c.max.cwiseMin(max).array()).any();
+}
+
 double jaccard(const std::vector<int64_t>& a, const std::vector<int64_t>& b) {
   size_t i = 0, j = 0, common = 0;
   while (i < a.size() && j < b.size()) {
@@ -440,6 +465,7 @@ CandidateMap::CandidateMap(CandidateMap&& other) noexcept
       views_seen_(other.views_seen_),
       dirty_(other.dirty_),
       candidates_(std::move(other.candidates_)),
+      retired_(std::move(other.retired_)),
       support_(std::move(other.support_)),
       own_ids_(other.own_ids_),
       ids_(other.ids_ == &other.own_ids_ ? &own_ids_ : other.ids_),
@@ -453,6 +479,7 @@ void CandidateMap::resetMap(int32_t map_id) {
   view_stride_ = 1;
   views_seen_ = 0;
   candidates_.clear();
+  retired_.clear();
   support_ = Support{};
 }
 
@@ -635,29 +662,40 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
   std::vector<std::vector<int64_t>> old_keys, new_keys;
   for (const auto& c : candidates_) old_keys.push_back(voxelSet(c.points, key_voxel));
   for (const auto& c : found) new_keys.push_back(voxelSet(c.points, key_voxel));
-  struct Pair {
-    double overlap;
-    size_t n, o;
-  };
   std::vector<Pair> pairs;
   for (size_t n = 0; n < found.size(); ++n)
     for (size_t o = 0; o < candidates_.size(); ++o) {
-      const Eigen::Vector3f lo = found[n].min.cwiseMax(candidates_[o].min);
-      const Eigen::Vector3f hi = found[n].max.cwiseMin(candidates_[o].max);
-      if ((hi.array() < lo.array()).any()) continue;  // bounds apart: nothing shared
+      if (!boundsMeet(found[n], candidates_[o].min, candidates_[o].max)) continue;
       const double j = jaccard(new_keys[n], old_keys[o]);
       if (j >= options_.id_overlap) pairs.push_back({j, n, o});
     }
-  std::stable_sort(pairs.begin(), pairs.end(),
-                   [](const Pair& a, const Pair& b) { return a.overlap > b.overlap; });
   std::vector<bool> new_done(found.size()), old_done(candidates_.size());
-  for (const auto& p : pairs) {
-    if (new_done[p.n] || old_done[p.o]) continue;
-    new_done[p.n] = old_done[p.o] = true;
-    found[p.n].id = candidates_[p.o].id;
+  matchGreedily(&pairs, &new_done, &old_done);
+  for (const auto& p : pairs) found[p.n].id = candidates_[p.o].id;
+  // A cluster that took no current id takes back the id of a dropped candidate of its scale that it
+  // overlaps as much: the same rule, over what earlier clusterings dropped. Within a scale: the
+  // part, the whole and the whole with its neighbour overlap across scales, and a cluster that
+  // took the id of another scale's would inherit evidence gathered on another region.
+  std::vector<Pair> back;
+  for (size_t r = 0; r < retired_.size(); ++r) {
+    std::vector<int64_t> keys;
+    for (size_t n = 0; n < found.size(); ++n) {
+      if (new_done[n] || found[n].scale != retired_[r].scale ||
+          !boundsMeet(found[n], retired_[r].min, retired_[r].max))
+        continue;
+      if (keys.empty()) keys = voxelSet(retired_[r].points, key_voxel);
+      const double j = jaccard(new_keys[n], keys);
+      if (j >= options_.id_overlap) back.push_back({j, n, r});
+    }
   }
+  std::vector<bool> retired_done(retired_.size());
+  matchGreedily(&back, &new_done, &retired_done);
+  for (const auto& p : back) found[p.n].id = retired_[p.o].id;
   for (auto& c : found)
     if (c.id < 0) c.id = (*ids_)++;
+  std::vector<Retired> retired;
+  for (size_t r = 0; r < retired_.size(); ++r)
+    if (!retired_done[r]) retired.push_back(std::move(retired_[r]));
   // A candidate no new cluster took over, whose region no new cluster holds either (its points
   // left out of this clustering: outside the support's region as it was fitted this time, or too
   // few for min_points after the filters), is kept for keep_lost_s of frame time.
@@ -677,8 +715,26 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
         continue;
       c.lost_since = since;
       found.push_back(std::move(c));
+      old_done[o] = true;
     }
   }
+  // The candidates dropped now, one point per key voxel; the oldest go beyond kMaxRetired.
+  for (size_t o = 0; o < candidates_.size(); ++o) {
+    if (old_done[o] || candidates_[o].points.empty()) continue;
+    Retired r{candidates_[o].id, candidates_[o].scale, {}, candidates_[o].min, candidates_[o].max};
+    std::vector<int64_t> seen;
+    for (const auto& p : candidates_[o].points) {
+      const int64_t k = voxelKey(p, key_voxel);
+      auto at = std::lower_bound(seen.begin(), seen.end(), k);
+      if (at != seen.end() && *at == k) continue;
+      seen.insert(at, k);
+      r.points.push_back(p);
+    }
+    retired.push_back(std::move(r));
+  }
+  if (retired.size() > kMaxRetired)
+    retired.erase(retired.begin(), retired.end() - static_cast<std::ptrdiff_t>(kMaxRetired));
+  retired_ = std::move(retired);
   candidates_ = std::move(found);
   support_ = std::move(clustering.support);
   stats_ = clustering.stats;

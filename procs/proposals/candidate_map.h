@@ -109,8 +109,11 @@ class CandidateMap {
   /// clustered), else nothing.
   std::optional<ClusterInput> takeClusterInput();
   /// Takes a clustering of this map as the candidates: each cluster keeps the id of the candidate
-  /// it shares most voxels with. False (nothing changes) when it is of another map id. `utime`:
-  /// the frame time (for keep_lost_s).
+  /// it shares most voxels with; a cluster that takes no current id takes back the id of a
+  /// candidate of its scale that an earlier clustering dropped, if it shares as many voxels with
+  /// it (an object
+  /// whose cluster comes and goes as the map grows keeps one id). False (nothing changes) when it
+  /// is of another map id. `utime`: the frame time (for keep_lost_s).
   bool adopt(Clustering&& clustering, int64_t utime = 0);
 
   int32_t mapId() const { return map_id_; }
@@ -132,6 +135,16 @@ class CandidateMap {
   int64_t views_seen_ = 0;
   bool dirty_ = false;
   std::vector<Candidate> candidates_;
+  /// A dropped candidate, kept so that its cluster can take its id back: one point per key voxel.
+  struct Retired {
+    int32_t id;
+    int scale;  ///< a cluster takes it back only at the same scale
+    std::vector<Eigen::Vector3f> points;
+    Eigen::Vector3f min, max;
+  };
+  /// Dropped candidates remembered (a bound on memory: each is at most a few hundred points).
+  static constexpr size_t kMaxRetired = 1024;
+  std::vector<Retired> retired_;  ///< oldest first
   Support support_;
   int32_t own_ids_ = 1;
   int32_t* ids_;  ///< the next new candidate id

@@ -501,7 +501,9 @@ TEST(ProposalIds, StableAcrossIncrementalUpdatesOfAGrowingMap) {
 // keep_lost_s: a candidate that a re-clustering does not find again, and whose place no new
 // cluster holds (its points were left out of that clustering), stays a candidate with its id for
 // keep_lost_s of frame time, ranked after the candidates found; one whose voxels a new cluster
-// holds (merged into it) is dropped at once, and so is every lost one with keep_lost_s 0.
+// holds (merged into it) is dropped at once, and so is every lost one with keep_lost_s 0. A dropped
+// candidate's cluster that comes back at the same scale takes its id back; at another scale, or
+// mostly elsewhere, it is a new candidate.
 TEST(ProposalIds, ALostCandidateIsKeptForKeepLostSeconds) {
   auto candidate = [](const std::vector<MapPoint>& pts) {
     Candidate c;
@@ -553,9 +555,9 @@ TEST(ProposalIds, ALostCandidateIsKeptForKeepLostSeconds) {
   ASSERT_TRUE(map.adopt(clustering({candidate(a)}), 1500001));
   EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}}))
       << "lost more than 1 s ago: dropped";
-  // Found again: a new candidate in its place.
+  // Found again: it takes its id back.
   ASSERT_TRUE(map.adopt(clustering({candidate(a), candidate(b)}), 1600000));
-  ASSERT_EQ(map.candidates().size(), 2u);
+  EXPECT_EQ(ids(map), (std::map<int32_t, int64_t>{{id_a, -1}, {id_b, -1}}));
   // a merged into a cluster with b: the new cluster holds a's voxels, a is not kept beside it.
   ASSERT_TRUE(map.adopt(clustering({candidate(join(a, b))}), 1700000));
   ASSERT_EQ(map.candidates().size(), 1u);
@@ -564,8 +566,38 @@ TEST(ProposalIds, ALostCandidateIsKeptForKeepLostSeconds) {
   CandidateMap plain(metricOptions());
   plain.update(1, false, 0, {}, join(a, b));
   ASSERT_TRUE(plain.adopt(clustering({candidate(a), candidate(b)}), 0));
+  const auto plain_ids = ids(plain);
   ASSERT_TRUE(plain.adopt(clustering({candidate(a)}), 500000));
   EXPECT_EQ(plain.candidates().size(), 1u);
+  // Clusterings later, b's cluster comes back (a little grown) beside a new one: b takes its id
+  // back, the new one gets a new id.
+  ASSERT_TRUE(plain.adopt(clustering({candidate(a)}), 600000));
+  const auto c = cylinder(0.45f, 0, 0.04f, 0.1f, 0.004f);
+  const auto b_grown = join(b, cylinder(0.15f, 0, 0.045f, 0.1f, 0.004f));
+  ASSERT_TRUE(plain.adopt(clustering({candidate(c), candidate(a), candidate(b_grown)}), 900000));
+  const auto back = ids(plain);
+  ASSERT_EQ(back.size(), 3u);
+  for (const auto& [id, since] : plain_ids) EXPECT_TRUE(back.count(id)) << "id " << id;
+  EXPECT_GT(back.rbegin()->first, plain_ids.rbegin()->first) << "the new cluster's id is new";
+  // A cluster in b's place but mostly elsewhere is another candidate: a new id.
+  CandidateMap other(metricOptions());
+  other.update(1, false, 0, {}, join(a, b));
+  ASSERT_TRUE(other.adopt(clustering({candidate(a), candidate(b)}), 0));
+  ASSERT_TRUE(other.adopt(clustering({candidate(a)}), 500000));
+  auto wide = b;  // b and three more like it in a row: a quarter of its voxels are b's
+  for (float y : {0.12f, 0.24f, 0.36f}) wide = join(wide, cylinder(0.15f, y, 0.04f, 0.1f, 0.004f));
+  ASSERT_TRUE(other.adopt(clustering({candidate(a), candidate(wide)}), 600000));
+  EXPECT_EQ(ids(other).rbegin()->first, 3) << "a third id";
+  // b's region coming back as a cluster of another scale (a part or a pair at another radius
+  // overlaps it as much) is another candidate: a new id.
+  CandidateMap scales(metricOptions());
+  scales.update(1, false, 0, {}, join(a, b));
+  ASSERT_TRUE(scales.adopt(clustering({candidate(a), candidate(b)}), 0));
+  ASSERT_TRUE(scales.adopt(clustering({candidate(a)}), 500000));
+  Candidate b_coarser = candidate(b);
+  b_coarser.scale = 1;
+  ASSERT_TRUE(scales.adopt(clustering({candidate(a), b_coarser}), 600000));
+  EXPECT_EQ(ids(scales).rbegin()->first, 3) << "a third id";
 }
 
 // A map of objects on a table seen from above gives boxes; degenerate input gives none and no
