@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "procs/proposals/density_clustering.h"
 #include "procs/proposals/free_space.h"
@@ -715,21 +716,16 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
         continue;
       c.lost_since = since;
       found.push_back(std::move(c));
-      old_done[o] = true;
+      old_done[o] = true;  // carried over: not dropped
     }
   }
   // The candidates dropped now, one point per key voxel; the oldest go beyond kMaxRetired.
   for (size_t o = 0; o < candidates_.size(); ++o) {
     if (old_done[o] || candidates_[o].points.empty()) continue;
     Retired r{candidates_[o].id, candidates_[o].scale, {}, candidates_[o].min, candidates_[o].max};
-    std::vector<int64_t> seen;
-    for (const auto& p : candidates_[o].points) {
-      const int64_t k = voxelKey(p, key_voxel);
-      auto at = std::lower_bound(seen.begin(), seen.end(), k);
-      if (at != seen.end() && *at == k) continue;
-      seen.insert(at, k);
-      r.points.push_back(p);
-    }
+    std::unordered_set<int64_t> seen;
+    for (const auto& p : candidates_[o].points)
+      if (seen.insert(voxelKey(p, key_voxel)).second) r.points.push_back(p);
     retired.push_back(std::move(r));
   }
   if (retired.size() > kMaxRetired)

@@ -111,9 +111,8 @@ class CandidateMap {
   /// Takes a clustering of this map as the candidates: each cluster keeps the id of the candidate
   /// it shares most voxels with; a cluster that takes no current id takes back the id of a
   /// candidate of its scale that an earlier clustering dropped, if it shares as many voxels with
-  /// it (an object
-  /// whose cluster comes and goes as the map grows keeps one id). False (nothing changes) when it
-  /// is of another map id. `utime`: the frame time (for keep_lost_s).
+  /// it (an object whose cluster comes and goes as the map grows keeps one id). False (nothing
+  /// changes) when it is of another map id. `utime`: the frame time (for keep_lost_s).
   bool adopt(Clustering&& clustering, int64_t utime = 0);
 
   int32_t mapId() const { return map_id_; }
