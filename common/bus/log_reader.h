@@ -2,7 +2,8 @@
 // Reading LCM log files (lcm-logger's format) so that a corrupt log is told from its end.
 // lcm::LogFile silently skips damaged bytes (it scans for the next sync word) and returns NULL
 // both at the end and on a truncated event; LogReader checks that every event starts where the
-// previous one ended and that the last one ends at the end of the file, and says where not.
+// previous one ended and that the last one ends at the end of the file, and says where not. A
+// header is checked before LCM reads its event, so a damaged length never makes it allocate.
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -60,8 +61,14 @@ class LogReader {
   static std::vector<LogRecord> readAll(const std::string& path);
 
  private:
+  struct Header {
+    int64_t eventnum = 0, timestamp = 0, channel_len = 0, data_len = 0;
+  };
   static int64_t recordSize(const LogRecord& r);
+  /// The header at offset when it has the sync word and its event fits in the file.
+  std::optional<Header> headerAt(int64_t offset) const;
   std::optional<LogRecord> readEventAt(int64_t offset) const;
+  LogError damageAt(int64_t offset) const;
 
   std::string path_;
   std::unique_ptr<LogError> pending_error_;

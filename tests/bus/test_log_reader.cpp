@@ -1,5 +1,7 @@
 // The log reader tells a corrupt log from its end, and says where.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -36,6 +38,24 @@ std::vector<uint8_t> readBytes(const std::string& path) {
 }
 void writeBytes(const std::string& path, const std::vector<uint8_t>& b) {
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), b.size());
+}
+
+// Reads a log with only `spare` bytes of address space left; 0 when it stops at `damaged` after
+// the events before it.
+int readWithSpareAddressSpace(const std::string& path, long spare, int64_t damaged) {
+  long pages = 0;
+  std::ifstream("/proc/self/statm") >> pages;
+  const rlim_t limit = static_cast<rlim_t>(pages * sysconf(_SC_PAGESIZE) + spare);
+  const rlimit rl{limit, limit};
+  setrlimit(RLIMIT_AS, &rl);
+  int n = 0;
+  try {
+    LogReader reader(path);
+    while (reader.next()) ++n;
+  } catch (const LogError& e) {
+    return n == 3 && e.offset() == damaged ? 0 : 2;
+  }
+  return 3;
 }
 
 }  // namespace
@@ -115,6 +135,26 @@ TEST(LogReader, DamagedLengthFieldIsAnError) {
   bytes[offsets[3] + 24] = 0x7f;
   writeBytes(path, bytes);
   EXPECT_THROW(LogReader::readAll(path), LogError);
+}
+
+// A header claiming 2 GB is refused before anything is allocated: with 256 MB of address space to
+// spare, LCM's reader (which allocates the claimed length unchecked) would write through NULL.
+TEST(LogReader, AHugeClaimedLengthIsRefusedBeforeAllocation) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "an address-space limit and AddressSanitizer's shadow memory do not mix";
+#else
+  const std::string path = test::tempDir("log_huge") + "/l.lcm";
+  const auto offsets = writeLog(path, 5);
+  auto bytes = readBytes(path);
+  bytes[offsets[3] + 24] = 0x7f;
+  bytes[offsets[3] + 25] = 0xff;
+  bytes[offsets[3] + 26] = 0xff;
+  bytes[offsets[3] + 27] = 0x00;
+  writeBytes(path, bytes);
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(std::exit(readWithSpareAddressSpace(path, 256 << 20, offsets[3])),
+              ::testing::ExitedWithCode(0), "");
+#endif
 }
 
 TEST(LogReader, MissingFile) { EXPECT_THROW(LogReader("/nonexistent/x.lcm"), LogError); }
