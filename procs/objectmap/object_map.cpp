@@ -729,10 +729,8 @@ MapSnapshot ObjectMapEngine::snapshot() const {
         json jc;
         jc["id"] = cid;
         jc["voting_views"] = cand.voting_views;
-        std::vector<std::pair<VoxelKey, int32_t>> votes(cand.votes.begin(), cand.votes.end());
-        std::sort(votes.begin(), votes.end());
         json flat = json::array();  // kx, ky, kz, votes per voxel
-        for (const auto& [k, n] : votes) {
+        for (const auto& [k, n] : cand.votes) {
           for (int a = 0; a < 3; ++a) flat.push_back(voxelKeyAxis(k, a));
           flat.push_back(n);
         }
@@ -819,10 +817,15 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
           for (size_t a = 0; a < 3; ++a)
             if (flat[i + a] < 0 || flat[i + a] > 0xffff)
               throw std::runtime_error("voxel key out of range");
-          cand.votes[packVoxelKey(
-              static_cast<uint32_t>(flat[i]), static_cast<uint32_t>(flat[i + 1]),
-              static_cast<uint32_t>(flat[i + 2]))] = static_cast<int32_t>(flat[i + 3]);
+          cand.votes.emplace_back(
+              packVoxelKey(static_cast<uint32_t>(flat[i]), static_cast<uint32_t>(flat[i + 1]),
+                           static_cast<uint32_t>(flat[i + 2])),
+              static_cast<int32_t>(flat[i + 3]));
         }
+        std::sort(cand.votes.begin(), cand.votes.end());
+        for (size_t i = 1; i < cand.votes.size(); ++i)
+          if (cand.votes[i].first == cand.votes[i - 1].first)
+            throw std::runtime_error("a voxel's votes listed twice");
         cand.box_position_sum = vec3From(jc.at("box_position_sum"));
         cand.box_positions = jsonInt<int32_t>(jc.at("box_positions"));
         cand.box_size = jsonFloat<double>(jc.at("box_size"));

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <set>
 #include <tuple>
+#include <unordered_map>
 
 #include "procs/objectmap/fusion.h"
 
@@ -200,6 +201,13 @@ void ObjectTable::thinViews(int64_t now_utime) {
     }
     c = views.empty() && before > 0 ? candidates_.erase(c) : std::next(c);
   }
+  // The full-rate period is the map's short-term memory: what it last called background (the last
+  // class) and has not seen within it goes with its candidates; objects stay.
+  for (const auto& [id, o] : objects_) {
+    const bool background = o.label >= 0 && static_cast<size_t>(o.label) + 1 == o.posterior.size();
+    if (background && o.user_label.empty() && o.last_seen_utime < now_utime - full_rate_us_)
+      for (int32_t c : o.candidates) candidates_.erase(c);
+  }
 }
 
 std::vector<double> sumViewEvidence(const std::vector<const View*>& views, size_t num_classes,
@@ -218,12 +226,36 @@ void ObjectTable::addVotes(int32_t candidate, const std::vector<VoxelKey>& keys,
   Candidate& c = candidates_[candidate];
   c.id = candidate;
   ++c.voting_views;
-  for (VoxelKey k : keys) ++c.votes[k];
+  std::vector<VoxelKey> sorted;
+  const std::vector<VoxelKey>* in = &keys;
+  if (!std::is_sorted(keys.begin(), keys.end())) {
+    sorted = keys;
+    std::sort(sorted.begin(), sorted.end());
+    in = &sorted;
+  }
+  // Merge of two sorted lists; a key given twice counts once.
+  std::vector<std::pair<VoxelKey, int32_t>> merged;
+  merged.reserve(c.votes.size() + in->size());
+  auto old = c.votes.begin();
+  for (size_t i = 0; i < in->size(); ++i) {
+    const VoxelKey k = (*in)[i];
+    if (i > 0 && (*in)[i - 1] == k) continue;
+    while (old != c.votes.end() && old->first < k) merged.push_back(*old++);
+    if (old != c.votes.end() && old->first == k) {
+      merged.emplace_back(k, old->second + 1);
+      ++old;
+    } else {
+      merged.emplace_back(k, 1);
+    }
+  }
+  merged.insert(merged.end(), old, c.votes.end());
   if (options.forget_share > 0 && c.voting_views % 10 == 0) {
     const double keep = options.forget_share * c.voting_views;
-    for (auto it = c.votes.begin(); it != c.votes.end();)
-      it = it->second < keep ? c.votes.erase(it) : std::next(it);
+    merged.erase(std::remove_if(merged.begin(), merged.end(),
+                                [&](const auto& v) { return v.second < keep; }),
+                 merged.end());
   }
+  c.votes = std::move(merged);
 }
 
 void ObjectTable::addBoxPosition(int32_t candidate, const Eigen::Vector3d& p_world, double size) {
@@ -438,9 +470,8 @@ void ObjectTable::deriveVoxels(const std::function<bool(VoxelKey)>& occupied,
     c.voxels.clear();
     const double need =
         std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
-    for (const auto& [key, n] : c.votes)
+    for (const auto& [key, n] : c.votes)  // sorted by key: so are the voxels
       if (n >= need && occupied(key)) c.voxels.push_back(key);
-    std::sort(c.voxels.begin(), c.voxels.end());
   }
 }
 

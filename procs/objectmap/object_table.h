@@ -21,7 +21,6 @@
 #include <functional>
 #include <map>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -51,8 +50,10 @@ std::vector<double> sumViewEvidence(const std::vector<const View*>& views, size_
 struct Candidate {
   int32_t id = -1;
   std::map<ViewKey, View> views;
-  std::unordered_map<VoxelKey, int32_t> votes;  ///< voxel -> views that voted it
-  int32_t voting_views = 0;                     ///< views that voted (localised, with a depth)
+  /// (voxel, views that voted it), sorted by voxel: 16 bytes a voxel (a hash map took about 50;
+  /// votes are most of the map's memory).
+  std::vector<std::pair<VoxelKey, int32_t>> votes;
+  int32_t voting_views = 0;  ///< views that voted (localised, with a depth)
   /// Where its boxes put it (box centres back-projected at their median depth), for objects that
   /// have no voxels yet: sum, count, and the last box's larger side in map units.
   Eigen::Vector3d box_position_sum = Eigen::Vector3d::Zero();
@@ -97,7 +98,8 @@ class ObjectTable {
 
   /// Adds (or replaces: same frame) a view of a candidate, creating the candidate.
   void addView(int32_t candidate, View view);
-  /// One view's votes for a candidate's voxels. Every 10 voting views, voxels voted in less than
+  /// One view's votes for a candidate's voxels (`keys` sorted, as voxelsInBoxes() gives them;
+  /// sorted here otherwise). Every 10 voting views, voxels voted in less than
   /// forget_share of them are forgotten (bounded memory; they come back if voted again).
   void addVotes(int32_t candidate, const std::vector<VoxelKey>& keys, const VotingOptions& options);
   /// Where a box of the candidate puts it (see Candidate::box_position_sum).
@@ -109,8 +111,10 @@ class ObjectTable {
   /// then stands for 2^k frames (View::frames): the expected evidence of a candidate is unchanged,
   /// and it keeps about rate x P x (1 + log2(age / P) / 2) views. A candidate left without views
   /// (one seen in a few frames long ago: a tentative cluster of the proposals stage, most often) is
-  /// forgotten. A candidate holding a user's label keeps every view. Run by update() whenever the
-  /// newest view is P / 8 past the last run.
+  /// forgotten. A candidate holding a user's label keeps every view. The candidates of an object
+  /// the last update() called background (without a user's label) and that no view of the last P
+  /// shows are forgotten: background is kept only while it is in view. Run by update() whenever
+  /// the newest view is P / 8 past the last run.
   void thinViews(int64_t now_utime);
 
   /// Thins the views (thinViews(), when due), then recomputes the candidates' voxels (voted in >=

@@ -127,7 +127,8 @@ struct ObjectMapOptions {
   /// s: every view of the last views_full_rate_s is kept; older ones are thinned as they age, the
   /// same frames for every candidate, each kept view standing for the frames around it
   /// (ObjectTable::thinViews: memory and fusion cost grow with the log of the session's length,
-  /// not with it; <= 0: every view is kept).
+  /// not with it); what the map calls background is forgotten once out of view for as long
+  /// (<= 0: every view is kept, nothing forgotten).
   double views_full_rate_s = 30;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
   int seq_buffer = 64;
@@ -154,7 +155,7 @@ struct ObjectMapOptions {
       "the average view)");
     v("views_full_rate_s", views_full_rate_s,
       "s of the newest views all kept; older ones are thinned, each kept view standing for 2^k "
-      "frames (<= 0: every view kept)");
+      "frames, and background out of view as long is forgotten (<= 0: every view kept)");
     v("seq_buffer", seq_buffer,
       "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
     v.section("persistence", persistence);
