@@ -315,7 +315,7 @@ class Chaos {
   std::vector<ChaosEvent> events_;
 };
 
-// Per process: RSS after the first loop and at the end, CPU, restarts.
+// Per process: RSS after the first loop, at half time and at the end, CPU, restarts.
 json processFigures(const Watch& w, const std::map<std::string, proc_info_t>& final_procs,
                     double base_from, double duration) {
   json out = json::object();
@@ -335,6 +335,11 @@ json processFigures(const Watch& w, const std::map<std::string, proc_info_t>& fi
     p["rss_mb_after_first_loop"] = after_first;
     p["rss_mb_at_end"] = at_end;
     p["rss_growth_pct"] = after_first > 0 ? 100.0 * (at_end - after_first) / after_first : 0.0;
+    // A leak grows in the second half as in the first; filling maps up (the first passes over a
+    // looped recording) does not.
+    const double at_half = median_between(duration / 2, duration / 2 + 30);
+    p["rss_mb_at_half"] = at_half;
+    p["rss_growth_second_half_pct"] = at_half > 0 ? 100.0 * (at_end - at_half) / at_half : 0.0;
     p["cpu_pct_mean"] = cpu.empty() ? 0.0
                                     : std::accumulate(cpu.begin(), cpu.end(), 0.0) /
                                           static_cast<double>(cpu.size());
