@@ -102,7 +102,13 @@ std::set<int32_t> savedObjects(const std::string& path) {
   std::set<int32_t> ids;
   try {
     const json doc = json::parse(in);
-    for (const auto& o : doc.at("content").at("objects")) ids.insert(o.at("id").get<int32_t>());
+    // What the map calls background it forgets once out of view (procs/objectmap/README.md), at
+    // the first regrouping after a load as at any other: only objects must come back.
+    const json& content = doc.at("content");
+    const std::string background = content.at("classes").back().get<std::string>();
+    for (const auto& o : content.at("objects"))
+      if (o.value("label", std::string()) != background || o.contains("user_label"))
+        ids.insert(o.at("id").get<int32_t>());
   } catch (const std::exception&) {
   }
   return ids;
