@@ -54,7 +54,7 @@ std::optional<LogRecord> LogReader::next() {
   }
   const int64_t end = std::ftell(log_->getFilePtr());
   const int64_t size = kHeaderBytes + static_cast<int64_t>(ev->channel.size()) + ev->datalen;
-  if (end - size != expected_offset_) {
+  if (end - size != expected_offset_) {  // a guard: LCM scans only when the sync word is not there
     done_ = true;
     throw damageAt(expected_offset_);
   }

@@ -823,9 +823,10 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
               static_cast<int32_t>(flat[i + 3]));
         }
         std::sort(cand.votes.begin(), cand.votes.end());
-        for (size_t i = 1; i < cand.votes.size(); ++i)
-          if (cand.votes[i].first == cand.votes[i - 1].first)
-            throw std::runtime_error("a voxel's votes listed twice");
+        if (std::adjacent_find(cand.votes.begin(), cand.votes.end(),
+                               [](const auto& a, const auto& b) { return a.first == b.first; }) !=
+            cand.votes.end())
+          throw std::runtime_error("a voxel's votes listed twice");
         cand.box_position_sum = vec3From(jc.at("box_position_sum"));
         cand.box_positions = jsonInt<int32_t>(jc.at("box_positions"));
         cand.box_size = jsonFloat<double>(jc.at("box_size"));

@@ -135,6 +135,8 @@ class CandidateMap {
   bool dirty_ = false;
   std::vector<Candidate> candidates_;
   /// A dropped candidate, kept so that its cluster can take its id back: one point per key voxel.
+  /// Points, not keys: the key voxel (2 x radius) follows each clustering's scene scale and the
+  /// young-map radius, so the keys are made again at the scale of the clustering that matches.
   struct Retired {
     int32_t id;
     int scale;  ///< a cluster takes it back only at the same scale
