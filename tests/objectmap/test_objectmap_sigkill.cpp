@@ -128,13 +128,11 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
     const bool saving = round % 4 == 2;  // killed only after a save of its own is committed
     saving_runs += saving;
     const std::string prey = round % 4 == 1 ? ".ot.tmp." : ".json.tmp.";
-    // A hunting run lives long enough for a save to begin (the first one is due after 0.2 s); a
-    // saving run lives until its first save is on disk (at most 10 s), then as long again as a
-    // plain run.
+    // A hunting run lives until its prey (a save's temporary file) appears, however long the
+    // start takes (a sanitized build needs seconds; at most 10 s); a saving run lives until its
+    // first save is on disk (at most 10 s), then as long again as a plain run.
     const double kill_after = kill_after_s(rng);
-    auto kill_at = Clock::now() + std::chrono::duration<double>(saving ? 10.0
-                                                                : hunt ? 0.4 + kill_after
-                                                                       : kill_after);
+    auto kill_at = Clock::now() + std::chrono::duration<double>(saving || hunt ? 10.0 : kill_after);
     int64_t committed = committed_before_run;
     bool writing = false, saved = false;
     while (Clock::now() < kill_at && !writing) {
@@ -150,7 +148,7 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
         saved = true;
         kill_at = Clock::now() + std::chrono::duration<double>(kill_after);
       }
-      const auto next_frame = Clock::now() + 4ms;
+      const auto next_frame = Clock::now() + 20ms;  // 50 Hz: faster than a camera
       while (Clock::now() < next_frame && !writing) {
         bus.handle(0);
         writing = hunt && temporaryFiles(map_dir, prey) > 0;
@@ -201,6 +199,7 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
   EXPECT_EQ(previous.size(), 3u) << "the three objects of the scene, with stable ids";
   EXPECT_EQ(saving_runs_saved, saving_runs) << "every run that waited for a save saw one";
   EXPECT_GE(saves_seen, saving_runs) << "runs that committed a save";
+  EXPECT_GT(hunted, 25) << "most of the 50 hunting runs were killed as a save began";
   EXPECT_GT(mid_save, 15) << "many kills hit a save in progress";
   for (const auto& [id, views] : previous) EXPECT_GT(views, 500);
 }

@@ -275,10 +275,21 @@ TEST(SupervisorTwoHosts, PipelineMessagesCrossAndCtlSeesBothHosts) {
       },
       30s);
   EXPECT_TRUE(both) << status << sup_a.log() << sup_b.log();
-  std::this_thread::sleep_for(3s);
-  logger_b.stop();
+  // Counted from the log as it grows (lcm-logger flushes every 100 ms; a half-written last event
+  // ends the count), until enough has crossed or 30 s: a slow build (sanitizers) starts late.
   std::map<std::string, int> heard;
-  for (const auto& ev : LogReader::readAll(log_b)) ++heard[ev.channel];
+  auto count = [&] {
+    heard.clear();
+    try {
+      LogReader reader(log_b);
+      while (auto ev = reader.next()) ++heard[ev->channel];
+    } catch (const LogError&) {
+    }
+    return heard["CAMERA"] > 5 && heard["SLAM_POSE"] > 5 && heard["RECOGNIZER_STATUS"] > 0;
+  };
+  test::waitUntil(count, 30s);
+  logger_b.stop();
+  count();
   std::printf("heard on host b: CAMERA %d, SLAM_POSE %d, RECOGNIZER_STATUS %d\n", heard["CAMERA"],
               heard["SLAM_POSE"], heard["RECOGNIZER_STATUS"]);
   std::printf("%s", status.c_str());
