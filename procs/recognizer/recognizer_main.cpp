@@ -144,14 +144,18 @@ class RecognizerNode {
   }
 
   /// Live reload: starts loading the model file anew on a second thread (the current model keeps
-  /// classifying); one load at a time, a request during a load is served after it.
+  /// classifying); one load at a time, a request during a load is served after it if the file
+  /// changed since that load began.
   void requestReload(const std::string& why) {
     if (!recognizer_) {
       tried_ = false;  // no model yet: the next ensureModel() tries at once
       return;
     }
     if (loading_.valid()) {
-      reload_again_ = true;
+      // The file being loaded is the one asked for: its load answers this request too. (The
+      // watch asks every model_watch_s until the load is swapped in; a load slower than that
+      // was loaded twice.)
+      if (!(stampOf(options_.model) == loading_stamp_)) reload_again_ = true;
       return;
     }
     spdlog::info("reloading the model {} ({})", options_.model, why);

@@ -407,10 +407,11 @@ TEST(MapFiles, SaveAndLoadTimesOfLargeMaps) {
     RecordProperty("fusion_us_" + std::to_string(n), static_cast<int>(fuse_ms * 1000));
     RecordProperty("load_ms_" + std::to_string(n), static_cast<int>(load_ms));
     RecordProperty("bytes_" + std::to_string(n), static_cast<int>(r.bytes_written));
-    EXPECT_LT(cr.ms, 5000);
-    EXPECT_LT(fuse_ms, 100);
-    EXPECT_LT(save_ms, 3000);
-    EXPECT_LT(load_ms, 3000);
+    // Loose bounds against a pathological slowdown (an order of magnitude over this machine's).
+    EXPECT_LT(cr.ms, 5000 * test::kSlowdown);
+    EXPECT_LT(fuse_ms, 100 * test::kSlowdown);
+    EXPECT_LT(save_ms, 3000 * test::kSlowdown);
+    EXPECT_LT(load_ms, 3000 * test::kSlowdown);
   }
 }
 

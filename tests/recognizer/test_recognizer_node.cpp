@@ -260,7 +260,7 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
     b_bytes.assign(std::istreambuf_iterator<char>(f), {});
   }
   std::ofstream(dir + "/recognizer.yaml")
-      << "recognizer:\n  model: " << model << "\n  model_watch_s: 0.2\n";
+      << "recognizer:\n  model: " << model << "\n  model_watch_s: 0.01\n";
 
   cv::Mat frame = test::texturedFrame(5);
   test::syntheticObjectView("disc", 1, 3, 96).copyTo(frame(cv::Rect(200, 150, 96, 96)));
@@ -291,6 +291,10 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
   send(l.bus, 2);
   send(l.bus, 3);
   ASSERT_TRUE(l.pump([&] { return l.answers >= 4; }, 10s)) << node->log();
+  // One replacement, one load: the watch (every 10 ms here, far shorter than a load) asking again
+  // while the file is loading does not load it a second time.
+  EXPECT_FALSE(l.pump([&] { return counter(l.last_status, "reloads") >= 2; }, 1500ms))
+      << node->log();
 
   // A damaged replacement: refused, named, and the new model goes on answering.
   replaceFile(model, b_bytes.substr(0, b_bytes.size() / 2));

@@ -12,6 +12,15 @@
 
 namespace slamaware::test {
 
+/// How many times slower code runs in this build than in the optimised one: the few loose bounds
+/// on time in tests (against a pathological slowdown; speed targets are in `make bench`) are
+/// multiplied by it. Sanitized code ran 2-10 times slower here, most with two tests at once.
+#if defined(SLAMAWARE_SANITIZE)
+inline constexpr double kSlowdown = 10;
+#else
+inline constexpr double kSlowdown = 1;
+#endif
+
 /// build/bin/<name>
 std::string binPath(const std::string& name);
 /// <source>/<relative>
