@@ -85,8 +85,12 @@ struct ChaosEvent {
   double back_s = -1;  ///< until it runs again with a new pid (-1: not back)
   double limit_s = 0;  ///< the target for back_s
   std::string detail;
-  std::set<int32_t> saved_objects;  ///< objects in the save it must reload
-  std::set<int32_t> lost_objects;   ///< of those, not in its first OBJECT_MAP after the restart
+  /// Objects in the save it must reload, each with its candidates.
+  std::map<int32_t, std::set<int32_t>> saved_objects;
+  /// Of those, in its first OBJECT_MAP after the restart: merged (the id gone, its candidates in
+  /// another object: id -> that object) and lost (neither the id nor any of its candidates).
+  std::map<int32_t, int32_t> merged_objects;
+  std::set<int32_t> lost_objects;
   bool map_checked = false;
 };
 
@@ -96,10 +100,11 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
 }
 
-/// Object ids of a saved generation's JSON (the content's "objects"); empty if unreadable.
-std::set<int32_t> savedObjects(const std::string& path) {
+/// Object ids of a saved generation's JSON (the content's "objects") with their candidates' ids;
+/// empty if unreadable.
+std::map<int32_t, std::set<int32_t>> savedObjects(const std::string& path) {
   std::ifstream in(path);
-  std::set<int32_t> ids;
+  std::map<int32_t, std::set<int32_t>> ids;
   try {
     const json doc = json::parse(in);
     // What the map calls background it forgets once out of view (procs/objectmap/README.md), at
@@ -107,8 +112,10 @@ std::set<int32_t> savedObjects(const std::string& path) {
     const json& content = doc.at("content");
     const std::string background = content.at("classes").back().get<std::string>();
     for (const auto& o : content.at("objects"))
-      if (o.value("label", std::string()) != background || o.contains("user_label"))
-        ids.insert(o.at("id").get<int32_t>());
+      if (o.value("label", std::string()) != background || o.contains("user_label")) {
+        auto& candidates = ids[o.at("id").get<int32_t>()];
+        for (const auto& c : o.at("candidates")) candidates.insert(c.at("id").get<int32_t>());
+      }
   } catch (const std::exception&) {
   }
   return ids;
@@ -236,14 +243,26 @@ class Chaos {
   }
 
   // Its first OBJECT_MAP after the restart must hold every object of the save it loaded (its
-  // heartbeat goes on while it loads: the map may come some seconds later).
+  // heartbeat goes on while it loads: the map may come some seconds later), by its id or, if the
+  // first regrouping merged it into another object, by its candidates.
   void checkReloaded(double since, ChaosEvent* e) {
     while (watch_.t() < since + 60 && !(watch_.last_map && watch_.last_map_t > since)) pump_(0.05);
     if (!(watch_.last_map && watch_.last_map_t > since)) return;
     std::set<int32_t> now_ids;
-    for (const auto& o : watch_.last_map->objects) now_ids.insert(o.id);
-    for (int32_t id : e->saved_objects)
-      if (!now_ids.count(id)) e->lost_objects.insert(id);
+    std::map<int32_t, int32_t> object_of_candidate;
+    for (const auto& o : watch_.last_map->objects) {
+      now_ids.insert(o.id);
+      for (int32_t c : o.candidate_ids) object_of_candidate[c] = o.id;
+    }
+    for (const auto& [id, candidates] : e->saved_objects) {
+      if (now_ids.count(id)) continue;
+      const auto into = std::find_if(candidates.begin(), candidates.end(),
+                                     [&](int32_t c) { return object_of_candidate.count(c) > 0; });
+      if (into != candidates.end())
+        e->merged_objects[id] = object_of_candidate[*into];
+      else
+        e->lost_objects.insert(id);
+    }
     e->map_checked = true;
   }
 
@@ -384,6 +403,9 @@ json eventsJson(const std::vector<ChaosEvent>& events) {
       j["saved_objects"] = e.saved_objects.size();
       j["map_checked"] = e.map_checked;
       j["lost_objects"] = std::vector<int32_t>(e.lost_objects.begin(), e.lost_objects.end());
+      json merged = json::object();
+      for (const auto& [id, into] : e.merged_objects) merged[std::to_string(id)] = into;
+      j["merged_objects"] = merged;
     }
     out.push_back(j);
   }
