@@ -412,6 +412,17 @@ json eventsJson(const std::vector<ChaosEvent>& events) {
   return out;
 }
 
+// The 1 Hz samples behind the plot, for a user's own analysis: t_s,process,rss_mb,cpu_pct.
+void writeSamplesCsv(const Watch& w, const std::string& path) {
+  std::ofstream out(path);
+  out << "t_s,process,rss_mb,cpu_pct\n";
+  for (const auto& [name, v] : w.samples)
+    for (const auto& s : v)
+      out << s.t << ',' << name << ',' << static_cast<double>(s.rss_kb) / 1024.0 << ',' << s.cpu_pct
+          << '\n';
+  if (!out) throw std::runtime_error(path + ": cannot write");
+}
+
 // RSS over time, one curve per process.
 void plotRss(const Watch& w, double duration, const std::string& path) {
   double max_mb = 1;
@@ -521,6 +532,7 @@ int main(int argc, char** argv) {
     if (!attacks.events().empty()) report["chaos_events"] = eventsJson(attacks.events());
     std::ofstream(out_dir + "/report.json") << report.dump(2) << "\n";
     plotRss(watch, duration, out_dir + "/rss.png");
+    writeSamplesCsv(watch, out_dir + "/samples.csv");
     std::printf("%s\n", report.dump(2).c_str());
     return 0;
   } catch (const std::exception& e) {
