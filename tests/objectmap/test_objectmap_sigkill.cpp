@@ -129,10 +129,10 @@ TEST(ObjectMapSigkill, AHundredKillsDuringAReplayNeverLoseASavedObject) {
     saving_runs += saving;
     const std::string prey = round % 4 == 1 ? ".ot.tmp." : ".json.tmp.";
     // A hunting run lives until its prey (a save's temporary file) appears, however long the
-    // start takes (a sanitized build needs seconds; at most 10 s); a saving run lives until its
-    // first save is on disk (at most 10 s), then as long again as a plain run.
+    // start takes; a saving run lives until its first save is on disk, then as long again as a
+    // plain run. At most 30 s each: a sanitized build beside another test once took over 10 s.
     const double kill_after = kill_after_s(rng);
-    auto kill_at = Clock::now() + std::chrono::duration<double>(saving || hunt ? 10.0 : kill_after);
+    auto kill_at = Clock::now() + std::chrono::duration<double>(saving || hunt ? 30.0 : kill_after);
     int64_t committed = committed_before_run;
     bool writing = false, saved = false;
     while (Clock::now() < kill_at && !writing) {
