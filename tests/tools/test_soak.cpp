@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "tests/support/test_support.h"
+#include "tools/eval/stats.h"
 
 using namespace slamaware;
 using nlohmann::json;
@@ -86,18 +86,14 @@ TEST(Soak, TheSupervisedSystemRunsAndTheReportAgreesWithItsSamples) {
     ASSERT_TRUE(std::getline(s, t, ',') && std::getline(s, name, ',') && std::getline(s, rss, ','))
         << line;
     ++rows[name];
-    if (std::stod(t) >= duration - 30 && std::stod(t) < duration + 1)
-      last_30_s[name].push_back(std::stod(rss));
+    const double t_s = std::stod(t);
+    if (t_s >= duration - 30 && t_s < duration + 1) last_30_s[name].push_back(std::stod(rss));
   }
   for (const char* name : {"camera", "slam", "proposals", "recognizer", "objectmap"}) {
     SCOPED_TRACE(name);
     EXPECT_GE(rows[name], 35);  // 45 s at 1 Hz, less the supervisor's start
-    std::vector<double>& v = last_30_s[name];
-    ASSERT_GE(v.size(), 25u);
-    std::sort(v.begin(), v.end());
-    const double median =
-        v.size() % 2 ? v[v.size() / 2] : (v[v.size() / 2 - 1] + v[v.size() / 2]) / 2;
+    ASSERT_GE(last_30_s[name].size(), 25u);
     const double end = r["processes"][name]["rss_mb_at_end"].get<double>();
-    EXPECT_NEAR(median, end, 0.01 * end);
+    EXPECT_NEAR(median(last_30_s[name]), end, 0.01 * end);
   }
 }

@@ -75,6 +75,7 @@ struct Sample {
   double t;
   int64_t rss_kb;
   double cpu_pct;
+  double rssMb() const { return static_cast<double>(rss_kb) / 1024.0; }
 };
 
 struct ChaosEvent {
@@ -348,7 +349,7 @@ json processFigures(const Watch& w, const std::map<std::string, proc_info_t>& fi
     auto median_between = [&](double a, double b) {
       std::vector<double> r;
       for (const auto& s : v)
-        if (s.t >= a && s.t < b) r.push_back(static_cast<double>(s.rss_kb) / 1024.0);
+        if (s.t >= a && s.t < b) r.push_back(s.rssMb());
       return r.empty() ? 0.0 : median(r);
     };
     const double after_first = median_between(base_from, base_from + 30);
@@ -418,8 +419,7 @@ void writeSamplesCsv(const Watch& w, const std::string& path) {
   out << "t_s,process,rss_mb,cpu_pct\n";
   for (const auto& [name, v] : w.samples)
     for (const auto& s : v)
-      out << s.t << ',' << name << ',' << static_cast<double>(s.rss_kb) / 1024.0 << ',' << s.cpu_pct
-          << '\n';
+      out << s.t << ',' << name << ',' << s.rssMb() << ',' << s.cpu_pct << '\n';
   if (!out) throw std::runtime_error(path + ": cannot write");
 }
 
@@ -427,7 +427,7 @@ void writeSamplesCsv(const Watch& w, const std::string& path) {
 void plotRss(const Watch& w, double duration, const std::string& path) {
   double max_mb = 1;
   for (const auto& [name, v] : w.samples)
-    for (const auto& s : v) max_mb = std::max(max_mb, static_cast<double>(s.rss_kb) / 1024.0);
+    for (const auto& s : v) max_mb = std::max(max_mb, s.rssMb());
   cv::Mat canvas(480, 900, CV_8UC3, cv::Scalar(255, 255, 255));
   PlotAxis x{0, duration / 60, false, {}, "minutes"},
       y{0, max_mb * 1.1, false, {}, "resident memory, MB"};
@@ -441,7 +441,7 @@ void plotRss(const Watch& w, double duration, const std::string& path) {
   int c = 0;
   for (const auto& [name, v] : w.samples) {
     std::vector<cv::Point2d> pts;
-    for (const auto& s : v) pts.emplace_back(s.t / 60, static_cast<double>(s.rss_kb) / 1024.0);
+    for (const auto& s : v) pts.emplace_back(s.t / 60, s.rssMb());
     panel.curve(pts, colours[c++ % 6], name);
   }
   writeImage(path, canvas);
