@@ -159,10 +159,6 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
     return false;
   }
   Segment& seg = segmentFor(c.map_id);
-  if (c.full) {
-    seg.occupancy.clear();
-    seg.inserted.clear();  // refilled below: a full cloud holds every keyframe's points so far
-  }
   std::unordered_map<int32_t, Eigen::Vector3f> origins;
   for (size_t k = 0; k < nk; ++k) {
     const Eigen::Vector3f o(c.kf_x[k], c.kf_y[k], c.kf_z[k]);
@@ -178,11 +174,11 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
   r.segment = seg.id;
   std::map<int32_t, size_t> seen;  // points of each keyframe in this cloud
   for (size_t i = 0; i < n; ++i) {
-    // Its index among its keyframe's points: those before seg.inserted are in the tree already
-    // (none after a full cloud, which cleared it).
+    // Its index among its keyframe's points: in an incremental cloud those before seg.inserted
+    // are in the map already. A full cloud gives each keyframe's points whole.
     const size_t index = seen[c.keyframe_ids[i]]++;
     if (i % stride != 0) continue;
-    if (index < seg.inserted[c.keyframe_ids[i]]) {
+    if (!c.full && index < seg.inserted[c.keyframe_ids[i]]) {
       ++r.repeated;
       continue;
     }
@@ -193,10 +189,25 @@ bool ObjectMapEngine::onMap(const point_cloud_t& c, std::string* why, CloudRepor
     }
     batches[c.keyframe_ids[i]].emplace_back(c.x[i], c.y[i], c.z[i]);
   }
+  if (c.full) {
+    // Every keyframe's points as they are now: a keyframe whose points or origin changed is
+    // replaced, one no longer in the map (culled, or without points) is taken back, the others
+    // cost nothing (OccupancyMap: the evidence of keyframes adds up in any order).
+    for (int32_t kf : seg.occupancy.keyframes())
+      if (!batches.count(kf)) {
+        seg.occupancy.removeKeyframe(kf);
+        ++r.keyframes_removed;
+      }
+    seg.inserted.clear();
+  }
   for (const auto& [kf, count] : seen) seg.inserted[kf] = std::max(seg.inserted[kf], count);
   for (const auto& [kf, points] : batches) {
     auto o = origins.find(kf);
-    const InsertStats s = seg.occupancy.insert(points, o == origins.end() ? nullptr : &o->second);
+    const Eigen::Vector3f* origin = o == origins.end() ? nullptr : &o->second;
+    const InsertStats s = c.full ? seg.occupancy.setKeyframe(kf, points, origin)
+                                 : seg.occupancy.addToKeyframe(kf, points, origin);
+    if (c.full) ++(s.unchanged ? r.keyframes_unchanged : r.keyframes_changed);
+    r.repeated += s.unchanged;
     r.insert.points += s.points;
     r.insert.dropped += s.dropped;
     r.insert.occupied_updates += s.occupied_updates;
@@ -222,8 +233,13 @@ bool ObjectMapEngine::onPose(const pose_t& pose, std::string* why) {
     return false;
   }
   if (last_pose_seq_ >= 0 && (pose.seq < last_pose_seq_ || pose.utime < last_pose_utime_)) {
-    // The camera or a replay restarted: SLAM's map ids start again and mean other maps.
+    // The camera or a replay restarted: SLAM's map ids start again and mean other maps. The
+    // segments of the session that ended take no more clouds.
     ++sessions_;
+    for (const auto& [slam_id, sid] : session_maps_) {
+      segments_.at(sid)->occupancy.freeze();
+      segments_.at(sid)->inserted.clear();
+    }
     session_maps_.clear();
     poses_.clear();
     proposals_.clear();

@@ -57,7 +57,7 @@ struct Segment {
   OccupancyMap occupancy;
   ObjectTable table;
   bool dirty = true;  ///< objects need regrouping
-  /// SLAM keyframe -> its points already in the tree (from incremental clouds or the last full
+  /// SLAM keyframe -> its points already in the map (from incremental clouds or the last full
   /// one). SLAM republishes a keyframe as its points converge, appending to them: only the new
   /// ones are inserted.
   std::map<int32_t, size_t> inserted;
@@ -73,6 +73,9 @@ struct CloudReport {
   bool full = false;
   InsertStats insert;
   size_t repeated = 0;  ///< points of a republished keyframe that were inserted before
+  /// A full cloud's keyframes: given again as they were, replaced (moved, points added or
+  /// dropped), taken back (no longer in SLAM's map).
+  size_t keyframes_unchanged = 0, keyframes_changed = 0, keyframes_removed = 0;
   double ms = 0;
 };
 

@@ -189,10 +189,11 @@ class ObjectMapNode {
     status_.count("cloud_points", static_cast<int64_t>(r.insert.points));
     status_.setCounter("map_insert_ms", static_cast<int64_t>(r.ms));
     spdlog::debug(
-        "{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped, {} inserted before) in "
-        "{:.0f} ms",
+        "{} cloud of seq {} (map {} -> segment {}): {} points ({} dropped, {} inserted before; "
+        "keyframes {} unchanged, {} replaced, {} removed) in {:.0f} ms",
         r.full ? "full" : "incremental", m.seq, m.map_id, r.segment, r.insert.points,
-        r.insert.dropped, r.repeated, r.ms);
+        r.insert.dropped, r.repeated, r.keyframes_unchanged, r.keyframes_changed,
+        r.keyframes_removed, r.ms);
   }
 
   void onDetections(const detections_t& m) {

@@ -6,8 +6,11 @@
 #include <cmath>
 #include <cstring>
 #include <iostream>
+#include <iterator>
+#include <map>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
 namespace slamaware::objectmap {
@@ -29,47 +32,163 @@ void applySensorModel(octomap::ColorOcTree& tree, const OccupancyOptions& o) {
   tree.setOccupancyThres(0.5);
 }
 
+double logit(double p) { return std::log(p / (1.0 - p)); }
+
+// A voxel's evidence: its log-odds in the tree before (read from a file, or of the keyframes
+// before a freeze), and the keyframes that saw it occupied or free since. 8 bytes: counts of
+// 16 bits, kept within their range (a voxel of more than 32,767 keyframes at once, far beyond a
+// SLAM map's, would stop counting there).
+struct Evidence {
+  float base = 0;
+  int16_t hits = 0, misses = 0;
+};
+constexpr int kMaxCount = INT16_MAX;
+
+// What one keyframe contributed: the points given (as given, for "unchanged") and the voxels it
+// updated, each sorted.
+struct KeyframeRecord {
+  std::vector<Eigen::Vector3f> points;
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+  bool has_origin = false;
+  bool one_origin = true;  // every batch of points came with the same origin
+  std::vector<VoxelKey> occupied, free;
+};
+
+bool sameBits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Eigen::Vector3f)) == 0);
+}
+bool sameOrigin(const KeyframeRecord& r, const Eigen::Vector3f* origin) {
+  if (!r.one_origin || r.has_origin != (origin != nullptr)) return false;
+  return !origin || std::memcmp(r.origin.data(), origin->data(), sizeof(Eigen::Vector3f)) == 0;
+}
+
+// a \ b of sorted vectors.
+std::vector<VoxelKey> minus(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+  std::vector<VoxelKey> out;
+  std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
+std::vector<VoxelKey> merged(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+  std::vector<VoxelKey> out;
+  out.reserve(a.size() + b.size());
+  std::merge(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
+
 }  // namespace
 
 struct OccupancyMap::Impl {
   OccupancyOptions options;
+  // While `live`, the evidence is in `voxels` and the tree is empty but for the moment it is
+  // written out (and does the key and ray arithmetic); a map read from a file or frozen keeps its
+  // evidence in the tree only (less memory) until a keyframe is given (thaw()). (OctoMap 1.9's
+  // deleteNode cannot remove a leaf whose parent has no other child, so the tree is built afresh
+  // rather than kept in step.)
   octomap::ColorOcTree tree;
-  mutable bool cache_valid = true;  // an empty tree's list is empty; a read tree's is built on use
+  bool live = true;
+  std::unordered_map<VoxelKey, Evidence> voxels;
+  std::map<int32_t, KeyframeRecord> keyframes;
+  float hit, miss, low, high;       // log-odds
+  mutable bool cache_valid = true;  // an empty map's list is empty; a read map's is built on use
   mutable std::vector<OccupiedVoxel> occupied;
 
-  Impl(const OccupancyOptions& o, double resolution) : options(o), tree(resolution) {
+  Impl(const OccupancyOptions& o, double resolution)
+      : options(o),
+        tree(resolution),
+        hit(static_cast<float>(logit(o.prob_hit))),
+        miss(static_cast<float>(logit(o.prob_miss))),
+        low(static_cast<float>(logit(o.clamp_min))),
+        high(static_cast<float>(logit(o.clamp_max))) {
     applySensorModel(tree, o);
+  }
+
+  float logOdds(const Evidence& e) const {
+    const double v = static_cast<double>(e.base) + e.hits * static_cast<double>(hit) +
+                     e.misses * static_cast<double>(miss);
+    return std::clamp(static_cast<float>(v), low, high);
+  }
+  const Evidence* find(VoxelKey key) const {
+    auto it = voxels.find(key);
+    return it == voxels.end() ? nullptr : &it->second;
+  }
+  bool occupiedNow(VoxelKey key) const {
+    const Evidence* e = find(key);
+    return e && logOdds(*e) >= 0;
+  }
+
+  // Calls f(key, log-odds) for every finest voxel of the tree's leaves (`all`) or of its occupied
+  // ones. A pruned occupied node (a file may have them) stands for every finest voxel it covers
+  // (checkOctreeFile bounds their number). A pruned free node is skipped (this map never writes
+  // one; a file's stays in the tree, its voxels unknown to a thawed map).
+  template <class F>
+  void forEachLeafVoxel(bool all, F f) const {
+    const unsigned depth_max = tree.getTreeDepth();
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+      const float v = it->getLogOdds();
+      const bool occ = tree.isNodeOccupied(*it);
+      if (!all && !occ) continue;
+      const octomap::OcTreeKey& k = it.getKey();
+      if (it.getDepth() >= depth_max) {
+        f(pack(k), v);
+        continue;
+      }
+      if (!occ) continue;
+      // A node at depth d with key k spans keys [k - h, k + h) with h = 2^(15 - d) on each axis.
+      const int h = 1 << (depth_max - 1 - it.getDepth());
+      for (int dx = -h; dx < h; ++dx)
+        for (int dy = -h; dy < h; ++dy)
+          for (int dz = -h; dz < h; ++dz)
+            f(packVoxelKey(static_cast<uint32_t>(k[0] + dx), static_cast<uint32_t>(k[1] + dy),
+                           static_cast<uint32_t>(k[2] + dz)),
+              v);
+    }
   }
 
   void buildCache() const {
     occupied.clear();
     const double res = tree.getResolution();
-    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-      if (!tree.isNodeOccupied(*it)) continue;
-      const unsigned depth = it.getDepth();
-      const octomap::OcTreeKey& k = it.getKey();
-      if (depth >= tree.getTreeDepth()) {
-        occupied.push_back({pack(k), voxelCentre(pack(k), res).cast<float>()});
-        continue;
-      }
-      // A pruned node (a loaded file may have them): every finest voxel it covers. A node at
-      // depth d with key k spans keys [k - h, k + h) with h = 2^(15 - d) on each axis.
-      const int h = 1 << (tree.getTreeDepth() - 1 - depth);
-      for (int dx = -h; dx < h; ++dx)
-        for (int dy = -h; dy < h; ++dy)
-          for (int dz = -h; dz < h; ++dz) {
-            const VoxelKey v =
-                packVoxelKey(static_cast<uint32_t>(k[0] + dx), static_cast<uint32_t>(k[1] + dy),
-                             static_cast<uint32_t>(k[2] + dz));
-            occupied.push_back({v, voxelCentre(v, res).cast<float>()});
-          }
+    if (live) {
+      for (const auto& [key, e] : voxels)
+        if (logOdds(e) >= 0) occupied.push_back({key, voxelCentre(key, res).cast<float>()});
+    } else {
+      forEachLeafVoxel(false, [&](VoxelKey key, float) {
+        occupied.push_back({key, voxelCentre(key, res).cast<float>()});
+      });
     }
     std::sort(occupied.begin(), occupied.end(), byKey);
     cache_valid = true;
   }
 
+  // The evidence back from the tree into `voxels` (a read or frozen map given a keyframe).
+  void thaw() {
+    if (live) return;
+    forEachLeafVoxel(true, [&](VoxelKey key, float v) { voxels.emplace(key, Evidence{v, 0, 0}); });
+    tree.clear();
+    live = true;
+  }
+
+  // The tree of the evidence in `voxels` (unpruned, so its shape depends only on the voxels).
+  void buildTree() {
+    tree.clear();
+    std::vector<std::pair<VoxelKey, float>> sorted;  // neighbours one after another: 2.5x faster
+    sorted.reserve(voxels.size());
+    for (const auto& [key, e] : voxels) sorted.emplace_back(key, logOdds(e));
+    std::sort(sorted.begin(), sorted.end());
+    for (const auto& [key, v] : sorted) tree.setNodeValue(unpack(key), v, true);
+  }
+
+  // The evidence into the tree; `voxels` and the keyframes' records dropped.
+  void freeze() {
+    if (!live) return;
+    buildTree();
+    std::unordered_map<VoxelKey, Evidence>().swap(voxels);
+    std::map<int32_t, KeyframeRecord>().swap(keyframes);
+    live = false;
+  }
+
   // The occupied list after an update in which the voxels `now_occupied` are occupied and
-  // `now_not` are not (each voxel in one of them at most): one merge, not a pass over the tree.
+  // `now_not` are not (each voxel in one of them at most): one merge, not a pass over the map.
   void applyChanges(std::vector<VoxelKey> now_occupied, std::vector<VoxelKey> now_not) {
     std::sort(now_occupied.begin(), now_occupied.end());
     std::sort(now_not.begin(), now_not.end());
@@ -92,6 +211,70 @@ struct OccupancyMap::Impl {
   }
 
   static bool byKey(const OccupiedVoxel& a, const OccupiedVoxel& b) { return a.key < b.key; }
+
+  // The voxels a batch of points updates: occupied where a point falls, free where a ray crosses
+  // (and no point falls), each sorted.
+  void updatesOf(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* origin,
+                 std::vector<VoxelKey>* occ, std::vector<VoxelKey>* free,
+                 InsertStats* stats) const {
+    std::vector<octomap::OcTreeKey> keys;
+    for (const Eigen::Vector3f& p : points) {
+      octomap::OcTreeKey key;
+      if (!p.allFinite() ||
+          (origin && options.max_range > 0 && (p - *origin).norm() > options.max_range) ||
+          !tree.coordToKeyChecked(octomap::point3d(p.x(), p.y(), p.z()), key)) {
+        ++stats->dropped;
+        continue;
+      }
+      occ->push_back(pack(key));
+      ++stats->points;
+    }
+    std::sort(occ->begin(), occ->end());
+    occ->erase(std::unique(occ->begin(), occ->end()), occ->end());
+    if (!origin || !origin->allFinite()) return;
+    // One ray per occupied voxel, to its centre (OctoMap's "discretize"): points sharing a voxel
+    // would cast nearly the same ray.
+    octomap::KeyRay ray;
+    for (VoxelKey k : *occ) {
+      const octomap::point3d end = tree.keyToCoord(unpack(k));
+      const Eigen::Vector3f p(end.x(), end.y(), end.z());
+      Eigen::Vector3f from = *origin;
+      const float length = (p - from).norm();
+      if (options.free_band > 0 && length > options.free_band)
+        from = p - (p - from) * static_cast<float>(options.free_band / length);
+      // Keys from the start voxel up to, not including, the point's voxel.
+      if (!tree.computeRayKeys(octomap::point3d(from.x(), from.y(), from.z()), end, ray)) continue;
+      for (const auto& rk : ray) free->push_back(pack(rk));
+    }
+    std::sort(free->begin(), free->end());
+    free->erase(std::unique(free->begin(), free->end()), free->end());
+    *free = minus(*free, *occ);
+  }
+
+  // Adds `d` hits (or misses) to each voxel of `keys`.
+  void count(const std::vector<VoxelKey>& keys, int d, bool hits, std::vector<VoxelKey>* changed) {
+    for (VoxelKey k : keys) {
+      Evidence& e = voxels[k];
+      int16_t& c = hits ? e.hits : e.misses;
+      c = static_cast<int16_t>(std::clamp(c + d, -kMaxCount, kMaxCount));
+      changed->push_back(k);
+    }
+  }
+
+  // Voxels left without evidence are dropped; the occupied list follows `changed`.
+  void settle(std::vector<VoxelKey> changed) {
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    std::vector<VoxelKey> now_occupied, now_not;
+    for (VoxelKey k : changed) {
+      auto it = voxels.find(k);
+      if (it != voxels.end() && it->second.base == 0 && it->second.hits == 0 &&
+          it->second.misses == 0)
+        voxels.erase(it), it = voxels.end();
+      (it != voxels.end() && logOdds(it->second) >= 0 ? now_occupied : now_not).push_back(k);
+    }
+    if (cache_valid) applyChanges(std::move(now_occupied), std::move(now_not));
+  }
 };
 
 OccupancyMap::OccupancyMap(const OccupancyOptions& options, double resolution)
@@ -103,79 +286,99 @@ OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 
 double OccupancyMap::resolution() const { return impl_->tree.getResolution(); }
 
-InsertStats OccupancyMap::insert(const std::vector<Eigen::Vector3f>& points,
-                                 const Eigen::Vector3f* origin) {
+InsertStats OccupancyMap::setKeyframe(int32_t kf, const std::vector<Eigen::Vector3f>& points,
+                                      const Eigen::Vector3f* origin) {
+  impl_->thaw();
   InsertStats stats;
-  octomap::ColorOcTree& tree = impl_->tree;
-  const OccupancyOptions& o = impl_->options;
-  octomap::KeySet occupied, free;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f& p = points[i];
-    octomap::OcTreeKey key;
-    if (!p.allFinite() || (origin && o.max_range > 0 && (p - *origin).norm() > o.max_range) ||
-        !tree.coordToKeyChecked(octomap::point3d(p.x(), p.y(), p.z()), key)) {
-      ++stats.dropped;
-      continue;
-    }
-    occupied.insert(key);
-    ++stats.points;
+  KeyframeRecord& r = impl_->keyframes[kf];
+  if (sameOrigin(r, origin) && sameBits(r.points, points) && !points.empty()) {
+    stats.unchanged = points.size();
+    return stats;
   }
-  if (origin && origin->allFinite()) {
-    // One ray per occupied voxel, to its centre (OctoMap's "discretize"): points sharing a voxel
-    // would cast nearly the same ray.
-    octomap::KeyRay ray;
-    for (const auto& key : occupied) {
-      const octomap::point3d end = tree.keyToCoord(key);
-      const Eigen::Vector3f p(end.x(), end.y(), end.z());
-      Eigen::Vector3f from = *origin;
-      const float length = (p - from).norm();
-      if (o.free_band > 0 && length > o.free_band)
-        from = p - (p - from) * static_cast<float>(o.free_band / length);
-      // Keys from the start voxel up to, not including, the point's voxel.
-      if (!tree.computeRayKeys(octomap::point3d(from.x(), from.y(), from.z()), end, ray)) continue;
-      for (const auto& k : ray)
-        if (!occupied.count(k)) free.insert(k);
-    }
+  std::vector<VoxelKey> occ, free, changed;
+  impl_->updatesOf(points, origin, &occ, &free, &stats);
+  // Only the difference: a voxel the keyframe updates the same way before and after is untouched.
+  const std::vector<VoxelKey> hits_gone = minus(r.occupied, occ), hits_new = minus(occ, r.occupied);
+  const std::vector<VoxelKey> misses_gone = minus(r.free, free), misses_new = minus(free, r.free);
+  impl_->count(hits_gone, -1, true, &changed);
+  impl_->count(hits_new, +1, true, &changed);
+  impl_->count(misses_gone, -1, false, &changed);
+  impl_->count(misses_new, +1, false, &changed);
+  stats.occupied_updates = hits_gone.size() + hits_new.size();
+  stats.free_updates = misses_gone.size() + misses_new.size();
+  impl_->settle(std::move(changed));
+  if (occ.empty() && free.empty()) {
+    impl_->keyframes.erase(kf);
+    return stats;
   }
-  // Lazy updates never prune, so the tree (and the .ot bytes) do not depend on the hash order.
-  // Lazy updates: inner nodes are brought up to date only before writing (serialize()); the
-  // leaves, which every query here reads, are exact. (A whole-tree pass per keyframe batch made a
-  // 40-keyframe rebuild twice as slow.) The occupied list is brought up to date from the voxels
-  // this batch touched (rebuilding it from every leaf of the tree after each keyframe was a fifth
-  // of the node's time).
-  std::vector<VoxelKey> now_occupied, now_not;
-  const auto update = [&](const octomap::OcTreeKey& k, bool hit) {
-    const octomap::ColorOcTreeNode* n = tree.updateNode(k, hit, true);
-    (n && tree.isNodeOccupied(n) ? now_occupied : now_not).push_back(pack(k));
-  };
-  for (const auto& k : free) update(k, false);
-  for (const auto& k : occupied) update(k, true);
-  stats.occupied_updates = occupied.size();
-  stats.free_updates = free.size();
-  if (impl_->cache_valid) impl_->applyChanges(std::move(now_occupied), std::move(now_not));
+  r.points = points;
+  r.has_origin = origin != nullptr;
+  r.origin = origin ? *origin : Eigen::Vector3f::Zero();
+  r.one_origin = true;
+  r.occupied = std::move(occ);
+  r.free = std::move(free);
   return stats;
 }
 
-void OccupancyMap::clear() {
-  impl_->tree.clear();
-  impl_->occupied.clear();
-  impl_->cache_valid = true;
+InsertStats OccupancyMap::addToKeyframe(int32_t kf, const std::vector<Eigen::Vector3f>& points,
+                                        const Eigen::Vector3f* origin) {
+  auto it = impl_->keyframes.find(kf);
+  if (it == impl_->keyframes.end()) return setKeyframe(kf, points, origin);
+  KeyframeRecord& r = it->second;
+  InsertStats stats;
+  std::vector<VoxelKey> occ, free, changed;
+  impl_->updatesOf(points, origin, &occ, &free, &stats);
+  // New occupied voxels; those the keyframe saw free turn occupied. New free voxels only where
+  // the keyframe updated nothing yet.
+  const std::vector<VoxelKey> hits_new = minus(occ, r.occupied);
+  const std::vector<VoxelKey> freed_before = minus(hits_new, minus(hits_new, r.free));
+  const std::vector<VoxelKey> misses_new = minus(minus(free, r.occupied), r.free);
+  impl_->count(hits_new, +1, true, &changed);
+  impl_->count(freed_before, -1, false, &changed);
+  impl_->count(misses_new, +1, false, &changed);
+  stats.occupied_updates = hits_new.size();
+  stats.free_updates = freed_before.size() + misses_new.size();
+  impl_->settle(std::move(changed));
+  r.points.insert(r.points.end(), points.begin(), points.end());
+  r.one_origin = r.one_origin && sameOrigin(r, origin);
+  r.occupied = merged(r.occupied, hits_new);
+  r.free = merged(minus(r.free, freed_before), misses_new);
+  return stats;
 }
 
+void OccupancyMap::removeKeyframe(int32_t kf) {
+  auto it = impl_->keyframes.find(kf);
+  if (it == impl_->keyframes.end()) return;
+  std::vector<VoxelKey> changed;
+  impl_->count(it->second.occupied, -1, true, &changed);
+  impl_->count(it->second.free, -1, false, &changed);
+  impl_->keyframes.erase(it);
+  impl_->settle(std::move(changed));
+}
+
+std::vector<int32_t> OccupancyMap::keyframes() const {
+  std::vector<int32_t> ids;
+  for (const auto& [id, r] : impl_->keyframes) ids.push_back(id);
+  return ids;
+}
+
+void OccupancyMap::freeze() { impl_->freeze(); }
+
 OccupancyMap::Cell OccupancyMap::cell(const Eigen::Vector3d& p) const {
-  octomap::OcTreeKey key;
-  if (!impl_->tree.coordToKeyChecked(
-          octomap::point3d(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                           static_cast<float>(p.z())),
-          key))
-    return Cell::kUnknown;
-  return cell(pack(key));
+  VoxelKey key;
+  if (!voxelKeyOf(p, resolution(), &key)) return Cell::kUnknown;
+  return cell(key);
 }
 
 OccupancyMap::Cell OccupancyMap::cell(VoxelKey key) const {
-  const octomap::ColorOcTreeNode* n = impl_->tree.search(unpack(key));
-  if (!n) return Cell::kUnknown;
-  return impl_->tree.isNodeOccupied(n) ? Cell::kOccupied : Cell::kFree;
+  if (!impl_->live) {
+    const octomap::ColorOcTreeNode* n = impl_->tree.search(unpack(key));
+    if (!n) return Cell::kUnknown;
+    return impl_->tree.isNodeOccupied(n) ? Cell::kOccupied : Cell::kFree;
+  }
+  const Evidence* e = impl_->find(key);
+  if (!e) return Cell::kUnknown;
+  return impl_->logOdds(*e) >= 0 ? Cell::kOccupied : Cell::kFree;
 }
 
 const std::vector<OccupiedVoxel>& OccupancyMap::occupied() const {
@@ -190,21 +393,26 @@ bool OccupancyMap::isOccupied(VoxelKey key) const {
   return it != v.end() && it->key == key;
 }
 
-size_t OccupancyMap::numLeaves() const { return impl_->tree.getNumLeafNodes(); }
+size_t OccupancyMap::numVoxels() const {
+  return impl_->live ? impl_->voxels.size() : impl_->tree.getNumLeafNodes();
+}
 
 std::string OccupancyMap::serialize(const std::function<Rgb(VoxelKey)>& colour) {
+  if (impl_->live) impl_->buildTree();
   octomap::ColorOcTree& tree = impl_->tree;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (!tree.isNodeOccupied(*it)) continue;
-    // A pruned node takes the colour of the voxel at its key.
-    const Rgb c = colour(pack(it.getKey()));
+    // A pruned node (a file's) takes the colour of the voxel at its key; free voxels are white
+    // (OctoMap's default), whatever they were while occupied.
+    const Rgb c = tree.isNodeOccupied(*it) ? colour(pack(it.getKey())) : Rgb{255, 255, 255};
     it->setColor(c.r, c.g, c.b);
   }
   // ColorOcTree: inner nodes take the mean colour of their children. Its updateInnerOccupancy()
   // (OctoMap 1.9) does not check for an empty tree: a segment whose SLAM map sent no points yet.
   if (tree.getRoot()) tree.updateInnerOccupancy();
   std::ostringstream out;
-  if (!tree.write(out)) throw std::runtime_error("OctoMap could not serialise the tree");
+  const bool written = tree.write(out);
+  if (impl_->live) tree.clear();
+  if (!written) throw std::runtime_error("OctoMap could not serialise the tree");
   return out.str();
 }
 
@@ -308,6 +516,7 @@ OccupancyMap OccupancyMap::deserialize(const std::string& bytes, const Occupancy
     throw std::runtime_error(what + ": resolution is not positive");
   auto impl = std::make_unique<Impl>(options, color->getResolution());
   impl->tree.swapContent(*color);
+  impl->live = false;  // the evidence stays in the tree until a keyframe is given
   impl->cache_valid = false;
   return OccupancyMap(std::move(impl));
 }

@@ -194,7 +194,7 @@ TEST(Occupancy, RayCastingMarksPointsOccupiedAndTheRaysInFrontFree) {
   for (int i = -10; i <= 10; ++i)
     for (int j = -10; j <= 10; ++j) wall.emplace_back(0.01f * i, 0.01f * j, 1.0f);
   const Eigen::Vector3f origin(0, 0, 0);
-  const InsertStats s = map.insert(wall, &origin);
+  const InsertStats s = map.setKeyframe(1, wall, &origin);
   EXPECT_EQ(s.points, wall.size());
   EXPECT_GT(s.free_updates, 0u);
   for (const auto& p : wall) EXPECT_EQ(map.cell(p.cast<double>()), OccupancyMap::Cell::kOccupied);
@@ -207,7 +207,7 @@ TEST(Occupancy, RayCastingMarksPointsOccupiedAndTheRaysInFrontFree) {
   // Whole rays (free_band <= 0): free from the keyframe up to the points.
   o.free_band = 0;
   OccupancyMap whole(o, o.resolution);
-  whole.insert(wall, &origin);
+  whole.setKeyframe(1, wall, &origin);
   EXPECT_EQ(whole.cell(Eigen::Vector3d(0.001, 0.001, 0.5)), OccupancyMap::Cell::kFree);
   EXPECT_EQ(whole.cell(Eigen::Vector3d(0.001, 0.001, 0.1)), OccupancyMap::Cell::kFree);
 
@@ -222,9 +222,8 @@ TEST(Occupancy, RayCastingMarksPointsOccupiedAndTheRaysInFrontFree) {
     EXPECT_EQ(k, v.key);
     EXPECT_TRUE(whole.isOccupied(v.key));
   }
-  // A second batch with points in front of the wall: a ray through an occupied voxel frees it
-  // once; hits from two batches keep a voxel occupied.
-  whole.insert(wall, &origin);
+  // A second keyframe seeing the same wall: hits from two keyframes keep a voxel occupied.
+  whole.setKeyframe(2, wall, &origin);
   EXPECT_EQ(whole.cell(Eigen::Vector3d(0.0, 0.0, 1.0)), OccupancyMap::Cell::kOccupied);
 }
 
@@ -245,7 +244,7 @@ TEST(Occupancy, TheOccupiedListFollowsEveryUpdateAsARebuildWouldFindIt) {
     std::vector<Eigen::Vector3f> points;
     for (int i = 0; i < 400; ++i) points.emplace_back(u(rng), u(rng), 1.0f + 0.3f * u(rng));
     const Eigen::Vector3f origin(0.2f * static_cast<float>(batch % 5) - 0.4f, 0, 0);
-    map.insert(points, &origin);
+    map.setKeyframe(batch, points, &origin);
     if (batch == 5) map.occupied();  // read in between: later batches update the list in place
     const OccupancyMap rebuilt =
         OccupancyMap::deserialize(map.serialize([](VoxelKey) { return Rgb{}; }), o, "rebuilt");
@@ -259,8 +258,78 @@ TEST(Occupancy, TheOccupiedListFollowsEveryUpdateAsARebuildWouldFindIt) {
     before = now;
   }
   EXPECT_GT(freed, 0u) << "no voxel was ever freed: the test would not see a stale list";
-  map.clear();
+  for (int32_t kf : map.keyframes()) map.removeKeyframe(kf);
   EXPECT_TRUE(map.occupied().empty());
+  EXPECT_EQ(map.numVoxels(), 0u);
+  EXPECT_TRUE(OccupancyMap::deserialize(map.serialize([](VoxelKey) { return Rgb{}; }), o, "emptied")
+                  .occupied()
+                  .empty());
+}
+
+// A keyframe's evidence can be replaced and taken back exactly: after keyframes moved, were
+// removed and got more points, in any order, the map is the one a build from scratch of each
+// keyframe's current points gives, to the byte of its .ot file.
+TEST(Occupancy, KeyframesReplacedOrTakenBackLeaveWhatABuildFromScratchGives) {
+  OccupancyOptions o;
+  o.resolution = 0.02;
+  o.free_band = 0;  // whole rays: keyframes carve through each other's points
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-0.3f, 0.3f);
+  auto surface = [&](int n) {
+    std::vector<Eigen::Vector3f> points;
+    for (int i = 0; i < n; ++i) points.emplace_back(u(rng), u(rng), 1.0f + 0.3f * u(rng));
+    return points;
+  };
+  std::vector<std::vector<Eigen::Vector3f>> points;
+  std::vector<Eigen::Vector3f> origins;
+  for (int kf = 0; kf < 6; ++kf) {
+    points.push_back(surface(400));
+    origins.emplace_back(0.2f * static_cast<float>(kf % 5) - 0.4f, 0, 0);
+  }
+  OccupancyMap map(o, o.resolution);
+  for (int kf = 0; kf < 6; ++kf) map.setKeyframe(kf, points[kf], &origins[kf]);
+  const std::vector<OccupiedVoxel> first = map.occupied();
+
+  // The same points and origin again: nothing to do.
+  const InsertStats same = map.setKeyframe(1, points[1], &origins[1]);
+  EXPECT_EQ(same.unchanged, points[1].size());
+  EXPECT_EQ(same.occupied_updates + same.free_updates, 0u);
+  // Keyframe 2 moved (bundle adjustment), 4 left SLAM's map, 5 got more points.
+  for (auto& p : points[2]) p += Eigen::Vector3f(0.03f, -0.01f, 0.02f);
+  origins[2] += Eigen::Vector3f(0.03f, -0.01f, 0.02f);
+  const InsertStats moved = map.setKeyframe(2, points[2], &origins[2]);
+  EXPECT_GT(moved.occupied_updates, 0u);
+  map.removeKeyframe(4);
+  const std::vector<Eigen::Vector3f> more = surface(200);
+  map.addToKeyframe(5, more, &origins[5]);
+  points[5].insert(points[5].end(), more.begin(), more.end());
+  EXPECT_EQ(map.keyframes(), (std::vector<int32_t>{0, 1, 2, 3, 5}));
+
+  OccupancyMap scratch(o, o.resolution);
+  for (int kf : {5, 3, 2, 1, 0}) scratch.setKeyframe(kf, points[kf], &origins[kf]);
+  std::vector<VoxelKey> now, expected;
+  for (const auto& v : map.occupied()) now.push_back(v.key);
+  for (const auto& v : scratch.occupied()) expected.push_back(v.key);
+  EXPECT_EQ(now, expected);
+  EXPECT_NE(map.occupied().size(), first.size());  // the changes did change the map
+  EXPECT_EQ(map.numVoxels(), scratch.numVoxels());
+  const auto grey = [](VoxelKey) { return Rgb{100, 100, 100}; };
+  EXPECT_EQ(map.serialize(grey), scratch.serialize(grey));
+
+  // Frozen (the evidence kept in the tree only), the map reads the same; a keyframe given then
+  // adds to what it holds.
+  const Eigen::Vector3d probe = voxelCentre(expected[expected.size() / 2], o.resolution);
+  map.freeze();
+  EXPECT_TRUE(map.keyframes().empty());
+  EXPECT_EQ(map.occupied().size(), expected.size());
+  EXPECT_EQ(map.cell(probe), OccupancyMap::Cell::kOccupied);
+  EXPECT_EQ(map.serialize(grey), scratch.serialize(grey));
+  map.setKeyframe(9, points[0], &origins[0]);
+  scratch.setKeyframe(9, points[0], &origins[0]);
+  std::vector<VoxelKey> thawed, twice;
+  for (const auto& v : map.occupied()) thawed.push_back(v.key);
+  for (const auto& v : scratch.occupied()) twice.push_back(v.key);
+  EXPECT_EQ(thawed, twice);
 }
 
 TEST(Occupancy, PointsBeyondMaxRangeOrNotFiniteAreDropped) {
@@ -268,7 +337,7 @@ TEST(Occupancy, PointsBeyondMaxRangeOrNotFiniteAreDropped) {
   o.max_range = 2.0;
   OccupancyMap map(o, o.resolution);
   const Eigen::Vector3f origin(0, 0, 0);
-  const InsertStats s = map.insert({{0, 0, 1}, {0, 0, 3}, {NAN, 0, 1}}, &origin);
+  const InsertStats s = map.setKeyframe(1, {{0, 0, 1}, {0, 0, 3}, {NAN, 0, 1}}, &origin);
   EXPECT_EQ(s.points, 1u);
   EXPECT_EQ(s.dropped, 2u);
   EXPECT_EQ(map.occupied().size(), 1u);
@@ -312,7 +381,7 @@ TEST(CandidateVoxels, AnObjectInFrontOfAWallKeepsItsVoxelsAndNotTheWall) {
     std::vector<Eigen::Vector3f> pts;
     for (int i = 0; i < c.num_points; ++i) pts.emplace_back(c.x[i], c.y[i], c.z[i]);
     const Eigen::Vector3f origin(c.kf_x.back(), c.kf_y.back(), c.kf_z.back());
-    map.insert(pts, &origin);
+    map.setKeyframe(c.keyframe_id, pts, &origin);
   }
   VotingOptions vo;
   ObjectTable table(map.resolution());
@@ -936,14 +1005,61 @@ TEST(ObjectMapEngine, ARepublishedKeyframeInsertsOnlyItsNewPoints) {
   point_cloud_t full = whole;
   full.full = true;
   full.keyframe_id = -1;
-  ASSERT_TRUE(e.onMap(full, &why, &r)) << why;
-  EXPECT_EQ(r.repeated, 0u);
+  ASSERT_TRUE(e.onMap(full, &why, &r)) << why;  // the keyframe as it is in the map: nothing to do
+  EXPECT_EQ(r.repeated, static_cast<size_t>(n));
+  EXPECT_EQ(r.insert.points, 0u);
+  EXPECT_EQ(r.keyframes_unchanged, 1u);
   ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;  // the full cloud held them all
   EXPECT_EQ(r.repeated, static_cast<size_t>(n));
   ASSERT_TRUE(e.onMap(firstPoints(full), &why, &r)) << why;  // a full cloud of the first points
+  EXPECT_EQ(r.keyframes_changed, 1u);                        // replaces the keyframe's
   ASSERT_TRUE(e.onMap(whole, &why, &r)) << why;              // then the rest are new again
   EXPECT_EQ(r.repeated, static_cast<size_t>(k));
   EXPECT_EQ(r.insert.points + r.insert.dropped, static_cast<size_t>(n - k));
+}
+
+// A full cloud costs only the keyframes that changed since the clouds before it, and leaves the
+// map a fresh engine given only that full cloud builds.
+TEST(ObjectMapEngine, AFullCloudReplacesOnlyTheKeyframesThatChanged) {
+  const test::SyntheticWorld w({}, test::SyntheticWorld::defaultObjects());
+  const std::vector<point_cloud_t> parts = w.keyframeClouds(1);
+  ASSERT_GE(parts.size(), 4u);
+  ObjectMapEngine e(ObjectMapOptions{});
+  std::string why;
+  CloudReport r;
+  for (const auto& c : parts) ASSERT_TRUE(e.onMap(c, &why, &r)) << why;
+  point_cloud_t full = w.fullCloud(1);
+  ASSERT_TRUE(e.onMap(full, &why, &r)) << why;
+  EXPECT_EQ(r.keyframes_unchanged, parts.size());
+  EXPECT_EQ(r.keyframes_changed + r.keyframes_removed + r.insert.points, 0u);
+  // Keyframe 1 moved, keyframe 2 was culled.
+  point_cloud_t next = full;
+  next.x.clear(), next.y.clear(), next.z.clear(), next.depth_std.clear();
+  next.r.clear(), next.g.clear(), next.b.clear(), next.keyframe_ids.clear();
+  for (size_t i = 0; i < full.x.size(); ++i) {
+    const int32_t kf = full.keyframe_ids[i];
+    if (kf == 2) continue;
+    const float dx = kf == 1 ? 0.02f : 0.0f;
+    next.x.push_back(full.x[i] + dx), next.y.push_back(full.y[i]), next.z.push_back(full.z[i]);
+    next.depth_std.push_back(full.depth_std[i]), next.keyframe_ids.push_back(kf);
+    next.r.push_back(0), next.g.push_back(0), next.b.push_back(0);
+  }
+  next.num_points = static_cast<int32_t>(next.x.size());
+  next.seq += 1;
+  ASSERT_TRUE(e.onMap(next, &why, &r)) << why;
+  EXPECT_EQ(r.keyframes_changed, 1u);
+  EXPECT_EQ(r.keyframes_removed, 1u);
+  EXPECT_EQ(r.keyframes_unchanged, parts.size() - 2);
+
+  ObjectMapEngine fresh(ObjectMapOptions{});
+  ASSERT_TRUE(fresh.onMap(next, &why, &r)) << why;
+  const auto keys = [](const ObjectMapEngine& m) {
+    std::vector<VoxelKey> k;
+    for (const auto& v : m.segments().at(1)->occupancy.occupied()) k.push_back(v.key);
+    return k;
+  };
+  EXPECT_EQ(keys(e), keys(fresh));
+  EXPECT_FALSE(keys(e).empty());
 }
 
 TEST(ObjectMapEngine, ANewClassFromAnotherModelIsAddedBeforeBackground) {
