@@ -24,7 +24,7 @@ double logMean(const Sample& p) {
 
 /// The median of the sample with each value repeated as often as its frames.
 double logMedian(Sample p) {
-  std::sort(p.begin(), p.end());
+  if (!std::is_sorted(p.begin(), p.end())) std::sort(p.begin(), p.end());
   int64_t n = 0;
   for (const auto& s : p) n += s.second;
   // The values at positions (n - 1) / 2 and n / 2 of the repeated sample (the same for odd n).
@@ -88,16 +88,17 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
       Sample p;
       for (int32_t c : o->candidates)
         if (auto it = table.candidates().find(c); it != table.candidates().end())
-          addObjectness(it->second, &p);
-      if (!p.empty()) object_median[o->id] = logMedian(p);
+          p.insert(p.end(), it->second.objectness.begin(), it->second.objectness.end());
+      if (!p.empty()) object_median[o->id] = logMedian(std::move(p));
     }
     if (candidate_mean.count(b.candidate)) continue;
     Sample p;
-    if (auto it = table.candidates().find(b.candidate); it != table.candidates().end())
-      addObjectness(it->second, &p);
-    if (p.empty()) continue;
+    auto it = table.candidates().find(b.candidate);
+    if (it == table.candidates().end() || it->second.objectness.empty()) continue;
+    // The mean in the views' order (a sum's rounding depends on it), the median of the sorted.
+    addObjectness(it->second, &p);
     candidate_mean[b.candidate] = logMean(p);
-    candidate_median[b.candidate] = logMedian(p);
+    candidate_median[b.candidate] = logMedian(it->second.objectness);
   }
   for (size_t i = 0; i < boxes.size(); ++i) {
     const FrameBox& b = boxes[i];

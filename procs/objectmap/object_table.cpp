@@ -8,6 +8,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "procs/objectmap/frame_labels.h"
 #include "procs/objectmap/fusion.h"
 
 namespace slamaware::objectmap {
@@ -147,12 +148,33 @@ std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vecto
 
 }  // namespace
 
+namespace {
+
+std::pair<double, int32_t> objectnessOf(const View& v) {
+  return {std::exp(logObjectness(v.log_prob.back())), v.frames};
+}
+
+void refreshObjectness(Candidate* c) {
+  c->objectness.clear();
+  for (const auto& [key, v] : c->views)
+    if (!v.log_prob.empty()) c->objectness.push_back(objectnessOf(v));
+  std::sort(c->objectness.begin(), c->objectness.end());
+}
+
+}  // namespace
+
 void ObjectTable::addView(int32_t candidate, View view) {
   Candidate& c = candidates_[candidate];
   c.id = candidate;
   newest_view_utime_ = std::max(newest_view_utime_, view.utime);
   const ViewKey key{view.utime, view.seq};
+  const bool again = c.views.count(key) > 0;  // the same frame again: replaces its view
+  if (!again && !view.log_prob.empty()) {
+    const auto entry = objectnessOf(view);
+    c.objectness.insert(std::upper_bound(c.objectness.begin(), c.objectness.end(), entry), entry);
+  }
   c.views[key] = std::move(view);
+  if (again) refreshObjectness(&c);
 }
 
 namespace {
@@ -185,6 +207,7 @@ void ObjectTable::thinViews(int64_t now_utime) {
     }
     auto& views = c->second.views;
     const size_t before = views.size();
+    bool changed = false;
     // Oldest first; stops at the first view within the full-rate period.
     for (auto it = views.begin(); it != views.end();) {
       const int k = thinningLevel(now_utime - it->first.first, full_rate_us_);
@@ -192,13 +215,17 @@ void ObjectTable::thinViews(int64_t now_utime) {
       const int32_t frames = int32_t{1} << k;
       if (it->second.frames >= frames) {
         ++it;
-      } else if ((frameHash(it->first.first, it->first.second) & (uint64_t(frames) - 1)) == 0) {
+        continue;
+      }
+      changed = true;
+      if ((frameHash(it->first.first, it->first.second) & (uint64_t(frames) - 1)) == 0) {
         it->second.frames = frames;
         ++it;
       } else {
         it = views.erase(it);
       }
     }
+    if (changed) refreshObjectness(&c->second);
     c = views.empty() && before > 0 ? candidates_.erase(c) : std::next(c);
   }
   // The full-rate period is the map's short-term memory: what it last called background (the last
@@ -279,6 +306,8 @@ const Object* ObjectTable::objectOfCandidate(int32_t candidate) const {
 
 void ObjectTable::restoreObject(int32_t id, std::vector<int32_t> candidates) {
   std::sort(candidates.begin(), candidates.end());
+  for (int32_t cid : candidates)
+    if (auto it = candidates_.find(cid); it != candidates_.end()) refreshObjectness(&it->second);
   Object& o = objects_[id];
   o.id = id;
   o.candidates = std::move(candidates);
@@ -310,7 +339,7 @@ std::string ObjectTable::userLabelOf(const std::vector<int32_t>& members) const 
 
 void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_size,
                                int old_background) {
-  for (auto& [id, c] : candidates_)
+  for (auto& [id, c] : candidates_) {
     for (auto& [key, v] : c.views) {
       const float floor =
           old_background >= 0 && static_cast<size_t>(old_background) < v.log_prob.size()
@@ -323,6 +352,8 @@ void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_si
           out[static_cast<size_t>(old_to_new[i])] = v.log_prob[i];
       v.log_prob = std::move(out);
     }
+    refreshObjectness(&c);
+  }
 }
 
 // The views of a group (one per frame: its most object-like box), their evidence and the group's

@@ -12,6 +12,7 @@
 
 #include "common/config.h"
 #include "procs/objectmap/candidate_voxels.h"
+#include "procs/objectmap/frame_labels.h"
 #include "procs/objectmap/fusion.h"
 #include "procs/objectmap/object_map.h"
 #include "procs/objectmap/object_table.h"
@@ -791,6 +792,15 @@ TEST(ObjectMapEngine, ThinnedViewsAreSavedWithTheFramesTheyStandFor) {
   back.restore(e.snapshot());
   EXPECT_EQ(encode(back.objectMap()), encode(m));
   EXPECT_EQ(back.snapshot().content, e.snapshot().content);
+  // Each candidate's sorted objectness is in step with its views, thinned and restored.
+  for (const ObjectMapEngine* engine : {&e, &back})
+    for (const auto& [id, c] : engine->segments().at(1)->table.candidates()) {
+      std::vector<std::pair<double, int32_t>> expected;
+      for (const auto& [k, v] : c.views)
+        expected.emplace_back(std::exp(logObjectness(v.log_prob.back())), v.frames);
+      std::sort(expected.begin(), expected.end());
+      EXPECT_EQ(c.objectness, expected) << "candidate " << id;
+    }
 }
 
 // The evaluator's accessor: a candidate id (of a SLAM map) leads to the object holding it now.
