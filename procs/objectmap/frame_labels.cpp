@@ -22,9 +22,8 @@ double logMean(const Sample& p) {
   return std::log(std::max(1e-300, sum / n));
 }
 
-/// The median of the sample with each value repeated as often as its frames.
-double logMedian(Sample p) {
-  if (!std::is_sorted(p.begin(), p.end())) std::sort(p.begin(), p.end());
+/// The median of a sorted sample with each value repeated as often as its frames.
+double logMedian(const Sample& p) {
   int64_t n = 0;
   for (const auto& s : p) n += s.second;
   // The values at positions (n - 1) / 2 and n / 2 of the repeated sample (the same for odd n).
@@ -37,11 +36,10 @@ double logMedian(Sample p) {
   return std::log(std::max(1e-300, median));
 }
 
-// p(object | view) of every view of a candidate.
+// p(object | view) of every view of a candidate, in the views' order.
 void addObjectness(const Candidate& c, Sample* out) {
   for (const auto& [key, v] : c.views)
-    if (!v.log_prob.empty())
-      out->emplace_back(std::exp(logObjectness(v.log_prob.back())), v.frames);
+    if (!v.log_prob.empty()) out->emplace_back(viewObjectness(v), v.frames);
 }
 
 }  // namespace
@@ -56,11 +54,6 @@ std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_e
   const double lse = m + std::log(z);
   for (double& v : e) v -= lse;
   return e;
-}
-
-double logObjectness(double log_p_background) {
-  const double lb = std::min(0.0, log_p_background);
-  return lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
 }
 
 void scaleObjectClasses(std::vector<double>* log_p, const std::vector<double>& log_factors) {
@@ -89,7 +82,8 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
       for (int32_t c : o->candidates)
         if (auto it = table.candidates().find(c); it != table.candidates().end())
           p.insert(p.end(), it->second.objectness.begin(), it->second.objectness.end());
-      if (!p.empty()) object_median[o->id] = logMedian(std::move(p));
+      std::sort(p.begin(), p.end());  // the candidates' sorted runs, one after another
+      if (!p.empty()) object_median[o->id] = logMedian(p);
     }
     if (candidate_mean.count(b.candidate)) continue;
     Sample p;

@@ -63,10 +63,6 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
 std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_evidence,
                                                 double total_weight, double views_exponent);
 
-/// log(1 - p(background)) from natural-log probabilities with the background last (0 for none),
-/// exact also for p(background) near 0 or 1.
-double logObjectness(double log_p_background);
-
 /// Adds log_factors[c] to each object class c of log_p (background last) and gives the background
 /// the rest of the probability.
 void scaleObjectClasses(std::vector<double>* log_p, const std::vector<double>& log_factors);

@@ -59,4 +59,9 @@ int argmaxClass(const std::vector<double>& values) {
   return best;
 }
 
+double logObjectness(double log_p_background) {
+  const double lb = std::min(0.0, log_p_background);
+  return lb > -0.693 ? std::log(-std::expm1(lb)) : std::log1p(-std::exp(lb));
+}
+
 }  // namespace slamaware::objectmap

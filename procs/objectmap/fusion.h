@@ -60,6 +60,10 @@ std::vector<double> scaledLogEvidence(const std::vector<double>& log_evidence, d
 bool moreObjectLikeView(const std::vector<float>& log_p_a, double area_a,
                         const std::vector<float>& log_p_b, double area_b);
 
+/// log(1 - p(background)) from natural-log probabilities with the background last (0 for none),
+/// exact also for p(background) near 0 or 1.
+double logObjectness(double log_p_background);
+
 /// The class with the highest value; ties go to the lower index; -1 for an empty vector.
 int argmaxClass(const std::vector<double>& values);
 

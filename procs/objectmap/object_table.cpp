@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <iterator>
 #include <numeric>
 #include <set>
 #include <tuple>
 #include <unordered_map>
 
-#include "procs/objectmap/frame_labels.h"
 #include "procs/objectmap/fusion.h"
 
 namespace slamaware::objectmap {
@@ -148,11 +148,11 @@ std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vecto
 
 }  // namespace
 
+double viewObjectness(const View& v) { return std::exp(logObjectness(v.log_prob.back())); }
+
 namespace {
 
-std::pair<double, int32_t> objectnessOf(const View& v) {
-  return {std::exp(logObjectness(v.log_prob.back())), v.frames};
-}
+std::pair<double, int32_t> objectnessOf(const View& v) { return {viewObjectness(v), v.frames}; }
 
 void refreshObjectness(Candidate* c) {
   c->objectness.clear();

@@ -40,6 +40,9 @@ struct View {
   /// (ObjectTable::update(), views_full_rate_s).
   int32_t frames = 1;
 };
+/// p(object | view) = 1 - p(background | view) of a view with log-probabilities (background last).
+double viewObjectness(const View& v);
+
 /// Views are identified by their frame: (utime, seq).
 using ViewKey = std::pair<int64_t, int32_t>;
 

@@ -69,6 +69,11 @@ std::vector<VoxelKey> minus(const std::vector<VoxelKey>& a, const std::vector<Vo
   std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
   return out;
 }
+std::vector<VoxelKey> common(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
+  std::vector<VoxelKey> out;
+  std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
 std::vector<VoxelKey> merged(const std::vector<VoxelKey>& a, const std::vector<VoxelKey>& b) {
   std::vector<VoxelKey> out;
   out.reserve(a.size() + b.size());
@@ -111,10 +116,6 @@ struct OccupancyMap::Impl {
   const Evidence* find(VoxelKey key) const {
     auto it = voxels.find(key);
     return it == voxels.end() ? nullptr : &it->second;
-  }
-  bool occupiedNow(VoxelKey key) const {
-    const Evidence* e = find(key);
-    return e && logOdds(*e) >= 0;
   }
 
   // Calls f(key, log-odds) for every finest voxel of the tree's leaves (`all`) or of its occupied
@@ -217,7 +218,6 @@ struct OccupancyMap::Impl {
   void updatesOf(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* origin,
                  std::vector<VoxelKey>* occ, std::vector<VoxelKey>* free,
                  InsertStats* stats) const {
-    std::vector<octomap::OcTreeKey> keys;
     for (const Eigen::Vector3f& p : points) {
       octomap::OcTreeKey key;
       if (!p.allFinite() ||
@@ -331,7 +331,7 @@ InsertStats OccupancyMap::addToKeyframe(int32_t kf, const std::vector<Eigen::Vec
   // New occupied voxels; those the keyframe saw free turn occupied. New free voxels only where
   // the keyframe updated nothing yet.
   const std::vector<VoxelKey> hits_new = minus(occ, r.occupied);
-  const std::vector<VoxelKey> freed_before = minus(hits_new, minus(hits_new, r.free));
+  const std::vector<VoxelKey> freed_before = common(hits_new, r.free);
   const std::vector<VoxelKey> misses_new = minus(minus(free, r.occupied), r.free);
   impl_->count(hits_new, +1, true, &changed);
   impl_->count(freed_before, -1, false, &changed);
