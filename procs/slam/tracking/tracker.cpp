@@ -298,9 +298,15 @@ bool Tracker::needNewKeyFrame(const Frame& frame, int inliers, bool mapper_idle)
   // camera moved: a keyframe every few frames of a slow camera adds cost and no parallax.
   const bool weak = inliers < o.weak_tracking_ratio * ref_points;
   const bool fewer = inliers < o.keyframe_ratio * ref_points;
+  // Parallax is measured from the last keyframe made and, when the frame tracks against an older
+  // one (the reference: the keyframe sharing the most points with it), from that one too: a camera
+  // going over ground it has mapped already gains nothing from a keyframe beside the one it tracks
+  // against.
   const double depth = reference_kf_->medianDepth();
-  const bool moved = depth > 0 && (frame.center() - last_keyframe_center_).norm() >=
-                                      o.min_keyframe_baseline * depth;
+  double from_keyframes = (frame.center() - last_keyframe_center_).norm();
+  if (reference_kf_->id != last_keyframe_id_)
+    from_keyframes = std::min(from_keyframes, (frame.center() - reference_kf_->center()).norm());
+  const bool moved = depth > 0 && from_keyframes >= o.min_keyframe_baseline * depth;
   const bool waited = frame.utime - last_keyframe_utime_ >= o.max_keyframe_interval_s * 1e6;
   return weak || (fewer && mapper_idle && (moved || waited));
 }
@@ -313,6 +319,7 @@ std::shared_ptr<KeyFrame> Tracker::createKeyFrame(Frame& frame) {
   frame.reference = kf;
   last_keyframe_utime_ = frame.utime;
   last_keyframe_center_ = frame.center();
+  last_keyframe_id_ = kf->id;
   return kf;
 }
 
@@ -335,6 +342,7 @@ TrackResult Tracker::initialize(Frame& frame, bool after_loss) {
   reference_kf_ = r.new_keyframes.back();
   last_keyframe_utime_ = frame.utime;
   last_keyframe_center_ = frame.center();
+  last_keyframe_id_ = reference_kf_->id;
   // Velocity from the two initial views.
   const auto& kf0 = r.new_keyframes.front();
   const double dt = (frame.utime - kf0->utime) * 1e-6;
@@ -389,6 +397,7 @@ TrackResult Tracker::track(Frame& frame, bool continuous, bool mapper_idle) {
       std::shared_lock<std::shared_mutex> lock(map_->mutex);
       reference_kf_ = kf;
       last_keyframe_center_ = kf->center();  // the keyframe policy's baseline, in this map
+      last_keyframe_id_ = kf->id;
       located = trackLocalMap(frame, true, &inliers);
     }
     if (located) {

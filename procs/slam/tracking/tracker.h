@@ -89,6 +89,7 @@ class Tracker {
   Vector6d velocity_per_s_ = Vector6d::Zero();  ///< log(T_cur * T_last^-1) / dt, 1/s
   int64_t last_keyframe_utime_ = 0;
   Eigen::Vector3d last_keyframe_center_ = Eigen::Vector3d::Zero();
+  int64_t last_keyframe_id_ = -1;  ///< the keyframe last_keyframe_center_ belongs to
   int64_t lost_since_utime_ = 0;
 };
 
