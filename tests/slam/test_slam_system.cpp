@@ -61,24 +61,29 @@ struct SlamRun {
   };
   std::vector<Cloud> cloud_info;  // the same clouds: when, of what, how big
   std::vector<std::pair<int64_t, std::array<double, 7>>> keyframes;
+  std::vector<int> keyframe_frames;  // the frame (index into the run) of each keyframes entry
 };
 
-SlamRun runSlam(bool threaded, SlamOptions options = {}) {
+/// The rendered sample through SLAM, its frames in `order` (empty: as rendered) on one clock.
+SlamRun runSlam(bool threaded, SlamOptions options = {}, std::vector<int> order = {}) {
   const Rendered& r = sampleFrames();
   options.mapping.threaded = threaded;
   options.depth.threaded = threaded;
   if (!threaded) options.init.threads = 1;  // the two-view refinements too
   SlamSystem slam(options, true);
   slam.setCamera(r.camera);
+  if (order.empty())
+    for (size_t k = 0; k < r.frames.size(); ++k) order.push_back(static_cast<int>(k));
   SlamRun run;
-  for (size_t i = 0; i < r.frames.size(); ++i) {
+  for (size_t i = 0; i < order.size(); ++i) {
     const SlamOutput out = slam.processFrame(static_cast<int64_t>(std::llround(i * 1e6 / r.fps)),
-                                             static_cast<int32_t>(i), r.frames[i]);
+                                             static_cast<int32_t>(i), r.frames[order[i]]);
     run.poses.push_back(out.pose);
     for (const auto& k : out.keyframes) {
       double p[3], q[4];
       se3ToArrays(k.T_world_camera, p, q);
       run.keyframes.push_back({k.id, {p[0], p[1], p[2], q[0], q[1], q[2], q[3]}});
+      run.keyframe_frames.push_back(static_cast<int>(i));
     }
     for (const auto& c : out.clouds) {
       std::vector<float> xyz;
@@ -245,25 +250,17 @@ TEST(SlamSystem, AYoungMapIsPublishedWithItsMapPointsAtOnce) {
 // Counted from the last one made alone, the return passes made 11 keyframes each against the first
 // pass's 17, which local mapping triangulated, bundle-adjusted and mostly culled again.
 TEST(SlamSystem, GoingBackOverMappedGroundAddsFewKeyframes) {
-  const Rendered& r = sampleFrames();
-  SlamOptions options;
-  options.mapping.threaded = options.depth.threaded = false;
-  options.init.threads = 1;
-  SlamSystem slam(options, true);
-  slam.setCamera(r.camera);
-  const int n = static_cast<int>(r.frames.size());
+  const int n = static_cast<int>(sampleFrames().frames.size());
   std::vector<int> order;
   for (int pass = 0; pass < 3; ++pass)
     for (int k = 0; k < n; ++k) order.push_back(pass % 2 == 0 ? k : n - 1 - k);
+  const SlamRun run = runSlam(false, {}, order);
   std::set<int64_t> seen;
   std::vector<int> made(3, 0), tracked(3, 0);
-  for (size_t i = 0; i < order.size(); ++i) {
-    const int pass = static_cast<int>(i) / n;
-    const SlamOutput out = slam.processFrame(static_cast<int64_t>(std::llround(i * 1e6 / r.fps)),
-                                             static_cast<int32_t>(i), r.frames[order[i]]);
-    tracked[pass] += out.pose.state == PoseState::kTracking;
-    for (const auto& k : out.keyframes) made[pass] += seen.insert(k.id).second;
-  }
+  for (size_t i = 0; i < run.poses.size(); ++i)
+    tracked[i / n] += run.poses[i].state == PoseState::kTracking;
+  for (size_t j = 0; j < run.keyframes.size(); ++j)
+    made[run.keyframe_frames[j] / n] += seen.insert(run.keyframes[j].first).second;
   EXPECT_GE(tracked[0], n - 5);
   EXPECT_EQ(tracked[1], n);
   EXPECT_EQ(tracked[2], n);
