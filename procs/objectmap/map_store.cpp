@@ -261,33 +261,24 @@ SaveReport MapStore::save(MapSnapshot snapshot) {
   report.bytes_written += text.size();
   next_generation_ = generation + 1;
   // 3. Only now: the generations before the previous good one go.
-  const int64_t previous = good_generation_;
+  std::set<std::string> keep{jsonName(generation)};
+  for (const auto& [id, ref] : files) keep.insert(ref.name);
+  if (good_generation_ >= 0) {
+    keep.insert(jsonName(good_generation_));
+    for (const auto& [id, ref] : good_files_) keep.insert(ref.name);
+  }
   good_generation_ = generation;
   good_files_ = std::move(files);
-  report.files_removed = removeOld(generation, previous);
+  report.files_removed = removeOld(generation, keep);
   report.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return report;
 }
 
-size_t MapStore::removeOld(int64_t keep_a, int64_t keep_b) {
-  // Files named by the kept generations stay; so does anything newer than keep_a (none is
-  // expected: generations are numbered above everything on disk).
-  std::set<std::string> keep;
-  for (int64_t g : {keep_a, keep_b}) {
-    if (g < 0) continue;
-    keep.insert(jsonName(g));
-    std::string text;
-    if (!readFile((fs::path(dir_) / jsonName(g)).string(), &text)) continue;
-    try {
-      const auto doc = nlohmann::json::parse(text);
-      for (const auto& seg : doc.at("content").at("segments"))
-        keep.insert(seg.at("file").get<std::string>());
-    } catch (const std::exception&) {
-      // A kept generation that does not parse keeps every .ot file: nothing is lost by keeping.
-      return 0;
-    }
-  }
+size_t MapStore::removeOld(int64_t newest, const std::set<std::string>& keep) {
+  // The kept generations' files are known from their load or save: the JSON is not read again
+  // (parsing it took as much memory and time as building it). Anything newer than `newest` stays
+  // (none is expected: generations are numbered above everything on disk).
   size_t removed = 0;
   std::error_code ec;
   std::vector<fs::path> doomed;
@@ -296,7 +287,7 @@ size_t MapStore::removeOld(int64_t keep_a, int64_t keep_b) {
     std::smatch m;
     if (keep.count(name)) continue;
     if ((std::regex_match(name, m, kJsonPattern) || std::regex_match(name, m, kSegmentPattern)) &&
-        std::stoll(m[1].str()) <= keep_a)
+        std::stoll(m[1].str()) <= newest)
       doomed.push_back(it->path());
   }
   // JSON files first: a generation whose JSON is gone is no longer a candidate for loading.

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <set>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -90,7 +91,8 @@ class MapStore {
   /// file.
   MapSnapshot readGeneration(int64_t generation, std::map<int32_t, FileRef>* files) const;
   void scan();
-  size_t removeOld(int64_t keep_a, int64_t keep_b);
+  /// Removes the files of generations up to `newest` whose names are not in `keep`.
+  size_t removeOld(int64_t newest, const std::set<std::string>& keep);
 
   std::string dir_;
   bool scanned_ = false;
