@@ -12,6 +12,8 @@
 
 // jpeglib.h needs FILE and size_t declared before it.
 #include <jpeglib.h>
+// jerror.h after jpeglib.h: the warning codes.
+#include <jerror.h>
 #include <png.h>
 
 namespace slamaware {
@@ -62,7 +64,14 @@ void onJpegError(j_common_ptr c) {
   std::longjmp(e->jump, 1);
 }
 
-void ignoreJpegMessage(j_common_ptr, int) {}
+/// libjpeg's warnings: the entropy-coded data ending before the image does (a marker or the end of
+/// the bytes where rows should follow) is an error: libjpeg would fill the missing rows with grey
+/// and decode on, at the cost of the whole image the header claims; other warnings and traces are
+/// ignored (as OpenCV does: some cameras write extraneous bytes before markers).
+void onJpegMessage(j_common_ptr c, int level) {
+  if (level < 0 && (c->err->msg_code == JWRN_HIT_MARKER || c->err->msg_code == JWRN_JPEG_EOF))
+    onJpegError(c);
+}
 
 /// Decodes a JPEG of width x height into `out` (rows of `step` bytes): 8-bit BGR, or grey if
 /// `grey` (libjpeg's own colour conversion and upsampling, as OpenCV's decoder asks for them).
@@ -71,7 +80,7 @@ bool decodeJpegInto(const uint8_t* data, size_t size, bool grey, int width, int 
   jpeg_decompress_struct cinfo;
   cinfo.err = jpeg_std_error(&err->pub);
   err->pub.error_exit = onJpegError;
-  err->pub.emit_message = ignoreJpegMessage;  // warnings (a corrupt stream is refused before)
+  err->pub.emit_message = onJpegMessage;
   if (setjmp(err->jump)) {
     jpeg_destroy_decompress(&cinfo);
     return false;

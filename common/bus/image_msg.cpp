@@ -33,10 +33,15 @@ image_t makeImageMessage(const cv::Mat& bgr, int64_t utime, int32_t seq, int8_t 
   return msg;
 }
 
-cv::Mat decodeImageMessage(const image_t& msg, const std::string& what, bool grey) {
+cv::Mat decodeImageMessage(const image_t& msg, const std::string& what, bool grey,
+                           cv::Size camera) {
   if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384)
     throw ImageError(what + ": bad image size " + std::to_string(msg.width) + "x" +
                      std::to_string(msg.height));
+  if (!camera.empty() && (msg.width != camera.width || msg.height != camera.height))
+    throw ImageSizeError(what + ": frame is " + std::to_string(msg.width) + "x" +
+                         std::to_string(msg.height) + " but the camera is " +
+                         std::to_string(camera.width) + "x" + std::to_string(camera.height));
   cv::Mat out;
   switch (msg.pixel_format) {
     case image_t::PIXEL_FORMAT_JPEG: {

@@ -122,19 +122,16 @@ int main(int argc, char** argv) {
       } else {
         cv::Mat bgr;
         try {
-          bgr = decodeImageMessage(img, what);
+          // The camera's size is checked before decoding (a frame of another size is refused
+          // whatever it holds; the decoder checks the image's own header against the message).
+          bgr = decodeImageMessage(img, what, false,
+                                   cv::Size(slam.camera().width(), slam.camera().height()));
+        } catch (const ImageSizeError& e) {
+          bus.reject(ch.camera, e.what());
+          status.count("frames_wrong_size");
         } catch (const ImageError& e) {
           bus.reject(ch.camera, e.what());
           status.count("frames_corrupt");
-        }
-        if (!bgr.empty() &&
-            (bgr.cols != slam.camera().width() || bgr.rows != slam.camera().height())) {
-          bus.reject(ch.camera, what + ": frame is " + std::to_string(bgr.cols) + "x" +
-                                    std::to_string(bgr.rows) + " but CAMERA_INFO says " +
-                                    std::to_string(slam.camera().width()) + "x" +
-                                    std::to_string(slam.camera().height()));
-          status.count("frames_wrong_size");
-          bgr.release();
         }
         out = bgr.empty() ? slam.skipFrame(img.utime, img.seq)
                           : slam.processFrame(img.utime, img.seq, bgr);

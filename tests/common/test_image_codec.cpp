@@ -177,3 +177,46 @@ TEST(ImageMessage, InconsistentMessagesAreRefused) {
   j.width = -3;
   EXPECT_THROW(decodeImageMessage(j, "x"), ImageError);
 }
+
+// A frame of another size than the receiver's camera is refused before anything is decoded: here
+// a 160x120 JPEG whose frame header and message both claim 8192x8192 (a few kB that made the
+// decoder fill 200 MB with grey and return it as an image).
+TEST(ImageMessage, AFrameOfAnotherSizeThanTheCameraIsRefusedBeforeDecoding) {
+  image_t j = makeImageMessage(testImage(), 5, 6, image_t::PIXEL_FORMAT_JPEG);
+  size_t sof = 0;
+  for (size_t i = 0; i + 8 < j.data.size(); ++i)
+    if (j.data[i] == 0xFF && j.data[i + 1] == 0xC0) {
+      sof = i;
+      break;
+    }
+  ASSERT_GT(sof, 0u) << "baseline frame header";
+  for (size_t k : {sof + 5, sof + 7}) {  // height, width: big-endian 16 bits
+    j.data[k] = 0x20;
+    j.data[k + 1] = 0x00;
+  }
+  j.width = j.height = 8192;
+  int w = 0, h = 0;
+  ASSERT_TRUE(peekImageSize(j.data.data(), j.data.size(), &w, &h));
+  ASSERT_EQ(w, 8192);
+  try {
+    decodeImageMessage(j, "CAMERA seq 6", false, cv::Size(160, 120));
+    FAIL() << "decoded";
+  } catch (const ImageSizeError& e) {
+    EXPECT_NE(std::string(e.what()).find("CAMERA seq 6: frame is 8192x8192 but the camera is "
+                                         "160x120"),
+              std::string::npos)
+        << e.what();
+  }
+  // Without a camera to compare with, the decoder stops where the data ends instead of filling
+  // the rest of the 8192 rows with grey (and the image is refused).
+  try {
+    decodeImageMessage(j, "CAMERA seq 6");
+    FAIL() << "decoded";
+  } catch (const ImageError& e) {
+    EXPECT_NE(std::string(e.what()).find("premature end of data segment"), std::string::npos)
+        << e.what();
+  }
+  // A frame of the camera's size decodes as before.
+  const image_t ok = makeImageMessage(testImage(), 5, 6, image_t::PIXEL_FORMAT_JPEG);
+  EXPECT_EQ(decodeImageMessage(ok, "x", false, cv::Size(160, 120)).size(), cv::Size(160, 120));
+}
