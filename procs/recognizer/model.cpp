@@ -179,8 +179,11 @@ void readExemplars(Reader& r, const std::string& what, RecognizerModel* m) {
         !(weight >= 0) || !std::isfinite(weight) || nb < 0 || nb > blocks)
       throw ModelError(what + ": exemplar " + std::to_string(i) + " is malformed");
     std::vector<uint16_t> index(static_cast<size_t>(nb));
-    std::memcpy(index.data(), r.raw(static_cast<uint64_t>(nb) * sizeof(uint16_t), "exemplar_index"),
-                index.size() * sizeof(uint16_t));
+    if (nb >
+        0)  // an exemplar of no blocks is all zero (memcpy must not see an empty vector's null)
+      std::memcpy(index.data(),
+                  r.raw(static_cast<uint64_t>(nb) * sizeof(uint16_t), "exemplar_index"),
+                  index.size() * sizeof(uint16_t));
     std::fill(row.begin(), row.end(), 0.f);
     for (int32_t k = 0; k < nb; ++k) {
       if (index[static_cast<size_t>(k)] >= blocks ||
