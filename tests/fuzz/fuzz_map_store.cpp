@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
+#include "procs/objectmap/json_number.h"
 #include "procs/objectmap/map_store.h"
 #include "procs/objectmap/object_map.h"
 #include "tests/fuzz/fuzz_support.h"
@@ -39,7 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       snapshot.content = nlohmann::json::parse(parts[0]);
       size_t next = 1;
       for (const auto& seg : snapshot.content.at("segments"))
-        snapshot.segment_files[seg.at("id").get<int32_t>()] =
+        snapshot.segment_files[jsonInt<int32_t>(seg.at("id"))] =
             next < parts.size() ? parts[next++] : std::string();
       MapStore(dir).save(snapshot);
     } catch (const std::exception&) {
