@@ -179,8 +179,8 @@ void readExemplars(Reader& r, const std::string& what, RecognizerModel* m) {
         !(weight >= 0) || !std::isfinite(weight) || nb < 0 || nb > blocks)
       throw ModelError(what + ": exemplar " + std::to_string(i) + " is malformed");
     std::vector<uint16_t> index(static_cast<size_t>(nb));
-    if (nb >
-        0)  // an exemplar of no blocks is all zero (memcpy must not see an empty vector's null)
+    // An exemplar of no blocks is all zero; memcpy must not be given an empty vector's null.
+    if (nb > 0)
       std::memcpy(index.data(),
                   r.raw(static_cast<uint64_t>(nb) * sizeof(uint16_t), "exemplar_index"),
                   index.size() * sizeof(uint16_t));
