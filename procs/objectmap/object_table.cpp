@@ -237,6 +237,92 @@ void ObjectTable::thinViews(int64_t now_utime) {
   }
 }
 
+namespace {
+
+/// The votes of a candidate that pass its own voxel threshold, each scaled from `c.voting_views` to
+/// `views` voting views (rounded up: a share at the threshold stays at it).
+std::vector<std::pair<VoxelKey, int32_t>> passingVotesScaled(const Candidate& c, int32_t views,
+                                                             const VotingOptions& options) {
+  const double need = std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
+  std::vector<std::pair<VoxelKey, int32_t>> out;
+  if (c.voting_views <= 0) return out;
+  for (const auto& [key, n] : c.votes)
+    if (n >= need)
+      out.emplace_back(
+          key, static_cast<int32_t>(std::ceil(static_cast<double>(n) * views / c.voting_views)));
+  return out;
+}
+
+/// Folds candidate `from` into `into` (ObjectTable::foldStaleCandidates).
+void foldCandidate(Candidate& into, const Candidate& from, const VotingOptions& options) {
+  for (const auto& [key, v] : from.views) {
+    auto [it, added] = into.views.emplace(key, v);
+    // Ties keep `into`'s view: the lower id's, as the object's fusion does (members in id order).
+    if (!added && moreObjectLikeView(v.log_prob, v.area, it->second.log_prob, it->second.area))
+      it->second = v;
+  }
+  refreshObjectness(&into);
+  const int32_t views = std::max(into.voting_views, from.voting_views);
+  if (views > 0) {
+    // The candidate with the most voting views keeps its votes as they are; the other's voxels
+    // keep their share of its views.
+    std::vector<std::pair<VoxelKey, int32_t>> a = into.voting_views == views
+                                                      ? std::move(into.votes)
+                                                      : passingVotesScaled(into, views, options);
+    const std::vector<std::pair<VoxelKey, int32_t>> b =
+        from.voting_views == views && into.voting_views != views
+            ? from.votes
+            : passingVotesScaled(from, views, options);
+    std::vector<std::pair<VoxelKey, int32_t>> merged;
+    merged.reserve(a.size() + b.size());
+    auto i = a.cbegin(), j = b.cbegin();
+    while (i != a.cend() || j != b.cend()) {
+      if (j == b.cend() || (i != a.cend() && i->first < j->first)) {
+        merged.push_back(*i++);
+      } else if (i == a.cend() || j->first < i->first) {
+        merged.push_back(*j++);
+      } else {
+        merged.emplace_back(i->first, std::max(i->second, j->second));
+        ++i, ++j;
+      }
+    }
+    into.votes = std::move(merged);
+    into.voting_views = views;
+  }
+  const int64_t into_last = into.views.empty() ? 0 : into.views.rbegin()->first.first;
+  const int64_t from_last = from.views.empty() ? 0 : from.views.rbegin()->first.first;
+  if (from.box_positions > 0 && (into.box_positions == 0 || from_last > into_last))
+    into.box_size = from.box_size;
+  into.box_position_sum += from.box_position_sum;
+  into.box_positions += from.box_positions;
+}
+
+}  // namespace
+
+void ObjectTable::foldStaleCandidates(int64_t now_utime, const VotingOptions& options) {
+  if (full_rate_us_ <= 0) return;
+  const int64_t since = now_utime - full_rate_us_;
+  for (const auto& [id, o] : objects_) {
+    // The stale candidates of the object, by user's label; each list in id order.
+    std::map<std::string, std::vector<int32_t>> stale;
+    for (int32_t cid : o.candidates) {
+      auto it = candidates_.find(cid);
+      if (it == candidates_.end()) continue;  // forgotten since
+      const Candidate& c = it->second;
+      if (c.views.empty() || c.views.rbegin()->first.first >= since) continue;
+      stale[c.user_label].push_back(cid);
+    }
+    for (const auto& [label, ids] : stale) {
+      if (ids.size() < 2) continue;
+      Candidate& keeper = candidates_.at(ids.front());
+      for (size_t k = 1; k < ids.size(); ++k) {
+        foldCandidate(keeper, candidates_.at(ids[k]), options);
+        candidates_.erase(ids[k]);
+      }
+    }
+  }
+}
+
 std::vector<double> sumViewEvidence(const std::vector<const View*>& views, size_t num_classes,
                                     bool objectness_weights, double* total_weight) {
   std::vector<const std::vector<float>*> log_p;
@@ -479,6 +565,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const FusionOptions& fusion) {
   if (full_rate_us_ > 0 && newest_view_utime_ >= next_thinning_utime_) {
     thinViews(newest_view_utime_);
+    foldStaleCandidates(newest_view_utime_, options);
     next_thinning_utime_ = newest_view_utime_ + full_rate_us_ / 8;
   }
   deriveVoxels(occupied, options);

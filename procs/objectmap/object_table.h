@@ -125,12 +125,24 @@ class ObjectTable {
   /// the newest view is P / 8 past the last run.
   void thinViews(int64_t now_utime);
 
-  /// Thins the views (thinViews(), when due), then recomputes the candidates' voxels (voted in >=
-  /// min_votes and >= min_vote_share of the voting views, and occupied now), the groups
-  /// (GroupingOptions: pairs of candidates are tried from the most overlapping, and two groups
-  /// merge when their voxel unions pass the test), the object ids
-  /// (new_id() for groups that continue no previous object) and every object's evidence and
-  /// geometry.
+  /// Bounds what an object keeps of its past. The candidates of an object (as of the last update())
+  /// that no view of the full-rate period before `now_utime` shows are folded into one of them (the
+  /// lowest id; only candidates holding the same user's label are folded together): its views are
+  /// the union of theirs (per frame the most object-like, the rule of the object's fusion), its
+  /// votes per voxel the largest of theirs once each is scaled to the largest number of voting
+  /// views (a candidate's votes below its own voxel threshold are dropped first), its box
+  /// positions the sum. The object's evidence and its voxels are the same before and after (the
+  /// folded candidate's voxels are the union of theirs); what it stops growing with is the number
+  /// of candidates the proposals gave it as their clusters came and went. Run by update() with
+  /// thinViews().
+  void foldStaleCandidates(int64_t now_utime, const VotingOptions& options);
+
+  /// Thins the views and folds stale candidates (thinViews(), foldStaleCandidates(), when due),
+  /// then recomputes the candidates' voxels (voted in >= min_votes and >= min_vote_share of the
+  /// voting views, and occupied now), the groups (GroupingOptions: pairs of candidates are tried
+  /// from the most overlapping, and two groups merge when their voxel unions pass the test), the
+  /// object ids (new_id() for groups that continue no previous object) and every object's evidence
+  /// and geometry.
   void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
               const GroupingOptions& grouping, size_t num_classes,
               const std::function<int32_t()>& new_id, const FusionOptions& fusion = {});

@@ -705,6 +705,84 @@ TEST(ObjectTable, OldViewsAreThinnedToTheSameFramesAndStandForTheFramesAround) {
   EXPECT_EQ(t.candidates().at(140).views.size(), 3u);
 }
 
+// An object whose parts the proposals gave new ids as their clusters came and went: candidates 1-3
+// (each seen in the first second, voted by 3, 6 and 4 views) and 4 (in view until 9.9 s), grouped
+// as one object. Once 1-3 have not been seen for the full-rate period, they are folded into one
+// candidate (the lowest id); the object keeps its id, its evidence, its frames and its voxels.
+// Candidate 5, alone in another object, has nothing to fold into.
+TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceAndVoxels) {
+  VotingOptions vo;
+  vo.min_votes = 2;
+  vo.min_vote_share = 0.5;
+  GroupingOptions half;
+  half.merge_overlap = 0.5;
+  half.merge_size_ratio = 0.5;
+  ObjectTable t(0.01, 10.0);
+  auto utime = [](int f) { return int64_t{f} * 100000; };  // 10 Hz
+  for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo);
+  t.addVotes(1, lineOfVoxels(100, 101), vo);  // once in 4: below the share
+  for (int v = 0; v < 6; ++v)
+    t.addVotes(2, lineOfVoxels(10, v < 2 ? 35 : 30), vo);  // 30-34: 2 in 6
+  for (int v = 0; v < 4; ++v) t.addVotes(3, lineOfVoxels(20, 40), vo);
+  for (int v = 0; v < 3; ++v) t.addVotes(4, lineOfVoxels(5, 35), vo);
+  for (int v = 0; v < 3; ++v) t.addVotes(5, lineOfVoxels(500, 510), vo);
+  // Frames boxed by two or three of them, more and less object-like.
+  t.addView(1, View{utime(0), 0, 50, logs({0.6, 0.3, 0.1})});
+  t.addView(1, View{utime(1), 1, 50, logs({0.5, 0.3, 0.2})});
+  t.addView(1, View{utime(2), 2, 50, logs({0.7, 0.2, 0.1})});
+  t.addView(2, View{utime(1), 1, 70, logs({0.2, 0.7, 0.1})});
+  t.addView(2, View{utime(2), 2, 70, logs({0.7, 0.2, 0.1})});  // as object-like: the larger
+  t.addView(2, View{utime(3), 3, 70, logs({0.4, 0.4, 0.2})});
+  t.addView(3, View{utime(2), 2, 90, logs({0.3, 0.6, 0.1})});
+  t.addView(3, View{utime(4), 4, 90, logs({0.8, 0.1, 0.1})});
+  t.addView(5, View{utime(5), 5, 20, logs({0.2, 0.7, 0.1})});
+  for (int f = 0; f < 100; ++f) t.addView(4, View{utime(f), f, 60, logs({0.6, 0.3, 0.1})});
+  int32_t next = 1;
+  auto update = [&] {
+    t.update([](VoxelKey) { return true; }, vo, half, 3, [&] { return next++; });
+  };
+  update();  // all seen within 10 s of the newest view (9.9 s): nothing thinned or folded
+  ASSERT_EQ(t.objects().size(), 2u);
+  const Object before = *t.objectOfCandidate(1);
+  ASSERT_EQ(before.candidates, (std::vector<int32_t>{1, 2, 3, 4}));
+  std::vector<VoxelKey> voxels_before;
+  for (int32_t c : before.candidates)
+    for (VoxelKey k : t.candidates().at(c).voxels) voxels_before.push_back(k);
+  std::sort(voxels_before.begin(), voxels_before.end());
+  voxels_before.erase(std::unique(voxels_before.begin(), voxels_before.end()), voxels_before.end());
+  size_t votes_before = 0;
+  for (int32_t c : {1, 2, 3}) votes_before += t.candidates().at(c).votes.size();
+
+  t.foldStaleCandidates(utime(115), vo);  // 11.5 s: candidates 1-3 and 5 unseen for 10 s
+  EXPECT_TRUE(t.candidates().count(1));
+  EXPECT_FALSE(t.candidates().count(2));
+  EXPECT_FALSE(t.candidates().count(3));
+  EXPECT_TRUE(t.candidates().count(4)) << "in view: not folded";
+  EXPECT_TRUE(t.candidates().count(5)) << "alone in its object";
+  const Candidate& folded = t.candidates().at(1);
+  EXPECT_EQ(folded.voting_views, 6);
+  EXPECT_EQ(folded.views.size(), 5u) << "frames 0-4";
+  EXPECT_LT(folded.votes.size(), votes_before) << "below-threshold votes are not carried over";
+  EXPECT_FALSE(std::binary_search(folded.votes.begin(), folded.votes.end(),
+                                  std::make_pair(lineOfVoxels(100, 101)[0], 0),
+                                  [](const auto& a, const auto& b) { return a.first < b.first; }));
+  update();
+  const Object& after = *t.objectOfCandidate(1);
+  EXPECT_EQ(after.id, before.id);
+  EXPECT_EQ(after.candidates, (std::vector<int32_t>{1, 4}));
+  EXPECT_EQ(after.num_views, before.num_views);
+  EXPECT_EQ(after.label, before.label);
+  ASSERT_EQ(after.log_evidence.size(), before.log_evidence.size());
+  for (size_t c = 0; c < 3; ++c) EXPECT_NEAR(after.log_evidence[c], before.log_evidence[c], 1e-9);
+  EXPECT_EQ(after.num_voxels, before.num_voxels);
+  std::vector<VoxelKey> voxels_after = t.candidates().at(1).voxels;
+  for (VoxelKey k : t.candidates().at(4).voxels) voxels_after.push_back(k);
+  std::sort(voxels_after.begin(), voxels_after.end());
+  voxels_after.erase(std::unique(voxels_after.begin(), voxels_after.end()), voxels_after.end());
+  EXPECT_EQ(voxels_after, voxels_before);
+  EXPECT_TRUE(after.centroid.isApprox(before.centroid));
+}
+
 TEST(ObjectTable, BackgroundOutOfViewIsForgottenObjectsAndUserLabelsStay) {
   VotingOptions vo;
   ObjectTable t(0.01, 10.0), every(0.01, 0);
