@@ -63,6 +63,22 @@ std::vector<VoxelKey> lineOfVoxels(int from, int to) {
   return k;
 }
 
+// A voxel belongs to a candidate voted in 2 views and half of them.
+VotingOptions twoVotesAndHalfTheViews() {
+  VotingOptions vo;
+  vo.min_votes = 2;
+  vo.min_vote_share = 0.5;
+  return vo;
+}
+
+// Candidates merge when they share half the smaller's voxels and it is at least half the larger.
+GroupingOptions halfOverlapAndHalfSize() {
+  GroupingOptions half;
+  half.merge_overlap = 0.5;
+  half.merge_size_ratio = 0.5;
+  return half;
+}
+
 const object_t* findLabel(const object_map_t& m, const std::string& label) {
   for (const auto& o : m.objects)
     if (o.label == label) return &o;
@@ -423,12 +439,9 @@ TEST(CandidateVoxels, AnObjectInFrontOfAWallKeepsItsVoxelsAndNotTheWall) {
 // ---- Merge, split, stable ids ----------------------------------------------------------------
 
 TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStayStable) {
-  VotingOptions vo;
-  vo.min_votes = 2;
-  vo.min_vote_share = 0.5;
-  GroupingOptions half;  // candidates that share half their voxels merge
-  half.merge_overlap = 0.5;
-  half.merge_size_ratio = 0.5;
+  const VotingOptions vo = twoVotesAndHalfTheViews();
+  const GroupingOptions half =
+      halfOverlapAndHalfSize();  // candidates sharing half their voxels merge
   ObjectTable t(0.01);
   // Candidate 1: voxels 0..19, candidate 2: voxels 10..29 (the shared 10..19 are half of each).
   for (int v = 0; v < 3; ++v)
@@ -492,12 +505,9 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
 // A user's label is held by the candidates of the object it was given to: a split leaves it on
 // both parts, a merge with an unlabelled object keeps it, and an unknown id is refused.
 TEST(ObjectTable, AUserLabelStaysWithTheCandidatesThroughSplitsAndMerges) {
-  VotingOptions vo;
-  vo.min_votes = 2;
-  vo.min_vote_share = 0.5;
-  GroupingOptions half;
-  half.merge_overlap = 0.5;
-  half.merge_size_ratio = 0.5;
+  const VotingOptions vo = twoVotesAndHalfTheViews();
+  const GroupingOptions half =
+      halfOverlapAndHalfSize();  // candidates sharing half their voxels merge
   ObjectTable t(0.01);
   for (int v = 0; v < 3; ++v)
     t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
@@ -711,12 +721,9 @@ TEST(ObjectTable, OldViewsAreThinnedToTheSameFramesAndStandForTheFramesAround) {
 // candidate (the lowest id); the object keeps its id, its evidence, its frames and its voxels.
 // Candidate 5, alone in another object, has nothing to fold into.
 TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceAndVoxels) {
-  VotingOptions vo;
-  vo.min_votes = 2;
-  vo.min_vote_share = 0.5;
-  GroupingOptions half;
-  half.merge_overlap = 0.5;
-  half.merge_size_ratio = 0.5;
+  const VotingOptions vo = twoVotesAndHalfTheViews();
+  const GroupingOptions half =
+      halfOverlapAndHalfSize();  // candidates sharing half their voxels merge
   ObjectTable t(0.01, 10.0);
   auto utime = [](int f) { return int64_t{f} * 100000; };  // 10 Hz
   for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo);
