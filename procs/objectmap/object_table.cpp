@@ -154,6 +154,11 @@ namespace {
 
 std::pair<double, int32_t> objectnessOf(const View& v) { return {viewObjectness(v), v.frames}; }
 
+/// The votes a voxel needs to be one of the candidate's (VotingOptions: min_votes, min_vote_share).
+double votesNeeded(const Candidate& c, const VotingOptions& options) {
+  return std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
+}
+
 void refreshObjectness(Candidate* c) {
   c->objectness.clear();
   for (const auto& [key, v] : c->views)
@@ -243,7 +248,7 @@ namespace {
 /// `views` voting views (rounded up: a share at the threshold stays at it).
 std::vector<std::pair<VoxelKey, int32_t>> passingVotesScaled(const Candidate& c, int32_t views,
                                                              const VotingOptions& options) {
-  const double need = std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
+  const double need = votesNeeded(c, options);
   std::vector<std::pair<VoxelKey, int32_t>> out;
   if (c.voting_views <= 0) return out;
   for (const auto& [key, n] : c.votes)
@@ -253,13 +258,13 @@ std::vector<std::pair<VoxelKey, int32_t>> passingVotesScaled(const Candidate& c,
   return out;
 }
 
-/// Folds candidate `from` into `into` (ObjectTable::foldStaleCandidates).
-void foldCandidate(Candidate& into, const Candidate& from, const VotingOptions& options) {
-  for (const auto& [key, v] : from.views) {
-    auto [it, added] = into.views.emplace(key, v);
+/// Folds candidate `from` into `into` (ObjectTable::foldStaleCandidates); `from` is dropped after.
+void foldCandidate(Candidate& into, Candidate&& from, const VotingOptions& options) {
+  for (auto& [key, v] : from.views) {
+    auto [it, added] = into.views.try_emplace(key, std::move(v));
     // Ties keep `into`'s view: the lower id's, as the object's fusion does (members in id order).
     if (!added && moreObjectLikeView(v.log_prob, v.area, it->second.log_prob, it->second.area))
-      it->second = v;
+      it->second = std::move(v);
   }
   refreshObjectness(&into);
   const int32_t views = std::max(into.voting_views, from.voting_views);
@@ -271,7 +276,7 @@ void foldCandidate(Candidate& into, const Candidate& from, const VotingOptions& 
                                                       : passingVotesScaled(into, views, options);
     const std::vector<std::pair<VoxelKey, int32_t>> b =
         from.voting_views == views && into.voting_views != views
-            ? from.votes
+            ? std::move(from.votes)
             : passingVotesScaled(from, views, options);
     std::vector<std::pair<VoxelKey, int32_t>> merged;
     merged.reserve(a.size() + b.size());
@@ -316,7 +321,7 @@ void ObjectTable::foldStaleCandidates(int64_t now_utime, const VotingOptions& op
       if (ids.size() < 2) continue;
       Candidate& keeper = candidates_.at(ids.front());
       for (size_t k = 1; k < ids.size(); ++k) {
-        foldCandidate(keeper, candidates_.at(ids[k]), options);
+        foldCandidate(keeper, std::move(candidates_.at(ids[k])), options);
         candidates_.erase(ids[k]);
       }
     }
@@ -586,8 +591,7 @@ void ObjectTable::deriveVoxels(const std::function<bool(VoxelKey)>& occupied,
                                const VotingOptions& options) {
   for (auto& [id, c] : candidates_) {
     c.voxels.clear();
-    const double need =
-        std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
+    const double need = votesNeeded(c, options);
     for (const auto& [key, n] : c.votes)  // sorted by key: so are the voxels
       if (n >= need && occupied(key)) c.voxels.push_back(key);
   }

@@ -440,8 +440,7 @@ TEST(CandidateVoxels, AnObjectInFrontOfAWallKeepsItsVoxelsAndNotTheWall) {
 
 TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStayStable) {
   const VotingOptions vo = twoVotesAndHalfTheViews();
-  const GroupingOptions half =
-      halfOverlapAndHalfSize();  // candidates sharing half their voxels merge
+  const GroupingOptions half = halfOverlapAndHalfSize();
   ObjectTable t(0.01);
   // Candidate 1: voxels 0..19, candidate 2: voxels 10..29 (the shared 10..19 are half of each).
   for (int v = 0; v < 3; ++v)
@@ -506,8 +505,7 @@ TEST(ObjectTable, MergeKeepsTheUnionOfViewsSplitKeepsEachCandidatesOwnAndIdsStay
 // both parts, a merge with an unlabelled object keeps it, and an unknown id is refused.
 TEST(ObjectTable, AUserLabelStaysWithTheCandidatesThroughSplitsAndMerges) {
   const VotingOptions vo = twoVotesAndHalfTheViews();
-  const GroupingOptions half =
-      halfOverlapAndHalfSize();  // candidates sharing half their voxels merge
+  const GroupingOptions half = halfOverlapAndHalfSize();
   ObjectTable t(0.01);
   for (int v = 0; v < 3; ++v)
     t.addVotes(1, lineOfVoxels(0, 20), vo), t.addVotes(2, lineOfVoxels(10, 30), vo);
@@ -722,8 +720,7 @@ TEST(ObjectTable, OldViewsAreThinnedToTheSameFramesAndStandForTheFramesAround) {
 // Candidate 5, alone in another object, has nothing to fold into.
 TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceAndVoxels) {
   const VotingOptions vo = twoVotesAndHalfTheViews();
-  const GroupingOptions half =
-      halfOverlapAndHalfSize();  // candidates sharing half their voxels merge
+  const GroupingOptions half = halfOverlapAndHalfSize();
   ObjectTable t(0.01, 10.0);
   auto utime = [](int f) { return int64_t{f} * 100000; };  // 10 Hz
   for (int v = 0; v < 3; ++v) t.addVotes(1, lineOfVoxels(0, 20), vo);
@@ -752,11 +749,13 @@ TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceA
   ASSERT_EQ(t.objects().size(), 2u);
   const Object before = *t.objectOfCandidate(1);
   ASSERT_EQ(before.candidates, (std::vector<int32_t>{1, 2, 3, 4}));
-  std::vector<VoxelKey> voxels_before;
-  for (int32_t c : before.candidates)
-    for (VoxelKey k : t.candidates().at(c).voxels) voxels_before.push_back(k);
-  std::sort(voxels_before.begin(), voxels_before.end());
-  voxels_before.erase(std::unique(voxels_before.begin(), voxels_before.end()), voxels_before.end());
+  auto voxelsOf = [&](const std::vector<int32_t>& members) {  // the union of their voxels
+    std::set<VoxelKey> all;
+    for (int32_t c : members)
+      all.insert(t.candidates().at(c).voxels.begin(), t.candidates().at(c).voxels.end());
+    return std::vector<VoxelKey>(all.begin(), all.end());
+  };
+  const std::vector<VoxelKey> voxels_before = voxelsOf(before.candidates);
   size_t votes_before = 0;
   for (int32_t c : {1, 2, 3}) votes_before += t.candidates().at(c).votes.size();
 
@@ -782,11 +781,7 @@ TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceA
   ASSERT_EQ(after.log_evidence.size(), before.log_evidence.size());
   for (size_t c = 0; c < 3; ++c) EXPECT_NEAR(after.log_evidence[c], before.log_evidence[c], 1e-9);
   EXPECT_EQ(after.num_voxels, before.num_voxels);
-  std::vector<VoxelKey> voxels_after = t.candidates().at(1).voxels;
-  for (VoxelKey k : t.candidates().at(4).voxels) voxels_after.push_back(k);
-  std::sort(voxels_after.begin(), voxels_after.end());
-  voxels_after.erase(std::unique(voxels_after.begin(), voxels_after.end()), voxels_after.end());
-  EXPECT_EQ(voxels_after, voxels_before);
+  EXPECT_EQ(voxelsOf(after.candidates), voxels_before);
   EXPECT_TRUE(after.centroid.isApprox(before.centroid));
 }
 
