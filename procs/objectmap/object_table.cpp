@@ -294,10 +294,8 @@ void foldCandidate(Candidate& into, Candidate&& from, const VotingOptions& optio
     into.votes = std::move(merged);
     into.voting_views = views;
   }
-  const int64_t into_last = into.views.empty() ? 0 : into.views.rbegin()->first.first;
-  const int64_t from_last = from.views.empty() ? 0 : from.views.rbegin()->first.first;
-  if (from.box_positions > 0 && (into.box_positions == 0 || from_last > into_last))
-    into.box_size = from.box_size;
+  // An object without voxels is as large as its members' largest box (describeGroup()).
+  into.box_size = std::max(into.box_size, from.box_size);
   into.box_position_sum += from.box_position_sum;
   into.box_positions += from.box_positions;
 }

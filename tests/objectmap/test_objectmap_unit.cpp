@@ -740,6 +740,9 @@ TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceA
   t.addView(3, View{utime(2), 2, 90, logs({0.3, 0.6, 0.1})});
   t.addView(3, View{utime(4), 4, 90, logs({0.8, 0.1, 0.1})});
   t.addView(5, View{utime(5), 5, 20, logs({0.2, 0.7, 0.1})});
+  t.addBoxPosition(1, Eigen::Vector3d(0.1, 0, 1), 0.1);
+  t.addBoxPosition(2, Eigen::Vector3d(0.2, 0, 1), 0.3);  // the larger box, seen later
+  t.addBoxPosition(3, Eigen::Vector3d(0.3, 0, 1), 0.2);
   for (int f = 0; f < 100; ++f) t.addView(4, View{utime(f), f, 60, logs({0.6, 0.3, 0.1})});
   int32_t next = 1;
   auto update = [&] {
@@ -768,6 +771,8 @@ TEST(ObjectTable, StaleCandidatesOfAnObjectAreFoldedIntoOneThatKeepsItsEvidenceA
   const Candidate& folded = t.candidates().at(1);
   EXPECT_EQ(folded.voting_views, 6);
   EXPECT_EQ(folded.views.size(), 5u) << "frames 0-4";
+  EXPECT_EQ(folded.box_positions, 3);
+  EXPECT_DOUBLE_EQ(folded.box_size, 0.3) << "the largest box of the parts, as the object has it";
   EXPECT_LT(folded.votes.size(), votes_before) << "below-threshold votes are not carried over";
   EXPECT_FALSE(std::binary_search(folded.votes.begin(), folded.votes.end(),
                                   std::make_pair(lineOfVoxels(100, 101)[0], 0),
