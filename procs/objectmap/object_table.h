@@ -131,10 +131,10 @@ class ObjectTable {
   /// the union of theirs (per frame the most object-like, the rule of the object's fusion), its
   /// votes per voxel the largest of theirs once each is scaled to the largest number of voting
   /// views (a candidate's votes below its own voxel threshold are dropped first), its box
-  /// positions the sum. The object's evidence and its voxels are the same before and after (the
-  /// folded candidate's voxels are the union of theirs); what it stops growing with is the number
-  /// of candidates the proposals gave it as their clusters came and went. Run by update() with
-  /// thinViews().
+  /// positions the sum, its box size the largest. The object's evidence, voxels and extent are the
+  /// same (the folded candidate's voxels are the union of theirs); what it stops growing with is
+  /// the number of candidates the proposals gave it as their clusters came and went. Run by
+  /// update() with thinViews().
   void foldStaleCandidates(int64_t now_utime, const VotingOptions& options);
 
   /// Thins the views and folds stale candidates (thinViews(), foldStaleCandidates(), when due),
