@@ -259,6 +259,7 @@ std::vector<std::pair<VoxelKey, int32_t>> passingVotesScaled(const Candidate& c,
 }
 
 /// Folds candidate `from` into `into` (ObjectTable::foldStaleCandidates); `from` is dropped after.
+/// `into.objectness` is left for the caller to refresh once all its parts are folded in.
 void foldCandidate(Candidate& into, Candidate&& from, const VotingOptions& options) {
   for (auto& [key, v] : from.views) {
     auto [it, added] = into.views.try_emplace(key, std::move(v));
@@ -266,7 +267,6 @@ void foldCandidate(Candidate& into, Candidate&& from, const VotingOptions& optio
     if (!added && moreObjectLikeView(v.log_prob, v.area, it->second.log_prob, it->second.area))
       it->second = std::move(v);
   }
-  refreshObjectness(&into);
   const int32_t views = std::max(into.voting_views, from.voting_views);
   if (views > 0) {
     // The candidate with the most voting views keeps its votes as they are; the other's voxels
@@ -322,6 +322,7 @@ void ObjectTable::foldStaleCandidates(int64_t now_utime, const VotingOptions& op
         foldCandidate(keeper, std::move(candidates_.at(ids[k])), options);
         candidates_.erase(ids[k]);
       }
+      refreshObjectness(&keeper);  // once, from the united views
     }
   }
 }
