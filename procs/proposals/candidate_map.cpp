@@ -735,6 +735,8 @@ bool CandidateMap::adopt(Clustering&& clustering, int64_t utime) {
   support_ = std::move(clustering.support);
   stats_ = clustering.stats;
   stats_.clusters = static_cast<int>(candidates_.size());
+  stats_.retired = static_cast<int>(retired_.size());
+  for (const auto& r : retired_) stats_.retired_points += static_cast<int64_t>(r.points.size());
   return true;
 }
 

@@ -42,9 +42,11 @@ struct ClusterStats {
   bool support = false;  ///< a support plane was found and the map restricted to what stands on it
   bool young = false;  ///< the map had fewer than young_map_points points: young_min_points applied
   int clusters = 0;
-  int views = 0;           ///< camera poses the priors came from
-  bool look_at = false;    ///< the views' optical axes meet
-  double voxel = 0;        ///< voxel used for downsampling
+  int retired = 0;             ///< dropped candidates remembered so that their ids can come back
+  int64_t retired_points = 0;  ///< their points (one per key voxel)
+  int views = 0;               ///< camera poses the priors came from
+  bool look_at = false;        ///< the views' optical axes meet
+  double voxel = 0;            ///< voxel used for downsampling
   double scene_scale = 1;  ///< map units per length unit of the options (median viewing distance)
   double ms = 0;           ///< time of the last recluster()
   double filter_ms = 0, structure_ms = 0,

@@ -68,6 +68,8 @@ int main(int argc, char** argv) {
         const ClusterStats& s = engine.map().stats();
         status.setCounter("map_points", s.input_points);
         status.setCounter("candidates", s.clusters);
+        status.setCounter("retired_candidates", s.retired);
+        status.setCounter("retired_points", s.retired_points);
         status.setCounter("support", s.support ? 1 : 0);
         status.setCounter("recluster_ms", static_cast<int64_t>(s.ms));
         status.count("reclusters");
