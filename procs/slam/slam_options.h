@@ -106,6 +106,10 @@ struct TrackingOptions {
   }
 };
 
+/// Keyframes other than its own that must see a point for it to count as redundant (culling, and
+/// the keyframe decision: a frame whose points are redundant is not made a keyframe).
+constexpr int kRedundantObservers = 3;
+
 /// Local mapping: triangulation, fusion, local bundle adjustment, culling.
 struct MappingOptions {
   bool threaded = true;              ///< run on its own thread (false: inline, for tests)
@@ -117,8 +121,8 @@ struct MappingOptions {
   int ba_iterations_refine = 10;     ///< iterations after outlier removal
   double point_found_ratio =
       0.25;  ///< cull a new point matched in fewer than this x the frames it should be seen
-  double keyframe_redundancy =
-      0.9;  ///< cull a keyframe when this share of its points is seen by 3 others
+  double keyframe_redundancy = 0.9;  ///< cull a keyframe when this share of its points is seen by 3
+                                     ///< others (and make none of a frame whose tracked points are)
   int min_covisibility_weight = 15;  ///< shared points for a covisibility edge
 
   template <class V>

@@ -244,27 +244,32 @@ TEST(SlamSystem, AYoungMapIsPublishedWithItsMapPointsAtOnce) {
   EXPECT_GE(fullClouds(b), 1);
 }
 
-// A camera going back over ground it has mapped (the video played forward, backward and forward
-// again, as a robot patrols) tracks every frame and adds few keyframes: the keyframe rule's motion
-// counts also from the older keyframe the frame tracks against, not only from the last one made.
-// Counted from the last one made alone, the return passes made 11 keyframes each against the first
-// pass's 17, which local mapping triangulated, bundle-adjusted and mostly culled again.
+// A camera going back over ground it has mapped (the video played forward, backward, forward ...,
+// as a robot patrols) tracks every frame and adds few keyframes, and after a few passes none: the
+// keyframe rule's motion counts also from the older keyframe the frame tracks against, and a frame
+// whose tracked points are already seen by three other keyframes (what local mapping culls as
+// redundant) is not made one. Without the first, the return passes made 11 keyframes each against
+// the first pass's 17; without the second, passes 4-6 made 11, 4 and 3, each replacing keyframes
+// that culling then removed with their semi-dense points (in a looping replay, SLAM's map, the
+// proposals' candidates and the object map's objects churned for as long as it ran).
 TEST(SlamSystem, GoingBackOverMappedGroundAddsFewKeyframes) {
   const int n = static_cast<int>(sampleFrames().frames.size());
+  const int passes = 6;
   std::vector<int> order;
-  for (int pass = 0; pass < 3; ++pass)
+  for (int pass = 0; pass < passes; ++pass)
     for (int k = 0; k < n; ++k) order.push_back(pass % 2 == 0 ? k : n - 1 - k);
   const SlamRun run = runSlam(false, {}, order);
   std::set<int64_t> seen;
-  std::vector<int> made(3, 0), tracked(3, 0);
+  std::vector<int> made(passes, 0), tracked(passes, 0);
   for (size_t i = 0; i < run.poses.size(); ++i)
     tracked[i / n] += run.poses[i].state == PoseState::kTracking;
   for (size_t j = 0; j < run.keyframes.size(); ++j)
     made[run.keyframe_frames[j] / n] += seen.insert(run.keyframes[j].first).second;
   EXPECT_GE(tracked[0], n - 5);
-  EXPECT_EQ(tracked[1], n);
-  EXPECT_EQ(tracked[2], n);
+  for (int p = 1; p < passes; ++p) EXPECT_EQ(tracked[p], n) << "pass " << p + 1;
   ASSERT_GE(made[0], 8);
-  EXPECT_LE(made[1] + made[2], made[0] / 2)
-      << "first pass " << made[0] << ", back " << made[1] << ", forward again " << made[2];
+  std::string per_pass;
+  for (int m : made) per_pass += " " + std::to_string(m);
+  EXPECT_LE(made[1] + made[2], made[0] / 2) << "keyframes made per pass:" << per_pass;
+  EXPECT_LE(made[3] + made[4] + made[5], 2) << "keyframes made per pass:" << per_pass;
 }

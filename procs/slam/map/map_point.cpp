@@ -17,6 +17,16 @@ int MapPoint::featureIn(int64_t keyframe_id) const {
   return it == observations.end() ? -1 : it->second.feature;
 }
 
+bool MapPoint::seenElsewhere(int level, int needed, int64_t except) const {
+  if (numObservations() - (observedBy(except) ? 1 : 0) < needed) return false;
+  int seen = 0;
+  for (const auto& [kf_id, obs] : observations) {
+    if (kf_id == except) continue;
+    if (obs.keyframe->features->level(obs.feature) <= level + 1 && ++seen >= needed) return true;
+  }
+  return false;
+}
+
 void MapPoint::addObservation(const std::shared_ptr<KeyFrame>& kf, int feature) {
   observations[kf->id] = Observation{kf, feature};
 }

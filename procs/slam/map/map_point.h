@@ -47,6 +47,9 @@ class MapPoint {
   int numObservations() const { return static_cast<int>(observations.size()); }
   bool observedBy(int64_t keyframe_id) const { return observations.count(keyframe_id) > 0; }
   int featureIn(int64_t keyframe_id) const;
+  /// True when at least `needed` keyframes other than `except` observe it at pyramid level
+  /// `level` + 1 or finer: what makes a point of a keyframe (or a frame) redundant.
+  bool seenElsewhere(int level, int needed, int64_t except = -1) const;
   void addObservation(const std::shared_ptr<KeyFrame>& kf, int feature);
   /// Removes an observation; returns true when the point is left with too few to exist.
   bool eraseObservation(int64_t keyframe_id);

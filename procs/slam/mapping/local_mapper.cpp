@@ -374,7 +374,7 @@ void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame
 void LocalMapper::cullKeyFrames(Map& map, const std::shared_ptr<KeyFrame>& kf,
                                 MappingEvents* events) {
   if (kf->bad) return;
-  const int needed = 3;
+  const int needed = kRedundantObservers;
   const double redundancy = options_.mapping.keyframe_redundancy;
   for (const auto& [w, n] :
        std::vector<std::pair<int, std::shared_ptr<KeyFrame>>>(kf->covisible())) {
@@ -384,14 +384,7 @@ void LocalMapper::cullKeyFrames(Map& map, const std::shared_ptr<KeyFrame>& kf,
       const auto& p = n->points[i];
       if (!p || p->bad) continue;
       ++total;
-      if (p->numObservations() <= needed) continue;
-      const int level = n->features->level(i);
-      int seen = 0;
-      for (const auto& [kf_id, obs] : p->observations) {
-        if (kf_id == n->id) continue;
-        if (obs.keyframe->features->level(obs.feature) <= level + 1 && ++seen >= needed) break;
-      }
-      if (seen >= needed) ++redundant;
+      if (p->seenElsewhere(n->features->level(i), needed, n->id)) ++redundant;
     }
     if (total > 0 && redundant > redundancy * total) {
       map.eraseKeyFrame(n);

@@ -308,7 +308,20 @@ bool Tracker::needNewKeyFrame(const Frame& frame, int inliers, bool mapper_idle)
     from_keyframes = std::min(from_keyframes, (frame.center() - reference_kf_->center()).norm());
   const bool moved = depth > 0 && from_keyframes >= o.min_keyframe_baseline * depth;
   const bool waited = frame.utime - last_keyframe_utime_ >= o.max_keyframe_interval_s * 1e6;
-  return weak || (fewer && mapper_idle && (moved || waited));
+  if (weak) return true;
+  if (!(fewer && mapper_idle && (moved || waited))) return false;
+  // A frame whose tracked points local mapping would find redundant (seen by three other
+  // keyframes at its scale) would only replace keyframes that culling then removes: on ground
+  // mapped before this churns the map (new keyframes, old ones and their points culled) without
+  // adding to it.
+  int tracked = 0, redundant = 0;
+  for (int i = 0; i < frame.size(); ++i) {
+    const auto& p = frame.points[i];
+    if (!p || p->bad) continue;
+    ++tracked;
+    if (p->seenElsewhere(frame.features->level(i), kRedundantObservers)) ++redundant;
+  }
+  return !(tracked > 0 && redundant > options_.mapping.keyframe_redundancy * tracked);
 }
 
 std::shared_ptr<KeyFrame> Tracker::createKeyFrame(Frame& frame) {
