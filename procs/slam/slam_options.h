@@ -106,10 +106,6 @@ struct TrackingOptions {
   }
 };
 
-/// Keyframes other than its own that must see a point for it to count as redundant (culling, and
-/// the keyframe decision: a frame whose points are redundant is not made a keyframe).
-constexpr int kRedundantObservers = 3;
-
 /// Local mapping: triangulation, fusion, local bundle adjustment, culling.
 struct MappingOptions {
   bool threaded = true;              ///< run on its own thread (false: inline, for tests)

@@ -17,16 +17,6 @@ int MapPoint::featureIn(int64_t keyframe_id) const {
   return it == observations.end() ? -1 : it->second.feature;
 }
 
-bool MapPoint::seenElsewhere(int level, int needed, int64_t except) const {
-  if (numObservations() - (observedBy(except) ? 1 : 0) < needed) return false;
-  int seen = 0;
-  for (const auto& [kf_id, obs] : observations) {
-    if (kf_id == except) continue;
-    if (obs.keyframe->features->level(obs.feature) <= level + 1 && ++seen >= needed) return true;
-  }
-  return false;
-}
-
 void MapPoint::addObservation(const std::shared_ptr<KeyFrame>& kf, int feature) {
   observations[kf->id] = Observation{kf, feature};
 }
@@ -89,6 +79,26 @@ int MapPoint::predictLevel(double distance, const ScalePyramid& pyramid) const {
 std::shared_ptr<MapPoint> MapPoint::resolve(std::shared_ptr<MapPoint> p) {
   for (int i = 0; p && p->replaced_by && i < 64; ++i) p = p->replaced_by;
   return p;
+}
+
+bool redundantView(const std::vector<std::shared_ptr<MapPoint>>& points,
+                   const FrameFeatures& features, double share, int64_t except) {
+  constexpr int kNeeded = 3;
+  int total = 0, redundant = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    if (!p || p->bad) continue;
+    ++total;
+    if (p->numObservations() < kNeeded) continue;
+    const int level = features.level(static_cast<int>(i));
+    int seen = 0;
+    for (const auto& [kf_id, obs] : p->observations)
+      if (kf_id != except && obs.keyframe->features->level(obs.feature) <= level + 1 &&
+          ++seen >= kNeeded)
+        break;
+    if (seen >= kNeeded) ++redundant;
+  }
+  return total > 0 && redundant > share * total;
 }
 
 }  // namespace slamaware::slam

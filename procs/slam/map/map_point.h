@@ -10,9 +10,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <vector>
 
 namespace slamaware::slam {
 
+class FrameFeatures;
 class KeyFrame;
 struct ScalePyramid;
 
@@ -47,9 +49,6 @@ class MapPoint {
   int numObservations() const { return static_cast<int>(observations.size()); }
   bool observedBy(int64_t keyframe_id) const { return observations.count(keyframe_id) > 0; }
   int featureIn(int64_t keyframe_id) const;
-  /// True when at least `needed` keyframes other than `except` observe it at pyramid level
-  /// `level` + 1 or finer: what makes a point of a keyframe (or a frame) redundant.
-  bool seenElsewhere(int level, int needed, int64_t except = -1) const;
   void addObservation(const std::shared_ptr<KeyFrame>& kf, int feature);
   /// Removes an observation; returns true when the point is left with too few to exist.
   bool eraseObservation(int64_t keyframe_id);
@@ -63,5 +62,12 @@ class MapPoint {
   /// Follows replaced_by to the point that now stands for this one.
   static std::shared_ptr<MapPoint> resolve(std::shared_ptr<MapPoint> p);
 };
+
+/// Local mapping's test of a redundant view: more than `share` of `points` (one per feature of
+/// `features`; null and bad ones left out) are seen by three keyframes other than `except` at
+/// their feature's pyramid level + 1 or finer. Culling asks it of a keyframe (except: itself),
+/// the keyframe decision of a frame (a redundant frame is not made a keyframe).
+bool redundantView(const std::vector<std::shared_ptr<MapPoint>>& points,
+                   const FrameFeatures& features, double share, int64_t except = -1);
 
 }  // namespace slamaware::slam

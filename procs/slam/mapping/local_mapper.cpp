@@ -374,19 +374,10 @@ void LocalMapper::localBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame
 void LocalMapper::cullKeyFrames(Map& map, const std::shared_ptr<KeyFrame>& kf,
                                 MappingEvents* events) {
   if (kf->bad) return;
-  const int needed = kRedundantObservers;
-  const double redundancy = options_.mapping.keyframe_redundancy;
   for (const auto& [w, n] :
        std::vector<std::pair<int, std::shared_ptr<KeyFrame>>>(kf->covisible())) {
     if (n->bad || n->id == map.first_keyframe_id || n == kf) continue;
-    int total = 0, redundant = 0;
-    for (int i = 0; i < n->size(); ++i) {
-      const auto& p = n->points[i];
-      if (!p || p->bad) continue;
-      ++total;
-      if (p->seenElsewhere(n->features->level(i), needed, n->id)) ++redundant;
-    }
-    if (total > 0 && redundant > redundancy * total) {
+    if (redundantView(n->points, *n->features, options_.mapping.keyframe_redundancy, n->id)) {
       map.eraseKeyFrame(n);
       events->culled.push_back(n);
       ++culled_keyframes_;

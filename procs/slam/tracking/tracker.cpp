@@ -314,14 +314,7 @@ bool Tracker::needNewKeyFrame(const Frame& frame, int inliers, bool mapper_idle)
   // keyframes at its scale) would only replace keyframes that culling then removes: on ground
   // mapped before this churns the map (new keyframes, old ones and their points culled) without
   // adding to it.
-  int tracked = 0, redundant = 0;
-  for (int i = 0; i < frame.size(); ++i) {
-    const auto& p = frame.points[i];
-    if (!p || p->bad) continue;
-    ++tracked;
-    if (p->seenElsewhere(frame.features->level(i), kRedundantObservers)) ++redundant;
-  }
-  return !(tracked > 0 && redundant > options_.mapping.keyframe_redundancy * tracked);
+  return !redundantView(frame.points, *frame.features, options_.mapping.keyframe_redundancy);
 }
 
 std::shared_ptr<KeyFrame> Tracker::createKeyFrame(Frame& frame) {
