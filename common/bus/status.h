@@ -1,6 +1,7 @@
 #pragma once
 // <NAME>_STATUS heartbeat at 1 Hz (docs/architecture.md §1): state, last input handled, queue
-// depth, frames processed and dropped, rejects of the bus, and the process's own counters. A
+// depth, frames processed and dropped, rejects of the bus, the heap (heap.used_kb, heap.free_kb:
+// glibc's mallinfo2), and the process's own counters. A
 // change of state goes out at once (at most 10 per second): the supervisor learns that a process
 // it restarted is running when it is, not up to a second later.
 #include <atomic>
