@@ -83,8 +83,9 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
     auto it = table.candidates().find(b.candidate);
     if (it == table.candidates().end() || it->second.objectness.empty()) continue;
     // Both over the sorted values the table keeps: walking the views' tree and taking each view's
-    // exponential again for every box of every frame grew with the session (a candidate keeps
-    // about 2,000 views after 15 minutes) and was half of the node's time.
+    // exponential again for every box of every frame grew with the session (a candidate kept
+    // about 2,000 views after 15 minutes before old views were merged) and was half of the node's
+    // time.
     candidate_mean[b.candidate] = logMean(it->second.objectness);
     candidate_median[b.candidate] = logMedian(it->second.objectness);
   }

@@ -7,13 +7,16 @@ namespace slamaware::objectmap {
 
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
                                         size_t num_classes, bool objectness_weights,
-                                        double* total_weight, const std::vector<int32_t>& frames) {
+                                        double* total_weight, const std::vector<int32_t>& frames,
+                                        const std::vector<double>& objectness) {
   std::vector<double> sum(num_classes, 0.0);
   double weight = 0;
   for (size_t i = 0; i < views.size(); ++i) {
     const std::vector<float>* v = views[i];
     double w = i < frames.size() ? static_cast<double>(frames[i]) : 1.0;
-    if (objectness_weights && num_classes > 0 && v->size() >= num_classes)
+    if (objectness_weights && i < objectness.size() && objectness[i] >= 0)
+      w *= objectness[i];
+    else if (objectness_weights && num_classes > 0 && v->size() >= num_classes)
       w *= 1.0 - std::exp(std::min(0.0, static_cast<double>((*v)[num_classes - 1])));
     weight += w;
     for (size_t c = 0; c < num_classes && c < v->size(); ++c)

@@ -29,12 +29,14 @@ struct FusionOptions {
 /// takes for background (the object cut by the image border, hidden, or the box off the object)
 /// says little about which object it is and counts little; views of the whole object count fully.
 /// total_weight (if given): sum_i w_i (the number of views without objectness weights).
-/// frames (empty: 1 each): how many frames each view stands for (a view that stayed when the
-/// object map thinned old views); its term counts that many times.
+/// frames (empty: 1 each): how many frames each view stands for (the object map merges old views);
+/// its term counts that many times. objectness (empty, or < 0 for a view: 1 - p(background | x_i)):
+/// the w_i of each view (a merged view's is its frames' mean).
 std::vector<double> sumLogProbabilities(const std::vector<const std::vector<float>*>& views,
                                         size_t num_classes, bool objectness_weights = false,
                                         double* total_weight = nullptr,
-                                        const std::vector<int32_t>& frames = {});
+                                        const std::vector<int32_t>& frames = {},
+                                        const std::vector<double>& objectness = {});
 
 /// p(c | all views) = softmax of the summed log evidence (shifted by its maximum, so that sums of
 /// hundreds of views do not underflow). Empty in, empty out.

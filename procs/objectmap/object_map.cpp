@@ -481,6 +481,13 @@ size_t ObjectMapEngine::numCandidates() const {
   return n;
 }
 
+size_t ObjectMapEngine::numViews() const {
+  size_t n = 0;
+  for (const auto& [id, seg] : segments_)
+    for (const auto& [cid, c] : seg->table.candidates()) n += c.views.size();
+  return n;
+}
+
 size_t ObjectMapEngine::numOccupiedVoxels() const {
   size_t n = 0;
   for (const auto& [id, seg] : segments_) n += seg->occupancy.occupied().size();
@@ -755,12 +762,15 @@ MapSnapshot ObjectMapEngine::snapshot() const {
         jc["box_positions"] = cand.box_positions;
         jc["box_size"] = cand.box_size;
         if (!cand.user_label.empty()) jc["user_label"] = cand.user_label;
-        // utime, seq, area, log p per class, and the frames it stands for if more than one.
+        // utime, seq, area, log p per class, then for a merged view the frames it stands for
+        // and their objectness (a view kept from before merging: only its frames, if more than
+        // one).
         json views = json::array();
         for (const auto& [key, v] : cand.views) {
           json jv = {v.utime, v.seq, compactFloat(v.area)};
           for (float lp : v.log_prob) jv.push_back(compactFloat(lp));
-          if (v.frames > 1) jv.push_back(v.frames);
+          if (v.frames > 1 || v.objectness >= 0) jv.push_back(v.frames);
+          if (v.objectness >= 0) jv.push_back(compactFloat(v.objectness));
           views.push_back(std::move(jv));
         }
         jc["views"] = std::move(views);
@@ -850,17 +860,21 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
         if (!cand.user_label.empty() && !validUserLabel(cand.user_label))
           throw std::runtime_error("bad user_label '" + cand.user_label + "'");
         for (const auto& jv : jc.at("views")) {
-          if (!jv.is_array() || (jv.size() != 3 + nc && jv.size() != 4 + nc))
-            throw std::runtime_error("a view is not 3 + classes (+ 1) numbers");
+          if (!jv.is_array() || jv.size() < 3 + nc || jv.size() > 5 + nc)
+            throw std::runtime_error("a view is not 3 + classes (+ 1 or 2) numbers");
           View v;
           v.utime = jsonInt<int64_t>(jv[0]);
           v.seq = jsonInt<int32_t>(jv[1]);
           v.area = jsonFloat<float>(jv[2]);
           for (size_t k = 0; k < nc; ++k) v.log_prob.push_back(jsonFloat<float>(jv[3 + k]));
-          if (jv.size() == 4 + nc) {
+          if (jv.size() >= 4 + nc) {
             v.frames = jsonInt<int32_t>(jv[3 + nc]);
-            if (v.frames < 1 || (v.frames & (v.frames - 1)))
-              throw std::runtime_error("a view's frames are not a power of two");
+            if (v.frames < 1) throw std::runtime_error("a view stands for fewer than 1 frame");
+          }
+          if (jv.size() == 5 + nc) {
+            v.objectness = jsonFloat<float>(jv[4 + nc]);
+            if (!(v.objectness >= 0 && v.objectness <= 1))
+              throw std::runtime_error("a merged view's objectness is not in [0, 1]");
           }
           const ViewKey key{v.utime, v.seq};
           cand.views[key] = std::move(v);

@@ -152,6 +152,8 @@ class ObjectMapEngine {
   int64_t sessions() const { return sessions_; }
   size_t numObjects() const;
   size_t numCandidates() const;
+  /// The views the candidates hold (merged views count once).
+  size_t numViews() const;
   size_t numOccupiedVoxels() const;
   /// The object that a candidate of a SLAM map (of the current session) belongs to now, after
   /// regrouping; nullptr when the map or the candidate is unknown. Read-only use (the evaluator's

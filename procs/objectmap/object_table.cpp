@@ -148,9 +148,25 @@ std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vecto
 
 }  // namespace
 
-double viewObjectness(const View& v) { return std::exp(logObjectness(v.log_prob.back())); }
+double viewObjectness(const View& v) {
+  if (v.objectness >= 0) return v.objectness;
+  return v.log_prob.empty() ? 0.0 : std::exp(logObjectness(v.log_prob.back()));
+}
 
 namespace {
+
+/// Of two views of one object with the same key (boxes of two of its candidates in one frame, or
+/// their views merged into one bin), whether `a` is the one to count: the one standing for more
+/// frames, then the more object-like box (moreObjectLikeView(); merged views by their objectness),
+/// then the larger.
+bool betterView(const View& a, const View& b) {
+  if (a.frames != b.frames) return a.frames > b.frames;
+  if (a.objectness < 0 && b.objectness < 0)
+    return moreObjectLikeView(a.log_prob, a.area, b.log_prob, b.area);
+  const double oa = viewObjectness(a), ob = viewObjectness(b);
+  if (oa != ob) return oa > ob;
+  return a.area > b.area;
+}
 
 std::pair<double, int32_t> objectnessOf(const View& v) { return {viewObjectness(v), v.frames}; }
 
@@ -184,54 +200,104 @@ void ObjectTable::addView(int32_t candidate, View view) {
 
 namespace {
 
-/// The frame's hash (splitmix64 of its capture time and seq): which frames stay when old views are
-/// thinned, the same for every candidate.
-uint64_t frameHash(int64_t utime, int32_t seq) {
-  uint64_t z = static_cast<uint64_t>(utime) * 0x9e3779b97f4a7c15ull + static_cast<uint32_t>(seq);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-/// k such that a view `age_us` old stands for 2^k frames: 0 within one period, k for an age in
-/// [period 2^(k-1), period 2^k).
+/// k such that a view `age_us` old is merged into bins of period 2^(k-1) / 16: 0 within one period
+/// (kept as it is), k for an age in [period 2^(k-1), period 2^k).
 int thinningLevel(int64_t age_us, int64_t period_us) {
   int k = 0;
   for (int64_t limit = period_us; age_us >= limit && k < 30; limit *= 2) ++k;
   return k;
 }
 
+/// The start of the bin of width `width` (> 0) holding `utime`.
+int64_t binStart(int64_t utime, int64_t width) {
+  const int64_t q = utime / width;
+  return (q - (utime % width < 0 ? 1 : 0)) * width;
+}
+
+/// One view for the views [first, last) of a bin starting at `start` (ObjectTable::thinViews()).
+View mergeViews(std::map<ViewKey, View>::const_iterator first,
+                std::map<ViewKey, View>::const_iterator last, int64_t start,
+                bool objectness_weights) {
+  View m;
+  m.utime = start;
+  m.seq = kMergedViewSeq;
+  const size_t classes = first->second.log_prob.size();
+  // Per class the sums of n log p and of n o log p (n frames, o objectness), and their weights.
+  std::vector<double> plain(classes, 0.0), weighted(classes, 0.0);
+  double frames = 0, area = 0, objectness = 0, plain_weight = 0, weight = 0;
+  for (auto it = first; it != last; ++it) {
+    const View& v = it->second;
+    const double n = v.frames, o = viewObjectness(v);
+    frames += n;
+    area += n * v.area;
+    objectness += n * o;
+    if (v.log_prob.size() != classes) continue;  // classes are remapped for every view at once
+    plain_weight += n;
+    weight += n * o;
+    for (size_t c = 0; c < classes; ++c) {
+      plain[c] += n * static_cast<double>(v.log_prob[c]);
+      weighted[c] += n * o * static_cast<double>(v.log_prob[c]);
+    }
+  }
+  // Fusion sums frames x objectness x log p with objectness weights (frames x log p without): the
+  // mean that gives the same sum. Frames all certain to be background weigh nothing: their mean.
+  const bool by_objectness = objectness_weights && weight > 0;
+  const std::vector<double>& sum = by_objectness ? weighted : plain;
+  const double w = by_objectness ? weight : plain_weight;
+  m.frames = static_cast<int32_t>(frames);
+  m.area = static_cast<float>(area / frames);
+  m.objectness = static_cast<float>(objectness / frames);
+  for (size_t c = 0; c < classes; ++c) m.log_prob.push_back(static_cast<float>(sum[c] / w));
+  return m;
+}
+
 }  // namespace
 
-void ObjectTable::thinViews(int64_t now_utime) {
+void ObjectTable::thinViews(int64_t now_utime, bool objectness_weights) {
   if (full_rate_us_ <= 0) return;
+  // Sixteen bins per doubling of age.
+  const int64_t base_us = std::max<int64_t>(1, full_rate_us_ / 16);
   for (auto c = candidates_.begin(); c != candidates_.end();) {
     if (!c->second.user_label.empty()) {
       ++c;
       continue;
     }
     auto& views = c->second.views;
-    const size_t before = views.size();
     bool changed = false;
-    // Oldest first; stops at the first view within the full-rate period.
+    // Oldest first, bin after bin; stops at the first view within the full-rate period.
     for (auto it = views.begin(); it != views.end();) {
       const int k = thinningLevel(now_utime - it->first.first, full_rate_us_);
       if (k == 0) break;
-      const int32_t frames = int32_t{1} << k;
-      if (it->second.frames >= frames) {
-        ++it;
+      const int64_t width = base_us << (k - 1);
+      const int64_t start = binStart(it->first.first, width);
+      // A bin the older views' level starts at the same time (their bins are twice as wide, and the
+      // level's boundary falls in its first half): these views join it.
+      if (it != views.begin() && std::prev(it)->first == ViewKey{start, kMergedViewSeq})
+        it = std::prev(it);
+      auto end = std::next(it);
+      while (end != views.end() && end->first.first < start + width &&
+             thinningLevel(now_utime - end->first.first, full_rate_us_) == k)
+        ++end;
+      if (std::next(it) == end && it->first == ViewKey{start, kMergedViewSeq}) {
+        it = end;  // merged already
         continue;
       }
+      View merged = mergeViews(it, end, start, objectness_weights);
+      it = views.erase(it, end);
+      it = std::next(views.emplace_hint(it, ViewKey{start, kMergedViewSeq}, std::move(merged)));
       changed = true;
-      if ((frameHash(it->first.first, it->first.second) & (uint64_t(frames) - 1)) == 0) {
-        it->second.frames = frames;
-        ++it;
-      } else {
-        it = views.erase(it);
-      }
+    }
+    int64_t frames = 0;
+    for (const auto& [key, v] : views) frames += v.frames;
+    const bool forget =
+        !views.empty() && frames < (int64_t{1} << thinningLevel(
+                                        now_utime - views.rbegin()->first.first, full_rate_us_));
+    if (forget) {
+      c = candidates_.erase(c);
+      continue;
     }
     if (changed) refreshObjectness(&c->second);
-    c = views.empty() && before > 0 ? candidates_.erase(c) : std::next(c);
+    ++c;
   }
   // The full-rate period is the map's short-term memory: what it last called background (the last
   // class) and has not seen within it goes with its candidates; objects stay.
@@ -264,8 +330,7 @@ void foldCandidate(Candidate& into, Candidate&& from, const VotingOptions& optio
   for (auto& [key, v] : from.views) {
     auto [it, added] = into.views.try_emplace(key, std::move(v));
     // Ties keep `into`'s view: the lower id's, as the object's fusion does (members in id order).
-    if (!added && moreObjectLikeView(v.log_prob, v.area, it->second.log_prob, it->second.area))
-      it->second = std::move(v);
+    if (!added && betterView(v, it->second)) it->second = std::move(v);
   }
   const int32_t views = std::max(into.voting_views, from.voting_views);
   if (views > 0) {
@@ -331,11 +396,14 @@ std::vector<double> sumViewEvidence(const std::vector<const View*>& views, size_
                                     bool objectness_weights, double* total_weight) {
   std::vector<const std::vector<float>*> log_p;
   std::vector<int32_t> frames;
+  std::vector<double> objectness;
   for (const View* v : views) {
     log_p.push_back(&v->log_prob);
     frames.push_back(v->frames);
+    objectness.push_back(v->objectness);
   }
-  return sumLogProbabilities(log_p, num_classes, objectness_weights, total_weight, frames);
+  return sumLogProbabilities(log_p, num_classes, objectness_weights, total_weight, frames,
+                             objectness);
 }
 
 void ObjectTable::addVotes(int32_t candidate, const std::vector<VoxelKey>& keys,
@@ -466,9 +534,7 @@ class ObjectTable::GroupFacts {
     for (int32_t cid : members)
       for (const auto& [key, v] : table_.candidates_.at(cid).views) {
         auto [view, added] = f.views.emplace(key, &v);
-        if (!added &&
-            moreObjectLikeView(v.log_prob, v.area, view->second->log_prob, view->second->area))
-          view->second = &v;
+        if (!added && betterView(v, *view->second)) view->second = &v;
       }
     std::vector<const View*> views;
     for (const auto& [key, v] : f.views) {
@@ -568,7 +634,7 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          size_t num_classes, const std::function<int32_t()>& new_id,
                          const FusionOptions& fusion) {
   if (full_rate_us_ > 0 && newest_view_utime_ >= next_thinning_utime_) {
-    thinViews(newest_view_utime_);
+    thinViews(newest_view_utime_, fusion.objectness_weights);
     foldStaleCandidates(newest_view_utime_, options);
     next_thinning_utime_ = newest_view_utime_ + full_rate_us_ / 8;
   }

@@ -36,12 +36,20 @@ struct View {
   int32_t seq = -1;             ///< seq of the frame
   float area = 0;               ///< px², area of the box
   std::vector<float> log_prob;  ///< natural log p(class | box), classes in the map's order
-  /// Frames this view stands for: 1, or 2^k once older views around it were thinned out
-  /// (ObjectTable::update(), views_full_rate_s).
+  /// Frames this view stands for: 1, or the frames of the time bin its candidate's older views were
+  /// merged into (ObjectTable::thinViews(), views_full_rate_s).
   int32_t frames = 1;
+  /// A merged view's p(object) per frame, the mean of its frames' (then `area` is their mean area
+  /// and `log_prob` their mean, weighted by objectness when the map fuses so); < 0: a frame's view,
+  /// whose p(object) is 1 - p(background) from `log_prob`.
+  float objectness = -1;
 };
-/// p(object | view) = 1 - p(background | view) of a view with log-probabilities (background last).
+/// p(object | view): View::objectness of a merged view, else 1 - p(background | view) (background
+/// last); 0 for a view without log-probabilities.
 double viewObjectness(const View& v);
+
+/// The seq of a merged view's key (ObjectTable::thinViews()): its utime is the start of its bin.
+constexpr int32_t kMergedViewSeq = -1;
 
 /// Views are identified by their frame: (utime, seq).
 using ViewKey = std::pair<int64_t, int32_t>;
@@ -86,8 +94,8 @@ struct Object {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< map units
   Eigen::Vector3d extent = Eigen::Vector3d::Zero();    ///< map units, axis-aligned size
   int32_t num_voxels = 0;
-  /// Its first and last views' frames (the first within 2^k frames of it once old views were
-  /// thinned).
+  /// Its first and last views' frames (the first: the start of its bin once old views were
+  /// merged).
   int64_t first_seen_utime = 0, last_seen_utime = 0;
   /// The user's class: the user_label held by most of its candidates (ties: the first name in
   /// order), "" if none holds one.
@@ -97,7 +105,7 @@ struct Object {
 class ObjectTable {
  public:
   /// views_full_rate_s: every view of the last views_full_rate_s seconds (before the table's
-  /// newest view) is kept, older ones are thinned (thinViews()); <= 0: every view is kept.
+  /// newest view) is kept, older ones are merged (thinViews()); <= 0: every view is kept.
   explicit ObjectTable(double resolution, double views_full_rate_s = 0)
       : resolution_(resolution),
         full_rate_us_(static_cast<int64_t>(std::max(0.0, views_full_rate_s) * 1e6)) {}
@@ -113,17 +121,22 @@ class ObjectTable {
   /// Where a box of the candidate puts it (see Candidate::box_position_sum).
   void addBoxPosition(int32_t candidate, const Eigen::Vector3d& p_world, double size);
 
-  /// Bounds the views of a long session. A view older than the full-rate period P (before
-  /// `now_utime`) by between P 2^(k-1) and P 2^k stays only when its frame's hash has its k lowest
-  /// bits zero (the same frames for every candidate, so a frame still counts once per object) and
-  /// then stands for 2^k frames (View::frames): the expected evidence of a candidate is unchanged,
-  /// and it keeps about rate x P x (1 + log2(age / P) / 2) views. A candidate left without views
-  /// (one seen in a few frames long ago: a tentative cluster of the proposals stage, most often) is
-  /// forgotten. A candidate holding a user's label keeps every view. The candidates of an object
-  /// the last update() called background (without a user's label) and that no view of the last P
-  /// shows are forgotten: background is kept only while it is in view. Run by update() whenever
-  /// the newest view is P / 8 past the last run.
-  void thinViews(int64_t now_utime);
+  /// Bounds the views of a long session. Views older than the full-rate period P (before
+  /// `now_utime`) are merged, per candidate, into time bins: a view between P 2^(k-1) and P 2^k old
+  /// goes into the bin of width P 2^(k-1) / 16 (aligned to multiples of it, so that the bins of
+  /// every candidate are the same and nest as they age) holding its capture time. A merged view
+  /// (key: the bin's start, kMergedViewSeq) stands for the frames of its views, with their mean
+  /// log p per class (weighted by objectness when `objectness_weights`, as fusion weighs them),
+  /// their mean objectness and area: its term in the object's evidence and weight is theirs
+  /// exactly, and a candidate keeps the views of the last P plus at most 16 per doubling of its
+  /// age. A candidate that stands for fewer frames than 2^k, k its newest view's, is forgotten
+  /// (seen in a few frames long ago: a tentative cluster of the proposals stage, most often): the
+  /// sampling this merging replaced kept on average 2^-k of such views. A candidate holding a
+  /// user's label keeps every view. The candidates of an object the last update() called background
+  /// (without a user's label) and that no view of the last P shows are forgotten: background is
+  /// kept only while it is in view. Run by update() whenever the newest view is P / 8 past the
+  /// last run.
+  void thinViews(int64_t now_utime, bool objectness_weights);
 
   /// Bounds what an object keeps of its past. The candidates of an object (as of the last update())
   /// that no view of the full-rate period before `now_utime` shows are folded into one of them (the
@@ -137,7 +150,7 @@ class ObjectTable {
   /// update() with thinViews().
   void foldStaleCandidates(int64_t now_utime, const VotingOptions& options);
 
-  /// Thins the views and folds stale candidates (thinViews(), foldStaleCandidates(), when due),
+  /// Merges old views and folds stale candidates (thinViews(), foldStaleCandidates(), when due),
   /// then recomputes the candidates' voxels (voted in >= min_votes and >= min_vote_share of the
   /// voting views, and occupied now), the groups (GroupingOptions: pairs of candidates are tried
   /// from the most overlapping, and two groups merge when their voxel unions pass the test), the

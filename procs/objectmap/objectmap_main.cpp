@@ -322,6 +322,7 @@ class ObjectMapNode {
     status_.setCounter("regroupings", engine_.regroupings());
     status_.setCounter("segments", static_cast<int64_t>(engine_.segments().size()));
     status_.setCounter("candidates", static_cast<int64_t>(engine_.numCandidates()));
+    status_.setCounter("views", static_cast<int64_t>(engine_.numViews()));
     status_.setCounter("voxels", static_cast<int64_t>(engine_.numOccupiedVoxels()));
     status_.setCounter("sessions", engine_.sessions());
     status_.setCounter("classes", static_cast<int64_t>(engine_.classes().size()));

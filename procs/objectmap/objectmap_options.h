@@ -124,10 +124,10 @@ struct ObjectMapOptions {
   /// (procs/objectmap/fusion.h: 0 = views independent, 1 = the average view). Labels do not change.
   double posterior_views_exponent = 1;
   FusionOptions fusion() const { return {objectness_weights, posterior_views_exponent}; }
-  /// s: every view of the last views_full_rate_s is kept; older ones are thinned as they age, the
-  /// same frames for every candidate, each kept view standing for the frames around it
-  /// (ObjectTable::thinViews: memory and fusion cost grow with the log of the session's length,
-  /// not with it); what the map calls background is forgotten once out of view for as long
+  /// s: every view of the last views_full_rate_s is kept; older ones are merged as they age into
+  /// time bins, the same for every candidate, each merged view standing for its frames
+  /// (ObjectTable::thinViews: 16 views per doubling of age, so memory and fusion cost stay about
+  /// flat over a session); what the map calls background is forgotten once out of view for as long
   /// (<= 0: every view is kept, nothing forgotten).
   double views_full_rate_s = 30;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
@@ -154,8 +154,9 @@ struct ObjectMapOptions {
       "posterior = softmax(fused sum / W^e), W the views' total weight (0: views independent, 1: "
       "the average view)");
     v("views_full_rate_s", views_full_rate_s,
-      "s of the newest views all kept; older ones are thinned, each kept view standing for 2^k "
-      "frames, and background out of view as long is forgotten (<= 0: every view kept)");
+      "s of the newest views all kept; older ones are merged into time bins (16 per doubling of "
+      "age) standing for their frames, and background out of view as long is forgotten (<= 0: "
+      "every view kept)");
     v("seq_buffer", seq_buffer,
       "SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS");
     v.section("persistence", persistence);
