@@ -2,6 +2,7 @@
 // Reads CAMERA_INFO, SLAM_MAP (clusters again when the map changed), SLAM_POSE and SLAM_KEYFRAME;
 // publishes one PROPOSALS per SLAM_POSE (empty when the frame is not localised or nothing is in
 // view), and one more, later, for a keyframe whose frame got none (a map's reference frame).
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -73,6 +74,11 @@ int main(int argc, char** argv) {
         status.setCounter("support", s.support ? 1 : 0);
         status.setCounter("recluster_ms", static_cast<int64_t>(s.ms));
         status.count("reclusters");
+        // A re-clustering works on every point of the map at several scales and frees it all.
+        // glibc keeps freed pages mapped, and as later re-clusterings touched other free pages the
+        // stage's RSS climbed (+2 to +4 MB over 30 minutes of a looped scene) while what it holds
+        // stayed flat (heap.used_kb 4 MB, heap.free_kb 16 MB): the freed pages go back at once.
+        malloc_trim(0);
         spdlog::debug(
             "map {}: {} points, {} single-view, {} seen through, planes {}, {} clustered -> {} "
             "candidates in {:.0f} ms",
