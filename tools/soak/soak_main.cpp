@@ -31,6 +31,7 @@
 #include "slamaware/object_map_t.hpp"
 #include "slamaware/proc_command_t.hpp"
 #include "slamaware/proc_status_t.hpp"
+#include "slamaware/status_t.hpp"
 #include "tools/eval/child_process.h"
 #include "tools/eval/plot.h"
 #include "tools/eval/stats.h"
@@ -77,6 +78,19 @@ struct Sample {
   double cpu_pct;
   double rssMb() const { return static_cast<double>(rss_kb) / 1024.0; }
 };
+
+/// The heap a process reports in its status (common/bus/status.h): in use and kept free by glibc.
+struct HeapSample {
+  double t;
+  int64_t used_kb, free_kb;
+};
+
+/// The names of the processes of a system.yaml.
+std::vector<std::string> processNames(const std::string& system) {
+  std::vector<std::string> names;
+  for (auto p : YAML::LoadFile(system)["processes"]) names.push_back(p["name"].as<std::string>());
+  return names;
+}
 
 struct ChaosEvent {
   std::string kind;  ///< "kill", "stop", "corrupt"
@@ -146,6 +160,7 @@ struct Watch {
   double t0 = now_s();
   std::map<std::string, proc_info_t> procs;  // latest PROC_STATUS row per process
   std::map<std::string, std::vector<Sample>> samples;
+  std::map<std::string, std::vector<HeapSample>> heap;  // from each process's <NAME>_STATUS
   std::map<int32_t, double> camera_at;             // seq -> wall time of reception
   std::vector<std::pair<double, double>> latency;  // (t, s) camera -> DETECTIONS
   int64_t camera_frames = 0, poses = 0, detections = 0, fused = 0, max_seq = -1;
@@ -154,8 +169,18 @@ struct Watch {
 
   double t() const { return now_s() - t0; }
 
-  void subscribe(Bus& bus, const SystemConfig& sys) {
+  void subscribe(Bus& bus, const SystemConfig& sys, const std::vector<std::string>& processes) {
     const Channels& ch = sys.channels;
+    for (const std::string& name : processes)
+      bus.subscribe<status_t>(ch.statusOf(name), [this, name](const status_t& s) {
+        HeapSample h{t(), -1, -1};
+        for (size_t i = 0; i < s.counter_names.size() && i < s.counter_values.size(); ++i) {
+          if (s.counter_names[i] == "heap.used_kb") h.used_kb = s.counter_values[i];
+          if (s.counter_names[i] == "heap.free_kb") h.free_kb = s.counter_values[i];
+        }
+        auto& v = heap[name];
+        if (h.used_kb >= 0 && (v.empty() || h.t - v.back().t >= 0.9)) v.push_back(h);
+      });
     bus.subscribe<proc_status_t>(ch.proc_status, [this](const proc_status_t& s) {
       for (const auto& p : s.procs) {
         procs[p.name] = p;
@@ -341,7 +366,7 @@ class Chaos {
   std::vector<ChaosEvent> events_;
 };
 
-// Per process: RSS after the first loop, at half time and at the end, CPU, restarts.
+// Per process: RSS after the first loop, at half time and at the end, heap in use, CPU, restarts.
 json processFigures(const Watch& w, const std::map<std::string, proc_info_t>& final_procs,
                     double base_from, double duration) {
   json out = json::object();
@@ -366,6 +391,22 @@ json processFigures(const Watch& w, const std::map<std::string, proc_info_t>& fi
     const double at_half = median_between(duration / 2, duration / 2 + 30);
     p["rss_mb_at_half"] = at_half;
     p["rss_growth_second_half_pct"] = at_half > 0 ? 100.0 * (at_end - at_half) / at_half : 0.0;
+    // What the process holds (heap in use), apart from what glibc keeps of what it freed: RSS
+    // can grow with the second alone.
+    if (auto h = w.heap.find(name); h != w.heap.end()) {
+      auto heap_between = [&](double a, double b, bool used) {
+        std::vector<double> r;
+        for (const auto& s : h->second)
+          if (s.t >= a && s.t < b) r.push_back(static_cast<double>(used ? s.used_kb : s.free_kb));
+        return r.empty() ? 0.0 : median(r) / 1024.0;
+      };
+      const double first = heap_between(base_from, base_from + 30, true);
+      const double end = heap_between(duration - 30, duration + 1, true);
+      p["heap_used_mb_after_first_loop"] = first;
+      p["heap_used_mb_at_end"] = end;
+      p["heap_used_growth_pct"] = first > 0 ? 100.0 * (end - first) / first : 0.0;
+      p["heap_free_mb_at_end"] = heap_between(duration - 30, duration + 1, false);
+    }
     p["cpu_pct_mean"] = cpu.empty() ? 0.0
                                     : std::accumulate(cpu.begin(), cpu.end(), 0.0) /
                                           static_cast<double>(cpu.size());
@@ -484,7 +525,7 @@ int main(int argc, char** argv) {
 
     Bus bus(sys.bus.url);
     Watch watch;
-    watch.subscribe(bus, sys);
+    watch.subscribe(bus, sys, processNames(soak_system));
     auto pump = [&](double seconds) {
       const double end = now_s() + seconds;
       while (now_s() < end) bus.handle(20);
