@@ -664,6 +664,13 @@ TEST(ObjectTable, OldViewsAreMergedIntoTheSameBinsAndKeepTheirEvidence) {
   for (int c = 100; c < 140 + 1; ++c)
     for (int f = (c - 100) * 3; f < (c - 100) * 3 + 3; ++f)
       t.addView(c, View{utime(f), f, 10, logs({0.3, 0.3, 0.4})});
+  // Two objects seen only in the first 10 s, each in its own voxels: 150 in 3 frames, 151 in 300.
+  for (int v = 0; v < 3; ++v)
+    t.addVotes(150, lineOfVoxels(300, 310), vo), t.addVotes(151, lineOfVoxels(400, 410), vo);
+  for (int f = 0; f < 300; ++f) {
+    if (f < 3) t.addView(150, View{utime(f), f, 40, logs({0.8, 0.1, 0.1})});
+    t.addView(151, View{utime(f), f, 40, logs({0.8, 0.1, 0.1})});
+  }
   int32_t next = 1;
   auto update = [&](ObjectTable& x) {
     x.update([](VoxelKey) { return true; }, vo, GroupingOptions{}, 3, [&] { return next++; });
@@ -723,6 +730,11 @@ TEST(ObjectTable, OldViewsAreMergedIntoTheSameBinsAndKeepTheirEvidence) {
   EXPECT_EQ(tentative_left, 0) << "called background and out of view for 300 s";
   ASSERT_TRUE(t.candidates().count(140)) << "a user's label is never forgotten";
   EXPECT_EQ(t.candidates().at(140).views.size(), 3u);
+  EXPECT_FALSE(t.candidates().count(150)) << "3 frames 290 s ago: fewer than the 2^5 of its age";
+  ASSERT_TRUE(t.candidates().count(151)) << "300 frames: kept";
+  EXPECT_LE(t.candidates().at(151).views.size(), 2u) << "10 s at 290 s old: bins of 10 s";
+  EXPECT_EQ(t.objectOfCandidate(151)->num_views, 300);
+  EXPECT_EQ(t.objectOfCandidate(151)->label, 0);
 }
 
 // An object whose parts the proposals gave new ids as their clusters came and went: candidates 1-3
