@@ -161,8 +161,8 @@ struct Watch {
   std::map<std::string, proc_info_t> procs;  // latest PROC_STATUS row per process
   std::map<std::string, std::vector<Sample>> samples;
   std::map<std::string, std::vector<HeapSample>> heap;  // from each process's <NAME>_STATUS
-  std::map<int32_t, double> camera_at;             // seq -> wall time of reception
-  std::vector<std::pair<double, double>> latency;  // (t, s) camera -> DETECTIONS
+  std::map<int32_t, double> camera_at;                  // seq -> wall time of reception
+  std::vector<std::pair<double, double>> latency;       // (t, s) camera -> DETECTIONS
   int64_t camera_frames = 0, poses = 0, detections = 0, fused = 0, max_seq = -1;
   std::optional<object_map_t> last_map;
   double last_map_t = -1;
