@@ -202,7 +202,7 @@ namespace {
 
 /// k such that a view `age_us` old is merged into bins of period 2^(k-1) / 16: 0 within one period
 /// (kept as it is), k for an age in [period 2^(k-1), period 2^k).
-int thinningLevel(int64_t age_us, int64_t period_us) {
+int ageLevel(int64_t age_us, int64_t period_us) {
   int k = 0;
   for (int64_t limit = period_us; age_us >= limit && k < 30; limit *= 2) ++k;
   return k;
@@ -214,7 +214,8 @@ int64_t binStart(int64_t utime, int64_t width) {
   return (q - (utime % width < 0 ? 1 : 0)) * width;
 }
 
-/// One view for the views [first, last) of a bin starting at `start` (ObjectTable::thinViews()).
+/// One view for the views [first, last) of a bin starting at `start`
+/// (ObjectTable::mergeOldViews()).
 View mergeViews(std::map<ViewKey, View>::const_iterator first,
                 std::map<ViewKey, View>::const_iterator last, int64_t start,
                 bool objectness_weights) {
@@ -253,7 +254,7 @@ View mergeViews(std::map<ViewKey, View>::const_iterator first,
 
 }  // namespace
 
-void ObjectTable::thinViews(int64_t now_utime, bool objectness_weights) {
+void ObjectTable::mergeOldViews(int64_t now_utime, bool objectness_weights) {
   if (full_rate_us_ <= 0) return;
   // Sixteen bins per doubling of age.
   const int64_t base_us = std::max<int64_t>(1, full_rate_us_ / 16);
@@ -266,7 +267,7 @@ void ObjectTable::thinViews(int64_t now_utime, bool objectness_weights) {
     bool changed = false;
     // Oldest first, bin after bin; stops at the first view within the full-rate period.
     for (auto it = views.begin(); it != views.end();) {
-      const int k = thinningLevel(now_utime - it->first.first, full_rate_us_);
+      const int k = ageLevel(now_utime - it->first.first, full_rate_us_);
       if (k == 0) break;
       const int64_t width = base_us << (k - 1);
       const int64_t start = binStart(it->first.first, width);
@@ -274,9 +275,11 @@ void ObjectTable::thinViews(int64_t now_utime, bool objectness_weights) {
       // level's boundary falls in its first half): these views join it.
       if (it != views.begin() && std::prev(it)->first == ViewKey{start, kMergedViewSeq})
         it = std::prev(it);
+      // The bin's views of this level: older than P 2^(k-1) (and younger than P 2^k, as `it` is).
+      const int64_t level_end = now_utime - (full_rate_us_ << (k - 1));
       auto end = std::next(it);
       while (end != views.end() && end->first.first < start + width &&
-             thinningLevel(now_utime - end->first.first, full_rate_us_) == k)
+             end->first.first <= level_end)
         ++end;
       if (std::next(it) == end && it->first == ViewKey{start, kMergedViewSeq}) {
         it = end;  // merged already
@@ -290,8 +293,8 @@ void ObjectTable::thinViews(int64_t now_utime, bool objectness_weights) {
     int64_t frames = 0;
     for (const auto& [key, v] : views) frames += v.frames;
     const bool forget =
-        !views.empty() && frames < (int64_t{1} << thinningLevel(
-                                        now_utime - views.rbegin()->first.first, full_rate_us_));
+        !views.empty() &&
+        frames < (int64_t{1} << ageLevel(now_utime - views.rbegin()->first.first, full_rate_us_));
     if (forget) {
       c = candidates_.erase(c);
       continue;
@@ -633,10 +636,10 @@ void ObjectTable::update(const std::function<bool(VoxelKey)>& occupied,
                          const VotingOptions& options, const GroupingOptions& grouping,
                          size_t num_classes, const std::function<int32_t()>& new_id,
                          const FusionOptions& fusion) {
-  if (full_rate_us_ > 0 && newest_view_utime_ >= next_thinning_utime_) {
-    thinViews(newest_view_utime_, fusion.objectness_weights);
+  if (full_rate_us_ > 0 && newest_view_utime_ >= next_merge_utime_) {
+    mergeOldViews(newest_view_utime_, fusion.objectness_weights);
     foldStaleCandidates(newest_view_utime_, options);
-    next_thinning_utime_ = newest_view_utime_ + full_rate_us_ / 8;
+    next_merge_utime_ = newest_view_utime_ + full_rate_us_ / 8;
   }
   deriveVoxels(occupied, options);
   std::vector<std::vector<int32_t>> groups = groupOverlapping(grouping);

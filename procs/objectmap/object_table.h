@@ -37,7 +37,7 @@ struct View {
   float area = 0;               ///< px², area of the box
   std::vector<float> log_prob;  ///< natural log p(class | box), classes in the map's order
   /// Frames this view stands for: 1, or the frames of the time bin its candidate's older views were
-  /// merged into (ObjectTable::thinViews(), views_full_rate_s).
+  /// merged into (ObjectTable::mergeOldViews(), views_full_rate_s).
   int32_t frames = 1;
   /// A merged view's p(object) per frame, the mean of its frames' (then `area` is their mean area
   /// and `log_prob` their mean, weighted by objectness when the map fuses so); < 0: a frame's view,
@@ -48,7 +48,8 @@ struct View {
 /// last); 0 for a view without log-probabilities.
 double viewObjectness(const View& v);
 
-/// The seq of a merged view's key (ObjectTable::thinViews()): its utime is the start of its bin.
+/// The seq of a merged view's key (ObjectTable::mergeOldViews()): its utime is the start of its
+/// bin.
 constexpr int32_t kMergedViewSeq = -1;
 
 /// Views are identified by their frame: (utime, seq).
@@ -105,7 +106,7 @@ struct Object {
 class ObjectTable {
  public:
   /// views_full_rate_s: every view of the last views_full_rate_s seconds (before the table's
-  /// newest view) is kept, older ones are merged (thinViews()); <= 0: every view is kept.
+  /// newest view) is kept, older ones are merged (mergeOldViews()); <= 0: every view is kept.
   explicit ObjectTable(double resolution, double views_full_rate_s = 0)
       : resolution_(resolution),
         full_rate_us_(static_cast<int64_t>(std::max(0.0, views_full_rate_s) * 1e6)) {}
@@ -136,7 +137,7 @@ class ObjectTable {
   /// (without a user's label) and that no view of the last P shows are forgotten: background is
   /// kept only while it is in view. Run by update() whenever the newest view is P / 8 past the
   /// last run.
-  void thinViews(int64_t now_utime, bool objectness_weights);
+  void mergeOldViews(int64_t now_utime, bool objectness_weights);
 
   /// Bounds what an object keeps of its past. The candidates of an object (as of the last update())
   /// that no view of the full-rate period before `now_utime` shows are folded into one of them (the
@@ -147,15 +148,15 @@ class ObjectTable {
   /// positions the sum, its box size the largest. The object's evidence, voxels and extent are the
   /// same (the folded candidate's voxels are the union of theirs); what it stops growing with is
   /// the number of candidates the proposals gave it as their clusters came and went. Run by
-  /// update() with thinViews().
+  /// update() with mergeOldViews().
   void foldStaleCandidates(int64_t now_utime, const VotingOptions& options);
 
-  /// Merges old views and folds stale candidates (thinViews(), foldStaleCandidates(), when due),
-  /// then recomputes the candidates' voxels (voted in >= min_votes and >= min_vote_share of the
-  /// voting views, and occupied now), the groups (GroupingOptions: pairs of candidates are tried
-  /// from the most overlapping, and two groups merge when their voxel unions pass the test), the
-  /// object ids (new_id() for groups that continue no previous object) and every object's evidence
-  /// and geometry.
+  /// Merges old views and folds stale candidates (mergeOldViews(), foldStaleCandidates(), when
+  /// due), then recomputes the candidates' voxels (voted in >= min_votes and >= min_vote_share of
+  /// the voting views, and occupied now), the groups (GroupingOptions: pairs of candidates are
+  /// tried from the most overlapping, and two groups merge when their voxel unions pass the test),
+  /// the object ids (new_id() for groups that continue no previous object) and every object's
+  /// evidence and geometry.
   void update(const std::function<bool(VoxelKey)>& occupied, const VotingOptions& options,
               const GroupingOptions& grouping, size_t num_classes,
               const std::function<int32_t()>& new_id, const FusionOptions& fusion = {});
@@ -211,7 +212,7 @@ class ObjectTable {
   double resolution_;
   int64_t full_rate_us_ = 0;
   int64_t newest_view_utime_ = 0;
-  int64_t next_thinning_utime_ = 0;
+  int64_t next_merge_utime_ = 0;
   std::map<int32_t, Candidate> candidates_;
   std::map<int32_t, Object> objects_;
 };

@@ -126,8 +126,9 @@ struct ObjectMapOptions {
   FusionOptions fusion() const { return {objectness_weights, posterior_views_exponent}; }
   /// s: every view of the last views_full_rate_s is kept; older ones are merged as they age into
   /// time bins, the same for every candidate, each merged view standing for its frames
-  /// (ObjectTable::thinViews: 16 views per doubling of age, so memory and fusion cost stay about
-  /// flat over a session); what the map calls background is forgotten once out of view for as long
+  /// (ObjectTable::mergeOldViews: 16 views per doubling of age, so memory and fusion cost stay
+  /// about flat over a session); what the map calls background is forgotten once out of view for as
+  /// long
   /// (<= 0: every view is kept, nothing forgotten).
   double views_full_rate_s = 30;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
