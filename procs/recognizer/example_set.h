@@ -10,9 +10,13 @@
 // a value is at most half a step, 1/254 of its block's largest magnitude. A 107,520-D row takes
 // about a quarter of its half-precision size (a trainer's tens of thousands of rows are most of its
 // memory). Rows live in chunks of kChunkBytes, each allocated once at its full size: a growing set
-// never copies itself into a buffer twice its size.
+// never copies itself into a buffer twice its size. A chunk is not cleared when allocated: its
+// pages cost memory only once rows are written to them (a model's few exemplars take the pages they
+// fill, not 16 MB).
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <utility>
 #include <vector>
 
 namespace slamaware::recognizer {
@@ -66,7 +70,23 @@ class ExampleSet {
 
   int64_t dims_ = 0, block_dims_ = 0;
   size_t chunk_capacity_ = kChunkBytes;
-  std::vector<std::vector<uint8_t>> chunks_;
+  /// Leaves the bytes of a new chunk uninitialised (vector<uint8_t>(n) writes n zeros).
+  template <class T>
+  struct UninitialisedAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+      using other = UninitialisedAllocator<U>;
+    };
+    template <class U>
+    void construct(U* p) {
+      ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  };
+  std::vector<std::vector<uint8_t, UninitialisedAllocator<uint8_t>>> chunks_;
   size_t last_used_ = 0;  ///< bytes used in the last chunk
   size_t used_bytes_ = 0;
   std::vector<Row> rows_;
