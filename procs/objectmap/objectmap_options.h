@@ -128,8 +128,7 @@ struct ObjectMapOptions {
   /// time bins, the same for every candidate, each merged view standing for its frames
   /// (ObjectTable::mergeOldViews: 16 views per doubling of age, so memory and fusion cost stay
   /// about flat over a session); what the map calls background is forgotten once out of view for as
-  /// long
-  /// (<= 0: every view is kept, nothing forgotten).
+  /// long (<= 0: every view is kept, nothing forgotten).
   double views_full_rate_s = 30;
   /// SLAM_POSE and PROPOSALS messages kept for joining with DETECTIONS.
   int seq_buffer = 64;

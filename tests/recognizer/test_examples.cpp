@@ -7,11 +7,11 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <fstream>
 #include <memory>
 #include <vector>
 
 #include "procs/recognizer/example_set.h"
+#include "procs/supervisor/proc_stats.h"
 
 using namespace slamaware;
 using namespace slamaware::recognizer;
@@ -137,13 +137,8 @@ TEST(ExampleSet, AGrowingSetHoldsAtMostOneChunkOfUnusedRoom) {
 
 namespace {
 
-// Resident bytes of this process (/proc/self/statm).
-int64_t residentBytes() {
-  std::ifstream statm("/proc/self/statm");
-  int64_t size = 0, resident = 0;
-  statm >> size >> resident;
-  return resident * sysconf(_SC_PAGESIZE);
-}
+// Resident bytes of this process, as the supervisor samples every process.
+int64_t residentBytes() { return 1024 * supervisor::sampleProcess(getpid()).value().rss_kb; }
 
 }  // namespace
 
