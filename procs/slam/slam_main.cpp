@@ -4,9 +4,11 @@
 // keyframe, full every few seconds of sequence time). In lockstep every frame is handled and its
 // keyframe and map messages go out before its pose; in real time, frames that queued up behind a
 // newer one are dropped and counted.
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <deque>
 #include <opencv2/core/utility.hpp>
 
@@ -61,6 +63,17 @@ void reportStats(const SlamSystem& slam, StatusReporter& status) {
                                     : StatusReporter::State::kRunning);
 }
 
+// A frame's buffers (the image, its pyramid, per-frame matches) come and go at the camera's rate
+// and are best reused from the heap; a block over twice a colour frame (the full map's cloud and
+// its message) is mapped on its own and handed back to the system when freed. glibc's own
+// threshold slides up to the largest block freed so far: once the first full map had been sent,
+// every later one came from the heap, and the pages it touched stayed with the process (SLAM's
+// RSS settled 78-95 MB from run to run on the same replay; docs/experiments/slam.md).
+void holdFramesInTheHeap(const CameraModel& camera) {
+  const size_t frame = static_cast<size_t>(camera.width()) * camera.height() * 3;
+  mallopt(M_MMAP_THRESHOLD, static_cast<int>(std::min<size_t>(2 * frame, 32u << 20)));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -96,6 +109,7 @@ int main(int argc, char** argv) {
             return;
           }
           const bool first = !slam.hasCamera();
+          holdFramesInTheHeap(camera);
           if (slam.setCamera(camera)) {
             status.count("camera_changes");
             status.setMessage("camera changed: SLAM restarted");
