@@ -14,6 +14,7 @@
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
 #include "common/config.h"
+#include "common/heap.h"
 #include "procs/proposals/proposal_engine.h"
 
 using namespace slamaware;
@@ -33,12 +34,11 @@ int main(int argc, char** argv) {
     const ProposalOptions opts = loadConfig<ProposalOptions>(node.config, "proposals");
     const bool lockstep = sys.bus.lockstep;
     // A re-clustering works on every point of the map at several scales (about 15 MB on a 100k
-    // point map, every few seconds) and frees it all. glibc's sliding mmap threshold moves such
-    // buffers into the heap after the first one is freed, where their pages stay resident and
-    // later re-clusterings touch other free ones: the stage's RSS climbed 5 MB above what it holds
-    // (heap.used_kb 4.8 MB, heap.free_kb 14 MB) and swung with the time since the last trim. A
-    // fixed threshold keeps every buffer of 128 kB or more in its own mapping, returned when freed.
-    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+    // point map, every few seconds) and frees it all. With glibc's sliding threshold those
+    // buffers came from the heap after the first one: the stage's RSS climbed 5 MB above what it
+    // holds (heap.used_kb 4.8 MB, heap.free_kb 14 MB) and swung with the time since the last
+    // trim. Every buffer of 128 kB (glibc's default) or more gets its own mapping.
+    mapBlocksApartFrom(128 * 1024);
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("proposals"), ch.statusOf(node.nameOr("proposals")));

@@ -4,7 +4,6 @@
 // keyframe, full every few seconds of sequence time). In lockstep every frame is handled and its
 // keyframe and map messages go out before its pose; in real time, frames that queued up behind a
 // newer one are dropped and counted.
-#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -19,6 +18,7 @@
 #include "common/bus/shutdown.h"
 #include "common/bus/status.h"
 #include "common/config.h"
+#include "common/heap.h"
 #include "common/image_codec.h"
 #include "procs/slam/slam_messages.h"
 #include "procs/slam/slam_options.h"
@@ -65,13 +65,12 @@ void reportStats(const SlamSystem& slam, StatusReporter& status) {
 
 // A frame's buffers (the image, its pyramid, per-frame matches) come and go at the camera's rate
 // and are best reused from the heap; a block over twice a colour frame (the full map's cloud and
-// its message) is mapped on its own and handed back to the system when freed. glibc's own
-// threshold slides up to the largest block freed so far: once the first full map had been sent,
-// every later one came from the heap, and the pages it touched stayed with the process (SLAM's
-// RSS settled 78-95 MB from run to run on the same replay; docs/experiments/slam.md).
+// its message) is mapped on its own and handed back to the system when freed. With glibc's
+// sliding threshold SLAM's RSS settled 78-95 MB from run to run on the same replay
+// (docs/experiments/slam.md, 2026-12-05).
 void holdFramesInTheHeap(const CameraModel& camera) {
   const size_t frame = static_cast<size_t>(camera.width()) * camera.height() * 3;
-  mallopt(M_MMAP_THRESHOLD, static_cast<int>(std::min<size_t>(2 * frame, 32u << 20)));
+  mapBlocksApartFrom(2 * frame);
 }
 
 }  // namespace

@@ -1,0 +1,18 @@
+#pragma once
+// Which blocks glibc maps on their own. A block at or over the mmap threshold gets its own
+// mapping and goes back to the system when freed; a smaller one comes from the heap, whose freed
+// pages stay with the process until a trim. By default the threshold slides up to the largest
+// mapped block freed so far: after a process's first large buffer (a map's cloud, a
+// re-clustering's arrays) every later one of that size comes from the heap and leaves touched
+// pages behind, and the RSS a run settles at depends on the order of its frees
+// (docs/experiments/slam.md and proposals.md, 2026-12-05).
+#include <cstddef>
+
+namespace slamaware {
+
+/// Fixes the threshold at `bytes` (glibc's limits: at most 32 MiB, larger values are clamped):
+/// blocks of `bytes` or more are mapped apart from then on, whatever was freed before. Returns
+/// false if glibc refused.
+bool mapBlocksApartFrom(size_t bytes);
+
+}  // namespace slamaware
