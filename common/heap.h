@@ -7,8 +7,19 @@
 // pages behind, and the RSS a run settles at depends on the order of its frees
 // (docs/experiments/slam.md and proposals.md, 2026-12-05).
 #include <cstddef>
+#include <optional>
 
 namespace slamaware {
+
+/// The heap as glibc sees it, in bytes.
+struct HeapUse {
+  size_t used = 0;    ///< held by the process: in the heap and in blocks mapped apart
+  size_t free = 0;    ///< freed but kept by the allocator (RSS growing with it is glibc's)
+  size_t mapped = 0;  ///< of `used`, in blocks mapped apart
+};
+
+/// glibc's `mallinfo2`; none on a C library without it (before glibc 2.33).
+std::optional<HeapUse> heapUse();
 
 /// Fixes the threshold at `bytes` (glibc's limits: at most 32 MiB, larger values are clamped):
 /// blocks of `bytes` or more are mapped apart from then on, whatever was freed before. Returns

@@ -1,9 +1,9 @@
 #include "common/bus/status.h"
 
-#include <malloc.h>
 #include <unistd.h>
 
 #include "common/bus/bus.h"
+#include "common/heap.h"
 #include "slamaware/status_t.hpp"
 
 namespace slamaware {
@@ -106,15 +106,14 @@ void StatusReporter::publish() {
     msg.counter_values.push_back(kv.second);
     msg.rejected += kv.second;
   }
-#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
   // The heap as the allocator sees it: what the process holds, and what it freed but keeps (RSS
   // that grows with heap.free_kb is the allocator's, with heap.used_kb the process's own).
-  const struct mallinfo2 heap = mallinfo2();
-  msg.counter_names.push_back("heap.used_kb");
-  msg.counter_values.push_back(static_cast<int64_t>((heap.uordblks + heap.hblkhd) / 1024));
-  msg.counter_names.push_back("heap.free_kb");
-  msg.counter_values.push_back(static_cast<int64_t>(heap.fordblks / 1024));
-#endif
+  if (const auto heap = heapUse()) {
+    msg.counter_names.push_back("heap.used_kb");
+    msg.counter_values.push_back(static_cast<int64_t>(heap->used / 1024));
+    msg.counter_names.push_back("heap.free_kb");
+    msg.counter_values.push_back(static_cast<int64_t>(heap->free / 1024));
+  }
   if (msg.message.empty()) msg.message = bus_.lastProblem();
   msg.num_counters = static_cast<int32_t>(msg.counter_names.size());
   bus_.publish(channel_, msg);

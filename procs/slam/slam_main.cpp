@@ -107,8 +107,9 @@ int main(int argc, char** argv) {
             return;
           }
           const bool first = !slam.hasCamera();
-          holdFramesInTheHeap(camera);
-          if (slam.setCamera(camera)) {
+          const bool changed = slam.setCamera(camera);
+          if (first || changed) holdFramesInTheHeap(camera);
+          if (changed) {
             status.count("camera_changes");
             status.setMessage("camera changed: SLAM restarted");
             spdlog::warn("CAMERA_INFO changed to {}x{} fx {:.1f}: SLAM restarted", camera.width(),

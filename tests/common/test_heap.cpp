@@ -1,5 +1,4 @@
 #include <gtest/gtest.h>
-#include <malloc.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -9,7 +8,7 @@
 namespace slamaware {
 namespace {
 
-size_t mappedBytes() { return mallinfo2().hblkhd; }
+size_t mappedBytes() { return heapUse().value().mapped; }
 
 // A buffer that is allocated, written and freed, as a process's large buffers are.
 void useAndFree(size_t bytes) {
