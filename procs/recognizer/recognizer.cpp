@@ -29,35 +29,37 @@ std::vector<std::string> Recognizer::missingClasses() const {
   return missing;
 }
 
-FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& requests) {
-  const auto t0 = std::chrono::steady_clock::now();
-  FrameDetections out;
-  out.classes = classes_;
-  std::vector<PyramidBox> snapped;
-  std::vector<size_t> classified;  // the boxes of `out` that are encoded, in the order of `snapped`
-  const double W = bgr.cols, H = bgr.rows;
+void Recognizer::takeBoxes(int width, int height, const std::vector<BoxRequest>& requests,
+                           bool carry_only, FrameDetections* out, std::vector<PyramidBox>* snapped,
+                           std::vector<size_t>* classified) const {
+  const double W = width, H = height;
   for (size_t i = 0; i < requests.size(); ++i) {
     const BoxRequest& r = requests[i];
     if (!std::isfinite(r.x) || !std::isfinite(r.y) || !std::isfinite(r.w) || !std::isfinite(r.h)) {
-      ++out.rejected_not_finite;
+      ++out->rejected_not_finite;
       continue;
     }
     if (!(r.w > 0) || !(r.h > 0)) {
-      ++out.rejected_empty;
+      ++out->rejected_empty;
       continue;
     }
     const double x0 = std::max(r.x, 0.0), y0 = std::max(r.y, 0.0);
     const double x1 = std::min(r.x + r.w, W), y1 = std::min(r.y + r.h, H);
     PyramidBox pb;
-    if (!(x1 > x0) || !(y1 > y0) || !encoder_.snap(r.x, r.y, r.w, r.h, bgr.cols, bgr.rows, &pb)) {
-      ++out.rejected_outside;
+    if (!(x1 > x0) || !(y1 > y0) || !encoder_.snap(r.x, r.y, r.w, r.h, width, height, &pb)) {
+      ++out->rejected_outside;
       continue;
     }
-    if (static_cast<int>(out.boxes.size()) >= options_.max_boxes) {
-      ++out.rejected_over_limit;
+    if (static_cast<int>(out->boxes.size()) >= options_.max_boxes) {
+      ++out->rejected_over_limit;
       continue;
     }
-    if (x0 != r.x || y0 != r.y || x1 != r.x + r.w || y1 != r.y + r.h) ++out.clipped;
+    const bool carry = r.carried && r.carried->log_prob.size() == classes_.size();
+    if (!carry && carry_only) {
+      ++out->uncarried;
+      continue;
+    }
+    if (x0 != r.x || y0 != r.y || x1 != r.x + r.w || y1 != r.y + r.h) ++out->clipped;
     BoxDetection d;
     d.input_index = static_cast<int>(i);
     d.candidate_id = r.candidate_id;
@@ -65,16 +67,35 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
     d.y = static_cast<float>(y0);
     d.w = static_cast<float>(x1 - x0);
     d.h = static_cast<float>(y1 - y0);
-    if (r.carried && r.carried->log_prob.size() == classes_.size()) {
+    if (carry) {
       d.log_prob = r.carried->log_prob;
       d.carried_seq = r.carried->seq;
-      ++out.carried;
+      ++out->carried;
     } else {
-      classified.push_back(out.boxes.size());
-      snapped.push_back(pb);
+      classified->push_back(out->boxes.size());
+      snapped->push_back(pb);
     }
-    out.boxes.push_back(std::move(d));
+    out->boxes.push_back(std::move(d));
   }
+}
+
+FrameDetections Recognizer::carryOnly(int width, int height,
+                                      const std::vector<BoxRequest>& requests) const {
+  FrameDetections out;
+  out.classes = classes_;
+  std::vector<PyramidBox> snapped;
+  std::vector<size_t> classified;
+  takeBoxes(width, height, requests, true, &out, &snapped, &classified);
+  return out;
+}
+
+FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& requests) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameDetections out;
+  out.classes = classes_;
+  std::vector<PyramidBox> snapped;
+  std::vector<size_t> classified;  // the boxes of `out` that are encoded, in the order of `snapped`
+  takeBoxes(bgr.cols, bgr.rows, requests, false, &out, &snapped, &classified);
   if (snapped.empty()) return out;
 
   encoder_.encode(bgr, snapped, kind_, &encoded_, &out.stats);

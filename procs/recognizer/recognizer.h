@@ -102,6 +102,7 @@ struct FrameDetections {
   int clipped = 0;
   int suppressed = 0;  ///< boxes removed by suppressOverlaps()
   int carried = 0;     ///< valid boxes that carried a result instead of being classified
+  int uncarried = 0;   ///< carryOnly(): valid boxes left out, having no result to carry
   FrameEncoder::Stats stats;
   double total_ms = 0;  ///< encoding + scoring
   int rejected() const {
@@ -138,11 +139,23 @@ class Recognizer {
   /// a given input.
   FrameDetections recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& boxes);
 
+  /// The boxes of a `width` x `height` frame answered without its pixels: checked and clipped as
+  /// by recognize(), each valid box with a `carried` result gets it, and the others are left out
+  /// (counted in `uncarried`). For a frame that real time has no time to classify.
+  FrameDetections carryOnly(int width, int height, const std::vector<BoxRequest>& boxes) const;
+
   /// Prepares the buffers of frames of this size with the configured encoder
   /// (FrameEncoder::warmUp); returns the ms spent.
   double warmUp(int width, int height) { return encoder_.warmUp(width, height, kind_); }
 
  private:
+  /// recognize() and carryOnly(): the valid boxes of `requests` in `out`, those to classify also
+  /// snapped (`snapped`, and their places in out.boxes in `classified`); with `carry_only` they
+  /// are left out instead.
+  void takeBoxes(int width, int height, const std::vector<BoxRequest>& requests, bool carry_only,
+                 FrameDetections* out, std::vector<PyramidBox>* snapped,
+                 std::vector<size_t>* classified) const;
+
   std::shared_ptr<const RecognizerModel> model_;
   RecognizerOptions options_;
   EncoderKind kind_;

@@ -27,6 +27,7 @@
 #include <future>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "common/bus/box_msg.h"
 #include "common/bus/bus.h"
@@ -206,19 +207,20 @@ class RecognizerNode {
   void process() {
     joiner_.expire(nowS());
     auto& ready = joiner_.ready();
-    // Real time: of the joined frames waiting, only the newest is classified; the others are
-    // dropped (and counted). Proposals without a frame are still answered (cheaply), and so are
-    // late ones (for an older frame, sent late on purpose: rare).
-    if (!lockstep_) joiner_.markRealTimeDrops();
+    // Real time: of the joined frames waiting, only the newest is classified. The frames it
+    // overtook are answered first, at once and without their pixels: each box whose candidate has
+    // a result (of the last frame handled) carries it, the others are left out (boxes_unlabelled).
+    // Proposals without a frame are still answered (cheaply), and so are late ones (for an older
+    // frame, sent late on purpose: rare).
+    if (!lockstep_) {
+      joiner_.markRealTimeDrops();
+      for (Joiner::Job& job : ready)
+        if (job.drop) answerWithoutPixels(job);
+    }
     while (!ready.empty() && !shutdownRequested()) {
       Joiner::Job job = std::move(ready.front());
       ready.pop_front();
-      if (job.drop) {
-        status_.noteInput(job.proposals.utime, job.proposals.seq);
-        status_.addDropped();
-        continue;
-      }
-      handle(job);
+      if (!job.drop) handle(job);
     }
     status_.setQueueDepth(static_cast<int32_t>(joiner_.pending()));
   }
@@ -255,14 +257,7 @@ class RecognizerNode {
   void handle(Joiner::Job& job) {
     const proposals_t& p = job.proposals;
     status_.noteInput(p.utime, p.seq);
-    detections_t out;
-    out.utime = p.utime;
-    out.seq = p.seq;
-    out.map_id = p.map_id;
-    out.encode_ms = 0;
-    out.num_boxes = 0;
-    out.class_names = recognizer_ ? recognizer_->classes() : std::vector<std::string>{"background"};
-    out.num_classes = static_cast<int32_t>(out.class_names.size());
+    detections_t out = emptyAnswer(p);
     if (!job.frame) {
       const char* why = job.outcome == Joiner::Outcome::kOverflow ? "waiting queue full"
                         : job.outcome == Joiner::Outcome::kTimedOut
@@ -321,30 +316,80 @@ class RecognizerNode {
     for (const auto& b : d.boxes)
       if (b.carried_seq < 0)
         selector_.remember(p.map_id, p.seq, views[static_cast<size_t>(b.input_index)], b.log_prob);
-    suppressOverlaps(&d, options_.nms_iou, options_.nms_per_class);
-    status_.count("boxes_rejected", d.rejected());
-    if (d.rejected_not_finite) status_.count("boxes_rejected.not_finite", d.rejected_not_finite);
-    if (d.rejected_empty) status_.count("boxes_rejected.zero_size", d.rejected_empty);
-    if (d.rejected_outside) status_.count("boxes_rejected.outside_image", d.rejected_outside);
-    if (d.rejected_over_limit) status_.count("boxes_rejected.over_limit", d.rejected_over_limit);
-    if (d.clipped) status_.count("boxes_clipped", d.clipped);
-    const int64_t valid = static_cast<int64_t>(d.boxes.size()) + d.suppressed;
-    status_.count("boxes_classified", valid - d.carried);
-    if (d.carried) status_.count("boxes_carried", d.carried);
-    if (d.suppressed) status_.count("boxes_suppressed", d.suppressed);
+    const int64_t valid = countBoxes(&d);
     if (valid > d.carried) status_.count(std::string("encoder.") + encoderName(d.stats.used));
     const double ms = d.stats.features_ms + d.stats.coding_ms + d.stats.encode_ms;
     status_.setCounter("encode_us_last", static_cast<int64_t>(ms * 1000));
     // Timing is not reproducible: lockstep outputs carry 0 so that replays are byte-identical.
     out.encode_ms = lockstep_ ? 0.f : static_cast<float>(ms);
-    out.num_boxes = static_cast<int32_t>(d.boxes.size());
-    for (const auto& b : d.boxes) {
-      out.boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
-      out.candidate_ids.push_back(b.candidate_id);
-      out.log_prob.push_back(b.log_prob);
-      out.classified_seq.push_back(b.carried_seq >= 0 ? b.carried_seq : p.seq);
+    fill(d, &out);
+    publish(out);
+  }
+
+  /// A frame that a newer one overtook, answered with what the selection holds of its candidates
+  /// (the last frame handled): nothing is classified.
+  void answerWithoutPixels(const Joiner::Job& job) {
+    const proposals_t& p = job.proposals;
+    status_.noteInput(p.utime, p.seq);
+    status_.count("frames_carried");
+    detections_t out = emptyAnswer(p);
+    if (recognizer_) {
+      std::vector<BoxRequest> requests(static_cast<size_t>(p.num_boxes));
+      for (size_t i = 0; i < requests.size(); ++i) {
+        const box_t& b = p.boxes[i];
+        requests[i] = BoxRequest{b.x,
+                                 b.y,
+                                 b.w,
+                                 b.h,
+                                 p.candidate_ids[i],
+                                 selector_.lastResult(p.map_id, p.candidate_ids[i])};
+      }
+      const image_t& frame = **job.frame;
+      FrameDetections d = recognizer_->carryOnly(frame.width, frame.height, requests);
+      if (d.uncarried) status_.count("boxes_unlabelled", d.uncarried);
+      countBoxes(&d);
+      fill(d, &out);
     }
     publish(out);
+  }
+
+  /// A frame's DETECTIONS without boxes.
+  detections_t emptyAnswer(const proposals_t& p) const {
+    detections_t out;
+    out.utime = p.utime;
+    out.seq = p.seq;
+    out.map_id = p.map_id;
+    out.encode_ms = 0;
+    out.num_boxes = 0;
+    out.class_names = recognizer_ ? recognizer_->classes() : std::vector<std::string>{"background"};
+    out.num_classes = static_cast<int32_t>(out.class_names.size());
+    return out;
+  }
+
+  /// Suppresses overlaps among a frame's boxes and counts them; returns the valid boxes.
+  int64_t countBoxes(FrameDetections* d) {
+    suppressOverlaps(d, options_.nms_iou, options_.nms_per_class);
+    status_.count("boxes_rejected", d->rejected());
+    if (d->rejected_not_finite) status_.count("boxes_rejected.not_finite", d->rejected_not_finite);
+    if (d->rejected_empty) status_.count("boxes_rejected.zero_size", d->rejected_empty);
+    if (d->rejected_outside) status_.count("boxes_rejected.outside_image", d->rejected_outside);
+    if (d->rejected_over_limit) status_.count("boxes_rejected.over_limit", d->rejected_over_limit);
+    if (d->clipped) status_.count("boxes_clipped", d->clipped);
+    const int64_t valid = static_cast<int64_t>(d->boxes.size()) + d->suppressed;
+    status_.count("boxes_classified", valid - d->carried);
+    if (d->carried) status_.count("boxes_carried", d->carried);
+    if (d->suppressed) status_.count("boxes_suppressed", d->suppressed);
+    return valid;
+  }
+
+  static void fill(const FrameDetections& d, detections_t* out) {
+    out->num_boxes = static_cast<int32_t>(d.boxes.size());
+    for (const auto& b : d.boxes) {
+      out->boxes.push_back(boxMessage(b.x, b.y, b.w, b.h));
+      out->candidate_ids.push_back(b.candidate_id);
+      out->log_prob.push_back(b.log_prob);
+      out->classified_seq.push_back(b.carried_seq >= 0 ? b.carried_seq : out->seq);
+    }
   }
 
   void publish(const detections_t& out) { bus_.publish(ch_.detections, out); }

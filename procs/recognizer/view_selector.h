@@ -68,6 +68,13 @@ class ViewSelector {
   void remember(int32_t map_id, int32_t seq, const CandidateView& view,
                 const std::vector<float>& log_prob);
 
+  /// The result remembered for the candidate (of the last frame selected), or nullptr: for a frame
+  /// that real time had no time to classify. Valid until the next select() or remember().
+  const CarriedView* lastResult(int32_t map_id, int32_t candidate_id) const {
+    const auto it = last_.find(std::make_pair(map_id, candidate_id));
+    return it == last_.end() ? nullptr : &it->second.result;
+  }
+
   /// Forgets every result and frame (another model was loaded, or the camera stream restarted
   /// and its seqs start again).
   void clear() {

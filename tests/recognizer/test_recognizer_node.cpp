@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <thread>
 
 #include "common/bus/bus.h"
 #include "common/bus/image_msg.h"
@@ -72,6 +73,7 @@ struct Listener {
   int answers = 0;
   status_t last_status{};
   bool have_status = false;
+  int statuses = 0;
   Listener() {
     bus.subscribe<detections_t>("DETECTIONS", [this](const detections_t& d) {
       detections[d.seq] = d;
@@ -80,6 +82,7 @@ struct Listener {
     bus.subscribe<status_t>("RECOGNIZER_STATUS", [this](const status_t& s) {
       last_status = s;
       have_status = true;
+      ++statuses;
     });
   }
   bool pump(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
@@ -446,5 +449,71 @@ TEST(RecognizerNode, LateProposalsAreClassifiedWithoutChangingWhatIsCarried) {
   EXPECT_EQ(l.detections.at(2).classified_seq, (std::vector<int32_t>{0}));
   EXPECT_EQ(l.detections.at(1).classified_seq, (std::vector<int32_t>{1}));  // late: classified
   EXPECT_EQ(l.detections.at(3).classified_seq, (std::vector<int32_t>{0}));  // still frame 0's view
+  EXPECT_EQ(node.stop(), 0) << node.log();
+}
+
+// Real time: frames that arrive while the node classifies are overtaken by the newest one, which
+// alone is classified; the overtaken frames are still answered, at once and without classifying:
+// each box with its candidate's last result (classified_seq names its frame), and a box of a
+// candidate never classified left out (counted in boxes_unlabelled). Every frame is answered.
+TEST(RecognizerNode, RealTimeAnswersTheFramesItHadNoTimeToClassify) {
+  const std::string dir = test::tempDir("recognizer_node_overtaken");
+  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
+  saveModel(model, dir + "/model.bin");
+  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
+  Listener l;
+  test::ChildProcess node(
+      {test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url", test::testUrl()},
+      dir + "/node.log");
+  ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
+  // 150 boxes over the frame: classifying frame 0 takes long enough for frames 1-3 to arrive.
+  std::vector<std::array<float, 4>> boxes;
+  for (int i = 0; i < 150; ++i)
+    boxes.push_back({static_cast<float>(7 * (i % 50)),
+                     static_cast<float>(20 * (i / 50) + 5 * i % 17),
+                     static_cast<float>(60 + i % 7 * 30), static_cast<float>(50 + i % 5 * 40)});
+  for (int32_t s = 0; s < 4; ++s)
+    l.bus.publish("CAMERA", makeImageMessage(test::texturedFrame(30 + s), 1000000 + s * 33333, s,
+                                             image_t::PIXEL_FORMAT_JPEG));
+  l.bus.handle(20);
+  l.bus.publish("PROPOSALS", proposals(0, boxes, 0.f));
+  std::this_thread::sleep_for(20ms);
+  std::vector<std::array<float, 4>> with_new = boxes;
+  with_new.push_back({500, 300, 100, 100});  // candidate 250, first seen in frame 2
+  for (int32_t s = 1; s < 4; ++s)
+    l.bus.publish("PROPOSALS", proposals(s, s == 2 ? with_new : boxes, 0.f));
+  ASSERT_TRUE(l.pump([&] { return l.answers >= 4; }, 20s)) << node.log();
+  const int statuses = l.statuses;  // the counters of every answer: a status published after them
+  ASSERT_TRUE(l.pump([&] { return l.statuses >= statuses + 2; }, 5s));
+  ASSERT_GE(counter(l.last_status, "frames_carried"), 1) << "no frame was overtaken\n"
+                                                         << node.log();
+  const detections_t& first = l.detections.at(0);
+  ASSERT_GT(first.num_boxes, 0);
+  int left_out = 0;
+  for (int32_t s = 1; s < 4; ++s) {
+    const detections_t& d = l.detections.at(s);
+    SCOPED_TRACE("seq " + std::to_string(s));
+    // Candidates 100-249 are seen from frame 0's view in every frame: frame 0's results.
+    std::vector<float> known;
+    std::vector<int32_t> from;
+    bool has_new = false;
+    for (int b = 0; b < d.num_boxes; ++b) {
+      const size_t i = static_cast<size_t>(b);
+      if (d.candidate_ids[i] == 250) {
+        has_new = true;
+        EXPECT_EQ(d.classified_seq[i], s);  // classified here: the frame was not overtaken
+        continue;
+      }
+      from.push_back(d.classified_seq[i]);
+      known.insert(known.end(), d.log_prob[i].begin(), d.log_prob[i].end());
+    }
+    EXPECT_EQ(from, std::vector<int32_t>(first.classified_seq.size(), 0));
+    std::vector<float> expected;
+    for (const auto& lp : first.log_prob) expected.insert(expected.end(), lp.begin(), lp.end());
+    EXPECT_EQ(known, expected);
+    if (s == 2 && !has_new) ++left_out;
+  }
+  EXPECT_EQ(counter(l.last_status, "boxes_unlabelled"), left_out);
+  EXPECT_EQ(l.answers, 4);
   EXPECT_EQ(node.stop(), 0) << node.log();
 }

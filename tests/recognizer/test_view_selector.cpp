@@ -100,6 +100,23 @@ TEST(ViewSelector, AnOlderFrameIsClassifiedInFullAndChangesNothing) {
   EXPECT_EQ(after[0]->seq, 0);
 }
 
+// A frame that real time has no time to classify gets the last results of its candidates,
+// whatever its view: those of the last frame selected, of the candidate's map; none for a
+// candidate that frame did not have.
+TEST(ViewSelector, TheLastResultOfACandidateIsThatOfTheLastFrameSelected) {
+  ViewSelector s(options());
+  frame(s, 1, 0, {seen(5, 0), seen(6, 0)});
+  frame(s, 1, 1, {seen(5, 30)});  // 6 left the view; 5 classified again from another side
+  const CarriedView* r = s.lastResult(1, 5);
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->seq, 1);
+  EXPECT_EQ(r->log_prob, (std::vector<float>{-1.f, -1.f}));
+  EXPECT_EQ(s.lastResult(1, 6), nullptr);
+  EXPECT_EQ(s.lastResult(2, 5), nullptr);  // another map's candidate 5
+  s.clear();
+  EXPECT_EQ(s.lastResult(1, 5), nullptr);
+}
+
 TEST(ViewSelector, DisabledOrClearedEveryBoxIsClassified) {
   ViewSelectionOptions off = options();
   off.enabled = false;

@@ -6,10 +6,12 @@
 //   real time: the camera plays the recording at its own rate (30 Hz) and every stage keeps up as
 //              it can -> realtime_slam_fps (frames SLAM answered per second of camera stream),
 //              realtime_slam_located_pct (its poses that are located, not lost),
-//              realtime_recognizer_hz (frames answered per second; the recognizer takes the
-//              newest frame and drops the rest), realtime_frames_labelled_pct (frames with boxes
-//              whose DETECTIONS came), realtime_boxes_classified_pct (published boxes classified in
-//              their frame; the others carried an earlier view's result),
+//              realtime_recognizer_hz (frames answered per second; the recognizer classifies the
+//              newest frame and answers those it overtook without classifying:
+//              realtime_frames_answered_without_pixels, realtime_boxes_unlabelled_pct of their
+//              boxes had no earlier result and were left out), realtime_frames_labelled_pct (frames
+//              with boxes whose DETECTIONS came), realtime_boxes_classified_pct (published boxes
+//              classified in their frame; the others carried an earlier view's result),
 //              latency_ms_p95 (CAMERA to the frame's DETECTIONS; _new_views: frames with a box
 //              classified in them),
 //              rss_mb_total (sum of the processes' peak resident memory), realtime_cpu_cores
@@ -50,7 +52,8 @@ struct RunTimes {
           boxes_carried = 0;  ///< published boxes classified in their frame / carried
   int64_t poses_located = 0;  ///< SLAM_POSE in TRACKING or RELOCALIZED
   int64_t first_camera = -1, last_camera = -1, last_object_map = -1;
-  std::map<std::string, int64_t> slam_counters;  ///< of SLAM's last SLAM_STATUS
+  std::map<std::string, int64_t> slam_counters;        ///< of SLAM's last SLAM_STATUS
+  std::map<std::string, int64_t> recognizer_counters;  ///< of the last RECOGNIZER_STATUS
 };
 
 RunTimes readRun(const std::string& log_path, const Channels& ch) {
@@ -58,12 +61,14 @@ RunTimes readRun(const std::string& log_path, const Channels& ch) {
   std::set<int32_t> with_boxes;
   LogReader reader(log_path);
   const std::string slam_status = ch.statusOf("slam");
+  const std::string recognizer_status = ch.statusOf("recognizer");
   while (auto r = reader.next()) {
-    if (r->channel == slam_status) {
+    if (r->channel == slam_status || r->channel == recognizer_status) {
       status_t m;
       if (!decodeRecord(*r, &m)) continue;
+      auto& counters = r->channel == slam_status ? t.slam_counters : t.recognizer_counters;
       for (int i = 0; i < m.num_counters; ++i)
-        t.slam_counters[m.counter_names[static_cast<size_t>(i)]] =
+        counters[m.counter_names[static_cast<size_t>(i)]] =
             m.counter_values[static_cast<size_t>(i)];
       continue;
     }
@@ -221,6 +226,17 @@ int main(int argc, char** argv) {
           ? 100.0 * static_cast<double>(rt.labelled) / static_cast<double>(rt.proposals_with_boxes)
           : 0;
   j["realtime_boxes_classified_pct"] = classifiedPct(rt);
+  // Frames a newer one overtook are answered without classifying (their candidates' last
+  // results); a box whose candidate had none is left out of its frame.
+  const auto counter = [&](const char* k) {
+    const auto it = rt.recognizer_counters.find(k);
+    return it == rt.recognizer_counters.end() ? int64_t{0} : it->second;
+  };
+  j["realtime_frames_answered_without_pixels"] = counter("frames_carried");
+  const int64_t unlabelled = counter("boxes_unlabelled");
+  const int64_t boxes = counter("boxes_classified") + counter("boxes_carried") + unlabelled;
+  j["realtime_boxes_unlabelled_pct"] =
+      boxes > 0 ? 100.0 * static_cast<double>(unlabelled) / static_cast<double>(boxes) : 0;
   j["latency_ms_p95_new_views"] = percentile(delays(rt.camera, rt.new_views), 0.95);
   // Where the latency goes (median and p95 of each hop).
   const std::vector<std::pair<std::string, std::vector<double>>> hops = {
