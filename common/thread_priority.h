@@ -3,11 +3,11 @@
 // being mapped, and Linux shares the cores out by the threads' nice values. SLAM's tracking must
 // handle every frame as it comes (a frame it is late on delays every later frame and all that
 // follows from them); its local mapping must keep up, or tracking thins out and is lost; its
-// depth filter skips frames when behind; the recognizer takes the newest frame and drops the
-// rest; the proposals' clustering and the object map catch up later. So tracking alone runs at
-// the normal priority and everything else lowers its own, each by its increment in system.yaml's
-// `scheduling` (an unprivileged process may lower its priority, never raise it).
-// Only timing depends on it: lockstep runs are byte-identical at any value.
+// depth filter skips frames when behind; the recognizer classifies the newest frame and answers
+// the ones it overtook from earlier views; the proposals' clustering and the object map catch up
+// later. So tracking alone runs at the normal priority and everything else lowers its own, each by
+// its increment in system.yaml's `scheduling` (an unprivileged process may lower its priority,
+// never raise it). Only timing depends on it: lockstep runs are byte-identical at any value.
 #include <string>
 
 namespace slamaware {

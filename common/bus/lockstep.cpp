@@ -1,5 +1,6 @@
 #include "common/bus/lockstep.h"
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <set>
@@ -12,7 +13,8 @@ namespace slamaware {
 
 using Clock = std::chrono::steady_clock;
 
-LockstepGate::LockstepGate(Bus& bus, const std::string& channel) : bus_(bus), channel_(channel) {
+LockstepGate::LockstepGate(Bus& bus, const std::string& channel, int window)
+    : bus_(bus), channel_(channel), window_(static_cast<size_t>(std::max(1, window))) {
   bus_.subscribeRaw(channel_, [this](const Bus::RawMessage& m) {
     if (auto s = peekFrameStamp(m.data, m.size))
       acked_ = std::max(acked_, s->seq);
@@ -30,6 +32,23 @@ bool LockstepGate::waitFor(int32_t seq, double timeout_s, const std::function<vo
     if (idle) idle();
   }
   return true;
+}
+
+bool LockstepGate::waitForRoom(bool all, double timeout_s, const std::function<void()>& idle,
+                               int32_t* timed_out) {
+  const size_t room = all ? 0 : window_ - 1;
+  while (true) {
+    while (!waiting_.empty() && waiting_.front() <= acked_) waiting_.pop_front();
+    if (waiting_.size() <= room) return true;
+    const int32_t oldest = waiting_.front();
+    if (!waitFor(oldest, timeout_s, idle)) {
+      if (!shutdownRequested()) {
+        waiting_.pop_front();
+        if (timed_out) *timed_out = oldest;
+      }
+      return false;
+    }
+  }
 }
 
 std::vector<std::string> waitForChannels(Bus& bus, const std::vector<std::string>& channels,

@@ -51,6 +51,13 @@ SystemConfig loadSystemConfig(const std::string& path, bool print) {
       throw ConfigError((path.empty() ? std::string("defaults") : path) + ": key 'scheduling." +
                         key + "': a nice increment is 0..19, got " + std::to_string(value));
   }
+  // More than a second of frames in flight is a typo, not a pipeline (each one holds buffers).
+  constexpr int kMaxLockstepWindow = 32;
+  if (sys.bus.lockstep_window < 1 || sys.bus.lockstep_window > kMaxLockstepWindow)
+    throw ConfigError((path.empty() ? std::string("defaults") : path) +
+                      ": key 'bus.lockstep_window': frames in the pipeline at once, 1.." +
+                      std::to_string(kMaxLockstepWindow) + ", got " +
+                      std::to_string(sys.bus.lockstep_window));
   sys.channels = sys.channels.resolved();
   return sys;
 }

@@ -12,6 +12,7 @@ struct BusOptions {
   std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
   bool lockstep = false;             ///< one output per input frame, every frame, no dropping
   double lockstep_timeout_s = 20.0;  ///< how long a lockstep source waits for the last stage
+  int lockstep_window = 4;           ///< frames a lockstep source has in the pipeline at once
   int max_image_bytes = 16 << 20;    ///< cap on CAMERA messages
   int max_map_bytes = 64 << 20;      ///< cap on SLAM_MAP messages
   int max_message_bytes = 4 << 20;   ///< cap on every other channel
@@ -23,6 +24,9 @@ struct BusOptions {
       "deterministic mode: every stage handles every frame, one output per input");
     v("lockstep_timeout_s", lockstep_timeout_s,
       "s a lockstep source waits for the last stage before going on");
+    v("lockstep_window", lockstep_window,
+      "frames a lockstep source lets into the pipeline before the last stage answered the first "
+      "(1: one at a time; outputs are the same for any value)");
     v("max_image_bytes", max_image_bytes, "bytes, larger CAMERA messages are rejected");
     v("max_map_bytes", max_map_bytes, "bytes, larger SLAM_MAP messages are rejected");
     v("max_message_bytes", max_message_bytes,
@@ -33,14 +37,14 @@ struct BusOptions {
 /// Who gets the CPU first (common/thread_priority.h): SLAM's tracking at the normal priority,
 /// everything else a little or much lower. Nice increments, 0..19.
 struct SchedulingOptions {
-  int recognizer_nice = 2;    ///< the recognizer: takes the newest frame, drops the rest
+  int recognizer_nice = 2;    ///< the recognizer: classifies the newest frame
   int background_nice = 10;   ///< the proposals' clustering and the object map: they catch up
   int slam_mapping_nice = 1;  ///< SLAM's local-mapping thread (its tracking stays at 0)
   int slam_depth_nice = 3;    ///< SLAM's depth-filter thread (skips frames when behind)
   template <class V>
   void visit(V& v) {
     v("recognizer_nice", recognizer_nice,
-      "nice increment of the recognizer (it takes the newest frame and drops the rest); 0: none");
+      "nice increment of the recognizer (it classifies the newest frame); 0: none");
     v("background_nice", background_nice,
       "nice increment of the proposals' clustering and the object map (they catch up); 0: none");
     v("slam_mapping_nice", slam_mapping_nice,

@@ -152,7 +152,8 @@ int main(int argc, char** argv) {
     const Channels& ch = sys.channels;
 
     std::unique_ptr<LockstepGate> gate;
-    if (lockstep) gate = std::make_unique<LockstepGate>(bus, lockstep_channel);
+    if (lockstep)
+      gate = std::make_unique<LockstepGate>(bus, lockstep_channel, sys.bus.lockstep_window);
     auto last_info = Clock::now();
     const camera_info_t info = makeInfo(*src, opts.frame_id);
     auto publishInfo = [&]() {
@@ -183,21 +184,20 @@ int main(int argc, char** argv) {
 
     SourceFrame frame;
     int64_t published = 0, corrupt = 0, timeouts = 0;
-    int32_t last_published_seq = -1;
     Pacer pacer(speed, src->live());
     int exit_code = 0;
     while (!shutdownRequested()) {
       if (max_frames >= 0 && published >= max_frames) break;
-      // Lockstep: wait for the last stage's answer to the previous frame.
-      if (gate && last_published_seq >= 0 &&
-          !gate->waitFor(last_published_seq, sys.bus.lockstep_timeout_s, idle)) {
+      // Lockstep: wait until fewer than lockstep_window frames wait for the last stage.
+      int32_t unanswered = -1;
+      if (gate && !gate->waitForRoom(false, sys.bus.lockstep_timeout_s, idle, &unanswered)) {
         if (shutdownRequested()) break;
         ++timeouts;
         status.count("lockstep_timeouts");
         status.setMessage("lockstep: no answer on " + lockstep_channel + " for seq " +
-                          std::to_string(last_published_seq));
-        spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on",
-                     last_published_seq, lockstep_channel, sys.bus.lockstep_timeout_s);
+                          std::to_string(unanswered));
+        spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on", unanswered,
+                     lockstep_channel, sys.bus.lockstep_timeout_s);
       }
       if (!src->next(&frame)) {
         if (loop && src->rewind()) continue;
@@ -223,15 +223,16 @@ int main(int argc, char** argv) {
         break;
       }
       ++published;
-      last_published_seq = frame.seq;
+      if (gate) gate->published(frame.seq);
       status.noteInput(frame.utime, frame.seq);
       status.addProcessed();
       bus.handle(0);
       idle();
     }
     // In lockstep, let the pipeline finish the last frame before we go.
-    if (gate && last_published_seq >= 0 && !shutdownRequested() &&
-        !gate->waitFor(last_published_seq, sys.bus.lockstep_timeout_s, idle))
+    int32_t unanswered = -1;
+    while (gate && !shutdownRequested() &&
+           !gate->waitForRoom(true, sys.bus.lockstep_timeout_s, idle, &unanswered))
       ++timeouts;
     status.setState(StatusReporter::State::kStopping);
     status.setCounter("frames_published", published);

@@ -896,4 +896,43 @@ void ObjectMapEngine::restore(const MapSnapshot& snap) {
   *this = std::move(fresh);
 }
 
+void LockstepInputs::add(int32_t seq, Input input, const Handler& handle) {
+  if (std::holds_alternative<pose_t>(input)) {
+    poses_.push_back(seq);
+    if (poses_.size() > kMaxWaiting) poses_.pop_front();
+  } else if (std::holds_alternative<proposals_t>(input)) {
+    if (newest_proposals_ && seq < *newest_proposals_) {
+      for (const int32_t p : poses_)
+        if (p > *newest_proposals_) {
+          released_by_[seq] = p;
+          break;
+        }
+      while (released_by_.size() > kMaxWaiting) released_by_.erase(released_by_.begin());
+    } else {
+      newest_proposals_ = seq;
+    }
+  }
+  waiting_.emplace_back(seq, std::move(input));
+  while (waiting_.size() > kMaxWaiting) {
+    handle(waiting_.front().second);
+    waiting_.pop_front();
+  }
+}
+
+void LockstepInputs::releaseUpTo(int32_t seq, const Handler& handle) {
+  int32_t upto = seq;
+  if (const auto it = released_by_.find(seq); it != released_by_.end()) {
+    upto = std::max(upto, it->second);
+    released_by_.erase(it);
+  }
+  std::deque<std::pair<int32_t, Input>> later;
+  for (auto& [s, input] : waiting_) {
+    if (s <= upto)
+      handle(input);
+    else
+      later.emplace_back(s, std::move(input));
+  }
+  waiting_ = std::move(later);
+}
+
 }  // namespace slamaware::objectmap

@@ -20,9 +20,14 @@
 // is grouped again); in real time the node defers it (deferRegrouping()) and calls regroup() at
 // most every regroup_period_s, before answering a query and before the last save.
 #include <cstdint>
+#include <deque>
+#include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include "common/camera_model.h"
@@ -184,6 +189,36 @@ class ObjectMapEngine {
   int64_t changes_ = 0;
   bool defer_regrouping_ = false;
   int64_t regroupings_ = 0;
+};
+
+/// Lockstep order of the inputs (docs/architecture.md §4): a frame's SLAM_MAP, SLAM_POSE and
+/// PROPOSALS messages are handled when a DETECTIONS message of that frame or a later one comes,
+/// just before it, in their order of arrival. With several frames in the pipeline
+/// (`bus.lockstep_window`) a later frame's map may arrive before an earlier frame's detections;
+/// in this order it is never fused into them, so the outputs are those of one frame at a time.
+/// Late proposals (a map's reference keyframe, sent just before the frame that released them)
+/// release the inputs of that frame too, as one frame at a time would have had them: that frame
+/// is the first SLAM_POSE after the newest PROPOSALS seen when they came.
+/// The node and the evaluator's re-run of a recording (tools/eval) both go through it.
+class LockstepInputs {
+ public:
+  using Input = std::variant<point_cloud_t, pose_t, proposals_t>;
+  using Handler = std::function<void(const Input&)>;
+  /// Inputs kept at most; beyond, the oldest is handled at once (no DETECTIONS are coming).
+  static constexpr size_t kMaxWaiting = 64;
+
+  /// Keeps `input` of frame `seq` (or hands the oldest to `handle` when too many wait).
+  void add(int32_t seq, Input input, const Handler& handle);
+  /// Hands the inputs of frames up to `seq` (for late proposals' frame: up to the frame that
+  /// released them) to `handle`, in their order of arrival.
+  void releaseUpTo(int32_t seq, const Handler& handle);
+  size_t waiting() const { return waiting_.size(); }
+
+ private:
+  std::deque<std::pair<int32_t, Input>> waiting_;
+  std::optional<int32_t> newest_proposals_;
+  std::deque<int32_t> poses_;               ///< seqs of the latest SLAM_POSE messages
+  std::map<int32_t, int32_t> released_by_;  ///< late proposals' seq -> the frame that released them
 };
 
 }  // namespace slamaware::objectmap

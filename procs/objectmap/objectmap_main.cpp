@@ -5,11 +5,14 @@
 // table) every save_period_s and at shutdown, and loads it at start (procs/objectmap/README.md).
 //
 // Lockstep: exactly one OBJECT_MAP per DETECTIONS message, whose content depends only on the
-// inputs (no wall-clock or save information). Real time: the objects are regrouped at most every
-// regroup_period_s (and before a query's answer and the last save), and OBJECT_MAP goes out
-// whenever they were and every publish_period_s. Bad input is counted in OBJECTMAP_STATUS and
-// never stops the process; a damaged map file is refused with a message naming it, and the
-// previous good generation is used.
+// inputs (no wall-clock or save information). SLAM_MAP, SLAM_POSE and PROPOSALS wait until a
+// DETECTIONS message of their seq or a later one comes, so that with several frames in the
+// pipeline (bus.lockstep_window) a later frame's map is never fused into an earlier frame's
+// detections: the order of the work is that of the frames, whatever the order of arrival. Real
+// time: the objects are regrouped at most every regroup_period_s (and before a query's answer and
+// the last save), and OBJECT_MAP goes out whenever they were and every publish_period_s. Bad input
+// is counted in OBJECTMAP_STATUS and never stops the process; a damaged map file is refused with a
+// message naming it, and the previous good generation is used.
 #include <malloc.h>
 #include <spdlog/spdlog.h>
 
@@ -87,22 +90,12 @@ class ObjectMapNode {
         },
         max_msg);
     bus_.subscribe<point_cloud_t>(
-        ch_.slam_map, [this](const point_cloud_t& m) { onMap(m); },
+        ch_.slam_map, [this](const point_cloud_t& m) { frameInput(m.seq, m); },
         static_cast<size_t>(sys.bus.max_map_bytes));
     bus_.subscribe<pose_t>(
-        ch_.slam_pose,
-        [this](const pose_t& m) {
-          std::string why;
-          if (!engine_.onPose(m, &why)) bus_.reject(ch_.slam_pose, why);
-        },
-        max_msg);
+        ch_.slam_pose, [this](const pose_t& m) { frameInput(m.seq, m); }, max_msg);
     bus_.subscribe<proposals_t>(
-        ch_.proposals,
-        [this](const proposals_t& m) {
-          std::string why;
-          if (!engine_.onProposals(m, &why)) bus_.reject(ch_.proposals, why);
-        },
-        max_msg);
+        ch_.proposals, [this](const proposals_t& m) { frameInput(m.seq, m); }, max_msg);
     bus_.subscribe<detections_t>(
         ch_.detections, [this](const detections_t& m) { onDetections(m); }, max_msg);
     bus_.subscribe<object_query_t>(
@@ -172,7 +165,33 @@ class ObjectMapNode {
   }
 
  private:
-  void onMap(const point_cloud_t& m) {
+  /// A SLAM_MAP, SLAM_POSE or PROPOSALS message: handled at once in real time; in lockstep just
+  /// before a DETECTIONS message of its frame or a later one (LockstepInputs).
+  template <class Msg>
+  void frameInput(int32_t seq, const Msg& m) {
+    if (lockstep_)
+      lockstep_inputs_.add(seq, m, handler());
+    else
+      handle(m);
+  }
+
+  LockstepInputs::Handler handler() {
+    return [this](const LockstepInputs::Input& in) {
+      std::visit([this](const auto& m) { handle(m); }, in);
+    };
+  }
+
+  void handle(const pose_t& m) {
+    std::string why;
+    if (!engine_.onPose(m, &why)) bus_.reject(ch_.slam_pose, why);
+  }
+
+  void handle(const proposals_t& m) {
+    std::string why;
+    if (!engine_.onProposals(m, &why)) bus_.reject(ch_.proposals, why);
+  }
+
+  void handle(const point_cloud_t& m) {
     std::string why;
     CloudReport r;
     bool inserted;
@@ -197,6 +216,7 @@ class ObjectMapNode {
   }
 
   void onDetections(const detections_t& m) {
+    lockstep_inputs_.releaseUpTo(m.seq, handler());
     status_.noteInput(m.utime, m.seq);
     std::string why;
     FrameReport r;
@@ -335,7 +355,8 @@ class ObjectMapNode {
   ObjectMapOptions options_;
   ObjectMapEngine engine_;
   MapStore store_;
-  bool deferred_ = false;  ///< regrouping deferred to regroup() (real time)
+  bool deferred_ = false;           ///< regrouping deferred to regroup() (real time)
+  LockstepInputs lockstep_inputs_;  ///< lockstep: inputs of frames ahead of their DETECTIONS
   bool can_save_ = false;
   bool save_failed_ = false;
   int64_t published_regroupings_ = -1;

@@ -207,6 +207,23 @@ TEST(Config, SchedulingNiceOutOfRangeIsRefused) {
   }
 }
 
+TEST(Config, LockstepWindowOutOfRangeIsRefused) {
+  EXPECT_EQ(loadSystemConfig(writeYaml("system5.yaml", "bus:\n  lockstep_window: 1\n"), false)
+                .bus.lockstep_window,
+            1);
+  for (const char* text : {"bus:\n  lockstep_window: 0\n", "bus:\n  lockstep_window: 1000\n"}) {
+    const std::string path = writeYaml("system6.yaml", text);
+    try {
+      loadSystemConfig(path, false);
+      FAIL() << "must be refused: " << text;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("system6.yaml: key 'bus.lockstep_window'"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(Config, ChannelPrefixAndStatusNames) {
   const std::string path = writeYaml("system2.yaml", "channels:\n  prefix: R1_\n  camera: CAM\n");
   const SystemConfig sys = loadSystemConfig(path, false);

@@ -1217,3 +1217,62 @@ TEST(ObjectMapConfig, ShippedYamlEqualsDefaults) {
             defaultConfigFileText<ObjectMapOptions>("objectmap"))
       << "config/objectmap.yaml is generated from the built-in defaults: make configs";
 }
+
+namespace {
+
+// A lockstep input of frame `seq` as the order sees it: "map 3", "pose 3", "proposals 3".
+std::string describe(const LockstepInputs::Input& in) {
+  if (const auto* m = std::get_if<point_cloud_t>(&in)) return "map " + std::to_string(m->seq);
+  if (const auto* m = std::get_if<pose_t>(&in)) return "pose " + std::to_string(m->seq);
+  return "proposals " + std::to_string(std::get<proposals_t>(in).seq);
+}
+
+template <class Msg>
+Msg ofFrame(int32_t seq) {
+  Msg m{};
+  m.seq = seq;
+  return m;
+}
+
+}  // namespace
+
+// With several frames in the pipeline a later frame's map and pose arrive before an earlier
+// frame's detections; each DETECTIONS releases the inputs of its own frame and those before, in
+// their order of arrival, and late proposals (frame 0, sent just before frame 5 released them) the
+// inputs of frame 5 as well, as one frame at a time would have had them.
+TEST(LockstepInputs, InputsAreHandledInTheOrderOfTheFramesWhateverTheirArrival) {
+  LockstepInputs order;
+  std::vector<std::string> handled;
+  const LockstepInputs::Handler h = [&](const LockstepInputs::Input& in) {
+    handled.push_back(describe(in));
+  };
+  order.add(3, ofFrame<point_cloud_t>(3), h);
+  order.add(3, ofFrame<pose_t>(3), h);
+  order.add(3, ofFrame<proposals_t>(3), h);
+  order.add(4, ofFrame<point_cloud_t>(4), h);  // frame 4 ahead of frame 3's detections
+  order.add(4, ofFrame<pose_t>(4), h);
+  EXPECT_TRUE(handled.empty());
+  order.releaseUpTo(3, h);  // DETECTIONS 3
+  EXPECT_EQ(handled, (std::vector<std::string>{"map 3", "pose 3", "proposals 3"}));
+  handled.clear();
+  order.add(4, ofFrame<proposals_t>(4), h);
+  order.add(5, ofFrame<point_cloud_t>(5), h);
+  order.add(5, ofFrame<pose_t>(5), h);
+  order.add(0, ofFrame<proposals_t>(0), h);  // late: released by frame 5, the pose after 4
+  order.add(5, ofFrame<proposals_t>(5), h);
+  order.add(6, ofFrame<pose_t>(6), h);
+  order.releaseUpTo(4, h);  // (the late proposals are kept by seq: any time before is right)
+  EXPECT_EQ(handled, (std::vector<std::string>{"map 4", "pose 4", "proposals 4", "proposals 0"}));
+  handled.clear();
+  order.releaseUpTo(0, h);  // the late DETECTIONS: frame 5's inputs come before it
+  EXPECT_EQ(handled, (std::vector<std::string>{"map 5", "pose 5", "proposals 5"}));
+  handled.clear();
+  order.releaseUpTo(5, h);
+  EXPECT_TRUE(handled.empty());
+  EXPECT_EQ(order.waiting(), 1u);  // pose 6
+  // Without DETECTIONS (the recognizer gone) at most kMaxWaiting inputs wait.
+  for (int32_t s = 7; s < 7 + static_cast<int32_t>(LockstepInputs::kMaxWaiting); ++s)
+    order.add(s, ofFrame<pose_t>(s), h);
+  EXPECT_EQ(handled, std::vector<std::string>{"pose 6"});
+  EXPECT_EQ(order.waiting(), LockstepInputs::kMaxWaiting);
+}

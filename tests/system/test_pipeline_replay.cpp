@@ -1,17 +1,19 @@
 // The whole pipeline (camera -> slam -> proposals -> recognizer -> objectmap, every stage its own
-// process) replayed lockstep on the bundled recording logs/sample.lcm, twice, in a private network
-// namespace: every frame gets its DETECTIONS, OBJECT_DETECTIONS and OBJECT_MAP (and the frame the
-// SLAM map was initialised from, not located when it came, gets a second, late set with its boxes),
-// the two runs publish byte-identical payloads on the three channels, and the recognised objects
-// are there (not only empty messages); no two published boxes of a frame that are surest of the
-// same object class overlap by IoU > 0.5 (docs/architecture.md §3, suppressed per class), though
-// the proposals did. The object map re-run on the recording's inputs gives the node's messages byte
-// for byte, and on the first half of them the same messages for that half: a fused label never
-// depends on a later frame.
+// process) replayed lockstep on the bundled recording logs/sample.lcm, twice (one frame at a time,
+// then with several in the pipeline: bus.lockstep_window), in a private network namespace: every
+// frame gets its DETECTIONS, OBJECT_DETECTIONS and OBJECT_MAP (and the frame the SLAM map was
+// initialised from, not located when it came, gets a second, late set with its boxes), the two runs
+// publish byte-identical payloads on the three channels, and the recognised objects are there (not
+// only empty messages); no two published boxes of a frame that are surest of the same object class
+// overlap by IoU > 0.5 (docs/architecture.md §3, suppressed per class), though the proposals did.
+// The object map re-run on the recording's inputs gives the node's messages byte for byte, and on
+// the first half of them the same messages for that half: a fused label never depends on a later
+// frame.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 
 #include "common/bus/log_reader.h"
@@ -103,10 +105,18 @@ TEST(PipelineReplay, TheBundledLogReplayedLockstepTwiceGivesByteIdenticalDetecti
   ASSERT_TRUE(fs::exists(test::sourcePath("models/recognizer.model")));
   const std::string dir = test::tempDir("pipeline_replay");
 
+  // The first run one frame at a time, the second with the shipped lockstep window (several
+  // frames in the pipeline at once): the outputs do not depend on it.
   std::vector<Recording> runs;
+  const std::string shipped = test::sourcePath("config/system.yaml");
+  ASSERT_GT(loadSystemConfig(shipped, false).bus.lockstep_window, 1)
+      << "the test compares a window of 1 with the shipped one";
+  const std::string one_at_a_time = dir + "/system-window-1.yaml";
+  std::ofstream(one_at_a_time) << "bus:\n  lockstep_window: 1\n";
   for (int run = 0; run < 2; ++run) {
     const std::string log = dir + "/run" + std::to_string(run) + ".lcm";
     options.objectmap_dir = dir + "/map" + std::to_string(run);
+    options.system_path = run == 0 ? one_at_a_time : shipped;
     const PipelineRun result = runPipeline(sample, log, sys, options);
     ASSERT_TRUE(result.ok) << result.error << " (process outputs: " << log << ".<stage>.txt)";
     ASSERT_EQ(result.stages,

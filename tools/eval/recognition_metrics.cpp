@@ -318,22 +318,30 @@ ObjectMapOutputs rerunObjectMap(const std::string& log_path, const Channels& ch,
   ObjectMapEngine engine(options);
   LogReader reader(log_path);
   std::string why;  // refusals are the node's status counters; the outputs are the same either way
+  // In the node's lockstep order (LockstepInputs), whatever the order the logger received them in.
+  LockstepInputs inputs;
+  const LockstepInputs::Handler handle = [&](const LockstepInputs::Input& in) {
+    if (const auto* m = std::get_if<point_cloud_t>(&in)) engine.onMap(*m, &why);
+    if (const auto* m = std::get_if<pose_t>(&in)) engine.onPose(*m, &why);
+    if (const auto* m = std::get_if<proposals_t>(&in)) engine.onProposals(*m, &why);
+  };
   while (auto r = reader.next()) {
     if (r->channel == ch.camera_info) {
       camera_info_t m;
       if (decodeRecord(*r, &m)) engine.onCameraInfo(m, &why);
     } else if (r->channel == ch.slam_map) {
       point_cloud_t m;
-      if (decodeRecord(*r, &m)) engine.onMap(m, &why);
+      if (decodeRecord(*r, &m)) inputs.add(m.seq, std::move(m), handle);
     } else if (r->channel == ch.slam_pose) {
       pose_t m;
-      if (decodeRecord(*r, &m)) engine.onPose(m, &why);
+      if (decodeRecord(*r, &m)) inputs.add(m.seq, m, handle);
     } else if (r->channel == ch.proposals) {
       proposals_t m;
-      if (decodeRecord(*r, &m)) engine.onProposals(m, &why);
+      if (decodeRecord(*r, &m)) inputs.add(m.seq, std::move(m), handle);
     } else if (r->channel == ch.detections) {
       detections_t m;
       if (!decodeRecord(*r, &m)) continue;
+      inputs.releaseUpTo(m.seq, handle);
       engine.onDetections(m, &why);
       // As the lockstep node publishes them (objectmap_main.cpp).
       out.frames[m.seq] = engine.frameDetections(m);

@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
     const bool lockstep = !lockstep_channel.empty();
     std::unique_ptr<LockstepGate> gate;
     if (lockstep) {
-      gate = std::make_unique<LockstepGate>(bus, lockstep_channel);
+      gate = std::make_unique<LockstepGate>(bus, lockstep_channel, sys.bus.lockstep_window);
       if (!app.count("--speed")) speed = 0;
     }
     for (const auto& c :
@@ -62,7 +62,6 @@ int main(int argc, char** argv) {
     status.setState(StatusReporter::State::kRunning);
 
     int64_t events = 0, frames = 0, timeouts = 0, first_ts = -1;
-    int32_t last_frame_seq = -1;
     const auto t0 = Clock::now();
     int rc = 0;
     try {
@@ -73,13 +72,14 @@ int main(int argc, char** argv) {
         if (first_ts < 0) first_ts = ev->timestamp;
         const bool is_frame = ev->channel == sys.channels.camera;
         if (is_frame && max_frames >= 0 && frames >= max_frames) break;
-        if (is_frame && gate && last_frame_seq >= 0 &&
-            !gate->waitFor(last_frame_seq, sys.bus.lockstep_timeout_s, idle)) {
+        int32_t unanswered = -1;
+        if (is_frame && gate &&
+            !gate->waitForRoom(false, sys.bus.lockstep_timeout_s, idle, &unanswered)) {
           if (shutdownRequested()) break;
           ++timeouts;
           status.count("lockstep_timeouts");
           spdlog::warn("lockstep: no message with seq {} on {} within {:.0f} s; going on",
-                       last_frame_seq, lockstep_channel, sys.bus.lockstep_timeout_s);
+                       unanswered, lockstep_channel, sys.bus.lockstep_timeout_s);
         }
         if (speed > 0) {
           const auto due = t0 + std::chrono::microseconds(
@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
         if (is_frame) {
           ++frames;
           if (auto s = peekFrameStamp(ev->data.data(), ev->data.size())) {
-            last_frame_seq = s->seq;
+            if (gate) gate->published(s->seq);
             status.noteInput(s->utime, s->seq);
           }
           status.addProcessed();
@@ -111,8 +111,9 @@ int main(int argc, char** argv) {
       spdlog::error("{}", e.what());
       rc = 3;
     }
-    if (gate && last_frame_seq >= 0 && !shutdownRequested() &&
-        !gate->waitFor(last_frame_seq, sys.bus.lockstep_timeout_s, idle))
+    int32_t unanswered = -1;
+    while (gate && !shutdownRequested() &&
+           !gate->waitForRoom(true, sys.bus.lockstep_timeout_s, idle, &unanswered))
       ++timeouts;
     status.setState(StatusReporter::State::kStopping);
     status.publish();
