@@ -106,14 +106,18 @@ RecognizerModel smallModel(const std::string& objects, int seed = 7, int epochs 
   return trainModel({objects}, {}, o, nullptr);
 }
 
+// A small model of "bar" and "disc" (no background class: the node appends it) in dir/model.bin,
+// and a config naming it and the `expected` classes; returns the config's path.
+std::string configWithSmallModel(const std::string& dir, const std::string& expected) {
+  saveModel(smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6)), dir + "/model.bin");
+  return writeConfig(dir, dir + "/model.bin", expected);
+}
+
 }  // namespace
 
 TEST(RecognizerNode, SurvivesBadInputAndCountsIt) {
   const std::string dir = test::tempDir("recognizer_node");
-  // A small model of "bar" and "disc" (no background class: the node appends it).
-  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
-  saveModel(model, dir + "/model.bin");
-  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar, mug]");
+  const std::string config = configWithSmallModel(dir, "[disc, bar, mug]");
 
   Listener l;
   test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url",
@@ -356,9 +360,7 @@ TEST(RecognizerNode, AReplacedModelIsSwappedInLiveAndABadOneRefused) {
 // without selection classify.
 TEST(RecognizerNode, ARepeatedViewCarriesItsResultAndANewViewIsClassified) {
   const std::string dir = test::tempDir("recognizer_node_views");
-  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
-  saveModel(model, dir + "/model.bin");
-  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
+  const std::string config = configWithSmallModel(dir, "[disc, bar]");
   std::ofstream(dir + "/off.yaml") << "recognizer:\n  model: " << dir + "/model.bin"
                                    << "\n  view_selection:\n    enabled: false\n";
   // Frame s shows the disc at 200 + 8 s px on its own background (made once: texturedFrame
@@ -427,9 +429,7 @@ TEST(RecognizerNode, ARepeatedViewCarriesItsResultAndANewViewIsClassified) {
 // leave the selection alone: the next frame still carries the view of the frame before them.
 TEST(RecognizerNode, LateProposalsAreClassifiedWithoutChangingWhatIsCarried) {
   const std::string dir = test::tempDir("recognizer_node_late");
-  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
-  saveModel(model, dir + "/model.bin");
-  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
+  const std::string config = configWithSmallModel(dir, "[disc, bar]");
   Listener l;
   test::ChildProcess node({test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url",
                            test::testUrl(), "--lockstep"},
@@ -458,9 +458,7 @@ TEST(RecognizerNode, LateProposalsAreClassifiedWithoutChangingWhatIsCarried) {
 // candidate never classified left out (counted in boxes_unlabelled). Every frame is answered.
 TEST(RecognizerNode, RealTimeAnswersTheFramesItHadNoTimeToClassify) {
   const std::string dir = test::tempDir("recognizer_node_overtaken");
-  const RecognizerModel model = smallModel(test::makeSyntheticObjectSet(dir + "/objects", 2, 6));
-  saveModel(model, dir + "/model.bin");
-  const std::string config = writeConfig(dir, dir + "/model.bin", "[disc, bar]");
+  const std::string config = configWithSmallModel(dir, "[disc, bar]");
   Listener l;
   test::ChildProcess node(
       {test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url", test::testUrl()},
