@@ -19,9 +19,6 @@ class LockstepGate {
   /// `window`: frames that may wait for their answer at once (at least 1).
   LockstepGate(Bus& bus, const std::string& channel, int window = 1);
   const std::string& channel() const { return channel_; }
-  /// Handles the bus until a message with seq >= `seq` arrived on the channel. Calls idle()
-  /// between waits. Returns false on timeout or shutdown.
-  bool waitFor(int32_t seq, double timeout_s, const std::function<void()>& idle);
 
   /// The source published frame `seq`.
   void published(int32_t seq) { waiting_.push_back(seq); }
@@ -32,6 +29,10 @@ class LockstepGate {
                    int32_t* timed_out);
 
  private:
+  /// Handles the bus until a message with seq >= `seq` arrived on the channel. Calls idle()
+  /// between waits. Returns false on timeout or shutdown.
+  bool waitFor(int32_t seq, double timeout_s, const std::function<void()>& idle);
+
   Bus& bus_;
   std::string channel_;
   size_t window_;

@@ -170,15 +170,9 @@ class ObjectMapNode {
   template <class Msg>
   void frameInput(int32_t seq, const Msg& m) {
     if (lockstep_)
-      lockstep_inputs_.add(seq, m, handler());
+      lockstep_inputs_.add(seq, m, handle_input_);
     else
       handle(m);
-  }
-
-  LockstepInputs::Handler handler() {
-    return [this](const LockstepInputs::Input& in) {
-      std::visit([this](const auto& m) { handle(m); }, in);
-    };
   }
 
   void handle(const pose_t& m) {
@@ -216,7 +210,7 @@ class ObjectMapNode {
   }
 
   void onDetections(const detections_t& m) {
-    lockstep_inputs_.releaseUpTo(m.seq, handler());
+    lockstep_inputs_.releaseUpTo(m.seq, handle_input_);
     status_.noteInput(m.utime, m.seq);
     std::string why;
     FrameReport r;
@@ -357,6 +351,10 @@ class ObjectMapNode {
   MapStore store_;
   bool deferred_ = false;           ///< regrouping deferred to regroup() (real time)
   LockstepInputs lockstep_inputs_;  ///< lockstep: inputs of frames ahead of their DETECTIONS
+  /// Hands an input LockstepInputs releases to handle() (made once, not per message).
+  const LockstepInputs::Handler handle_input_ = [this](const LockstepInputs::Input& in) {
+    std::visit([this](const auto& m) { handle(m); }, in);
+  };
   bool can_save_ = false;
   bool save_failed_ = false;
   int64_t published_regroupings_ = -1;
