@@ -543,6 +543,45 @@ TEST(Training, ExtraTrainingSetsJoinEveryFoldAndAreNeverTested) {
   EXPECT_EQ(collectNamedCrops(extra, 1).front().instance, "extra/bar_1");
 }
 
+// A loose crop (a small object on a cloth, as UMD's) is boxed around its object; a set whose
+// objects fill their crops (as UW RGB-D's) is left whole, even where its object is inside.
+TEST(Training, LooseCropsAreBoxedAroundTheirObjectAndTightOnesKeptWhole) {
+  const std::string dir = test::tempDir("loose_crops");
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> jitter(-30, 30);
+  std::map<std::string, cv::Rect> truth;
+  for (int v = 0; v < 6; ++v) {
+    // 220 x 180: a grey wall strip, a blue cloth with noise, a yellow mug-like block with stripes.
+    cv::Mat loose(180, 220, CV_8UC3, cv::Scalar(120, 40, 40));
+    loose(cv::Rect(0, 0, 220, 20)).setTo(cv::Scalar(150, 150, 150));
+    cv::Mat noise(loose.size(), CV_8UC3);
+    cv::randn(noise, 0, 8);
+    loose += noise;
+    const cv::Rect object(80 + jitter(rng), 60 + jitter(rng) / 2, 56, 64);
+    loose(object).setTo(cv::Scalar(40, 200, 230));
+    for (int y = object.y + 8; y < object.br().y; y += 16)
+      loose(cv::Rect(object.x, y, object.width, 4)).setTo(cv::Scalar(30, 30, 160));
+    const std::string name = dir + "/loose/coffee_mug/coffee_mug_101/coffee_mug_101_1_" +
+                             std::to_string(v) + "_crop.png";
+    fs::create_directories(fs::path(name).parent_path());
+    writeImage(name, loose);
+    truth[name] = object;
+    // The same object filling a crop of its own, with a little table at one corner.
+    cv::Mat tight = loose(object + cv::Size(6, 6) - cv::Point(3, 3)).clone();
+    const std::string tight_dir = dir + "/tight/coffee_mug/coffee_mug_1";
+    fs::create_directories(tight_dir);
+    writeImage(tight_dir + "/coffee_mug_1_1_" + std::to_string(v) + "_crop.png", tight);
+  }
+  for (const LabeledCrop& c : collectCrops({dir + "/loose"}, 0)) {
+    const cv::Rect t = truth.at(c.path);
+    EXPECT_GE((c.object_box & t).area(), 0.8 * (c.object_box | t).area())
+        << c.path << ": boxed at " << c.object_box << ", the object is at " << t;
+  }
+  for (const LabeledCrop& c : collectCrops({dir + "/tight"}, 0))
+    EXPECT_TRUE(c.object_box.empty())
+        << c.path << ": a crop framed by its object, boxed at " << c.object_box;
+}
+
 // Real data: train on two apples and two balls, classify two other instances.
 TEST(Training, SeparatesApplesFromBallsOnUnseenUwInstances) {
   const std::string uw = test::sharedData("objects/uw_rgbd_apple_ball");

@@ -21,6 +21,7 @@
 #include "common/image_codec.h"
 #include "common/parallel.h"
 #include "common/progress.h"
+#include "tools/train/object_box.h"
 
 namespace slamaware::recognizer {
 
@@ -368,11 +369,56 @@ void balanceDomains(ExampleSet* set, int classes, double real_share) {
   }
 }
 
+// A crop's pixels as the training sees them: cut to its object's box when it has one.
+cv::Mat readCrop(const LabeledCrop& crop) {
+  cv::Mat image = readImage(crop.path);
+  if (crop.object_box.area() > 0 &&
+      (crop.object_box & cv::Rect(0, 0, image.cols, image.rows)) == crop.object_box)
+    image = image(crop.object_box).clone();
+  return image;
+}
+
+// Crops of a photographed set without masks are taken as framed by their object (UW RGB-D's are
+// cut around the object's depth segment), unless the set's crops are loose: when the objects, as
+// GrabCut finds them in up to 16 crops spread over the set, cover less than half of their crop
+// (median), a box covering the crop would not count as a detection of its object (IoU < 0.5).
+// Every crop of such a set without a mask then gets its object's box (objectBoxInCrop). Which
+// kind a set is is measured, not declared: UMD's crops (another lab's turntable, objects on a
+// blue cloth) are loose, UW RGB-D's are not.
+// The set's crops are those of `crops` from `first` on.
+void boxLooseCrops(const std::string& dir, std::vector<LabeledCrop>* crops, size_t first) {
+  std::vector<size_t> unmasked;
+  for (size_t i = first; i < crops->size(); ++i)
+    if ((*crops)[i].mask_path.empty()) unmasked.push_back(i);
+  if (unmasked.empty()) return;
+  constexpr size_t kSample = 16;
+  const size_t n = std::min(kSample, unmasked.size());
+  std::vector<double> share;
+  for (size_t k = 0; k < n; ++k) {
+    const cv::Mat image = readImage((*crops)[unmasked[k * unmasked.size() / n]].path);
+    share.push_back(static_cast<double>(objectBoxInCrop(image).area()) /
+                    static_cast<double>(std::max<int64_t>(1, static_cast<int64_t>(image.total()))));
+  }
+  std::nth_element(share.begin(), share.begin() + static_cast<std::ptrdiff_t>(n / 2), share.end());
+  const double median = share[n / 2];
+  if (median >= 0.5) return;
+  spdlog::info(
+      "{}: its objects cover {:.0f} % of their crops (median of {}): each of its {} crops without "
+      "a mask is boxed around its object",
+      dir, 100 * median, n, unmasked.size());
+  for (size_t i : unmasked) {
+    const cv::Mat image = readImage((*crops)[i].path);
+    const cv::Rect box = objectBoxInCrop(image);
+    if (box != cv::Rect(0, 0, image.cols, image.rows)) (*crops)[i].object_box = box;
+  }
+}
+
 std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
                                       int max_views_per_instance) {
   std::vector<LabeledCrop> crops;
   for (const auto& dir : object_dirs) {
     const ObjectSet set = ObjectSet::open(dir);
+    const size_t first = crops.size();
     std::map<std::string, std::vector<const ObjectView*>> by_instance;
     for (const auto& v : set.views()) by_instance[v.instance].push_back(&v);
     for (const auto& [instance, views] : by_instance) {
@@ -382,9 +428,10 @@ std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dir
       for (size_t k = 0; k < keep; ++k) {
         const ObjectView* v = views[k * n / keep];
         crops.push_back(
-            LabeledCrop{v->crop_path, v->category, v->instance, v->mask_path, !set.rendered()});
+            LabeledCrop{v->crop_path, v->category, v->instance, v->mask_path, !set.rendered(), {}});
       }
     }
+    if (!set.rendered()) boxLooseCrops(dir, &crops, first);
   }
   return crops;
 }
@@ -600,7 +647,7 @@ void fitEncoding(const std::vector<LabeledCrop>& crops, const std::vector<SceneF
     const bool real = crop ? crops[k].real : frames[k].real;
     const int64_t quota = crop ? (real ? per_crop_real : per_crop_rendered)
                                : (real ? per_frame_real : per_frame_rendered);
-    worker->extractor.setImage(readImage(crop ? crops[k].path : frames[k].path));
+    worker->extractor.setImage(crop ? readCrop(crops[k]) : readImage(frames[k].path));
     worker->extractor.extract(worker->extractor.imageCells(), &worker->grid);
     const ReusableMatrix& features = worker->grid.features;
     const int64_t n = features.rows();
@@ -660,7 +707,7 @@ ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops,
   ExampleSet set(encoder.params().vladDims(), encoder.params().pca_dims);
   ReusableMatrix buffer;
   for (size_t i = 0; i < crops.size(); ++i) {
-    cv::Mat image = readImage(crops[i].path);
+    cv::Mat image = readCrop(crops[i]);
     const int label = labelOf(classes, crops[i].category, other_label);
     const int group = indexOf(instances, crops[i].instance);
     const int domain = crops[i].real ? 1 : 0;
@@ -923,8 +970,8 @@ void encodeCropsInContext(const TrainingData& d, const TrainOptions& options, Fr
     };
     for (size_t i = 0; i < crops.size(); ++i) {
       // A crop with a mask is pasted as its object alone, boxed tightly (what is around it in the
-      // box is the frame's); one without is pasted whole.
-      cv::Mat crop = readImage(crops[i].path), mask;
+      // box is the frame's); one without is pasted whole (a loose one cut to its object's box).
+      cv::Mat crop = readCrop(crops[i]), mask;
       if (!crops[i].mask_path.empty()) cutToMask(&crop, &mask, readImage(crops[i].mask_path, true));
       const int copies = options.context_copies + (crops[i].real ? options.real_copies : 0);
       for (int k = 0; k < copies; ++k) {

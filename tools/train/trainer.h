@@ -10,7 +10,8 @@
 //     calibration over-confident), else every `holdout_frame_every`-th frame.
 //  2. Vocabulary: raw features of the training crops and scene frames, a shuffled subset of
 //     `vocabulary_descriptors` of them -> PCA (D dims) -> VLFeat k-means (K codewords).
-//  3. Examples: every crop encoded as one box covering it, and `context_copies` times more pasted
+//  3. Examples: every crop encoded as one box covering it (a crop of a loose photographed set:
+//     its object's box, collectCrops), and `context_copies` times more pasted
 //     at a random place of a random scene frame (a box in a frame sees its surroundings, a crop
 //     alone only its mirrored border); per scene frame `negatives_per_frame` random boxes that
 //     overlap no ground-truth box (IoU < 0.1); per `scene_positive_every`-th scene frame, each
@@ -36,6 +37,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -162,6 +164,8 @@ struct LabeledCrop {
   std::string instance;
   std::string mask_path;  ///< the object's pixels ("" if the set has no mask)
   bool real = false;      ///< photographed (false: rendered by the generator)
+  /// Where the object is in a loose crop (collectCrops); empty: the crop is framed by its object.
+  cv::Rect object_box;
 };
 
 /// A scene frame with its ground-truth object boxes (anything else in it is background).
@@ -176,7 +180,9 @@ struct SceneFrame {
 };
 
 /// The crops of the object sets (categories merged by name across sets), at most
-/// max_views_per_instance per instance (evenly spaced). Throws DatasetError.
+/// max_views_per_instance per instance (evenly spaced). A photographed set whose objects cover
+/// under half of their crops (GrabCut, median of 16) is loose: its crops without a mask get their
+/// object's box (objectBoxInCrop, object_box.h). Throws DatasetError.
 std::vector<LabeledCrop> collectCrops(const std::vector<std::string>& object_dirs,
                                       int max_views_per_instance);
 /// The crops of one object set with their instances named after the set ("<set>/<instance>": two
