@@ -391,13 +391,26 @@ void boxLooseCrops(const std::string& dir, std::vector<LabeledCrop>* crops, size
   for (size_t i = first; i < crops->size(); ++i)
     if ((*crops)[i].mask_path.empty()) unmasked.push_back(i);
   if (unmasked.empty()) return;
+  // Each crop is read and cut at most once: the sample's cuts are the boxes of its crops too.
+  struct Cut {
+    cv::Rect box;
+    cv::Size size;
+  };
+  std::map<size_t, Cut> cuts;
+  auto cut = [&](size_t i) -> const Cut& {
+    auto it = cuts.find(i);
+    if (it == cuts.end()) {
+      const cv::Mat image = readImage((*crops)[i].path);
+      it = cuts.emplace(i, Cut{objectBoxInCrop(image), image.size()}).first;
+    }
+    return it->second;
+  };
   constexpr size_t kSample = 16;
   const size_t n = std::min(kSample, unmasked.size());
   std::vector<double> share;
   for (size_t k = 0; k < n; ++k) {
-    const cv::Mat image = readImage((*crops)[unmasked[k * unmasked.size() / n]].path);
-    share.push_back(static_cast<double>(objectBoxInCrop(image).area()) /
-                    static_cast<double>(std::max<int64_t>(1, static_cast<int64_t>(image.total()))));
+    const Cut& c = cut(unmasked[k * unmasked.size() / n]);
+    share.push_back(static_cast<double>(c.box.area()) / std::max(1, c.size.area()));
   }
   std::nth_element(share.begin(), share.begin() + static_cast<std::ptrdiff_t>(n / 2), share.end());
   const double median = share[n / 2];
@@ -407,9 +420,8 @@ void boxLooseCrops(const std::string& dir, std::vector<LabeledCrop>* crops, size
       "a mask is boxed around its object",
       dir, 100 * median, n, unmasked.size());
   for (size_t i : unmasked) {
-    const cv::Mat image = readImage((*crops)[i].path);
-    const cv::Rect box = objectBoxInCrop(image);
-    if (box != cv::Rect(0, 0, image.cols, image.rows)) (*crops)[i].object_box = box;
+    const Cut& c = cut(i);
+    if (c.box != cv::Rect(cv::Point(), c.size)) (*crops)[i].object_box = c.box;
   }
 }
 
