@@ -90,7 +90,7 @@ struct ProposalOptions {
                                   ///< of its last clustering (a young map grows fast; <= 1: off)
   // Density-based clustering (DBSCAN) at `scales` radii, each twice the previous.
   double radius = 0.008;   ///< map units, neighbourhood radius of the finest scale
-  int scales = 4;          ///< density thresholds, a factor 2 apart
+  int scales = 5;          ///< density thresholds, a factor 2 apart
   int min_neighbours = 4;  ///< points within the radius (on a grid of half of it) of a core point
   double colour_distance =
       40;  ///< RGB distance (0..441) under which core points join in a second clustering,
