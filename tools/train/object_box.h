@@ -7,11 +7,11 @@
 namespace slamaware::recognizer {
 
 /// The object's box in `crop` (8-bit BGR), by GrabCut (OpenCV) with a border band of 6 % of the
-/// shorter side as background and the rest as probable foreground. A side of the foreground's
-/// bounding box that reaches the band is taken to continue to the crop's edge: the object of a
-/// tight crop touches it there, and the band hid that part from the cut. So a tight crop keeps
-/// (nearly) its whole extent, a loose one is boxed around its object. No foreground, or a crop
-/// smaller than 16 px: the whole crop. Deterministic (OpenCV's RNG is reseeded).
+/// shorter side as background and the rest as probable foreground. A foreground that reaches the
+/// band on any side touches the crop's border there (the band hid that part from the cut): the
+/// crop is framed by its object and the whole crop is returned. So a tight crop keeps its whole
+/// extent, a loose one is boxed around its object. No foreground, or a crop smaller than 16 px:
+/// the whole crop. Deterministic (OpenCV's RNG is reseeded).
 cv::Rect objectBoxInCrop(const cv::Mat& crop);
 
 }  // namespace slamaware::recognizer
