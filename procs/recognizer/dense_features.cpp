@@ -146,6 +146,7 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
     grid.region = CellRect{};
     grid.nx = grid.ny = 0;
     grid.features.resize(0, kFeatureDims);
+    grid.textured.clear();
     return;
   }
   grid.region = region;
@@ -153,6 +154,7 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
   grid.nx = region.width() * s;
   grid.ny = region.height() * s;
   grid.features.resize(int64_t{grid.nx} * grid.ny * grid.scales, kFeatureDims);
+  grid.textured.resize(static_cast<size_t>(grid.features.rows()));
   if (!only) {
     extractBlock(region, &grid);
     return;
@@ -176,8 +178,29 @@ void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out
   const int c0 = M + step / 2;  // centre of grid point 0 inside `sub`
   std::vector<float>& norms = norms_;
 
+  // Mean R, G, B over each descriptor's support (the 4 x 4 bins around its centre), from an
+  // integral image, written with the descriptor.
+  cv::Mat& integral = integral_;
+  cv::integral(rgb_padded_(sub), integral, CV_64F);
+  const float w = static_cast<float>(params_.rgb_weight);
+  rgb_.resize(static_cast<size_t>(points) * 3);
+
   for (int t = 0; t < grid.scales; ++t) {
     const int b = params_.bin_sizes_px[t];
+    const int half = 2 * b;
+    const double inv_area = 1.0 / (4.0 * half * half);
+    for (int j = 0; j < ny; ++j) {
+      const int y0 = c0 + step * j - half, y1 = c0 + step * j + half;
+      const cv::Vec3d* top = integral.ptr<cv::Vec3d>(y0);
+      const cv::Vec3d* bottom = integral.ptr<cv::Vec3d>(y1);
+      float* rgb = rgb_.data() + static_cast<size_t>(j) * nx * 3;
+      for (int i = 0; i < nx; ++i) {
+        const int x0 = c0 + step * i - half, x1 = c0 + step * i + half;
+        const cv::Vec3d sum = bottom[x1] - bottom[x0] - top[x1] + top[x0];
+        for (int c = 0; c < 3; ++c) rgb[3 * i + c] = w * static_cast<float>(sum[c] * inv_area);
+      }
+    }
+
     const double sigma = smoothingSigma(b, params_.smoothing_magnif);
     cv::Mat& smooth = smooth_;
     if (sigma > 0)
@@ -195,35 +218,20 @@ void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out
     geometry.nx = nx;
     geometry.ny = ny;
     norms.resize(static_cast<size_t>(points));
-    denseSiftFlat(smooth.ptr<float>(), smooth.cols, smooth.rows, geometry,
-                  grid.features.row(grid.rowOf(gx, gy, t)), kFeatureDims, norms.data(),
-                  static_cast<size_t>(grid.nx));
     const float threshold = static_cast<float>(params_.contrast_threshold);
+    DsiftOutput out_sift;
+    out_sift.descriptors = grid.features.row(grid.rowOf(gx, gy, t));
+    out_sift.stride = kFeatureDims;
+    out_sift.row_pitch = static_cast<size_t>(grid.nx);
+    out_sift.norms = norms.data();
+    out_sift.zero_below = threshold;
+    out_sift.tail = rgb_.data();
+    out_sift.tail_dims = 3;
+    denseSiftFlat(smooth.ptr<float>(), smooth.cols, smooth.rows, geometry, out_sift);
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
-        if (norms[static_cast<size_t>(j) * nx + i] < threshold)
-          std::memset(grid.features.row(grid.rowOf(gx + i, gy + j, t)), 0,
-                      sizeof(float) * kSiftDims);
-  }
-
-  // Mean RGB over each descriptor's support: the 4 x 4 bins around its centre.
-  cv::Mat& integral = integral_;
-  cv::integral(rgb_padded_(sub), integral, CV_64F);
-  const float w = static_cast<float>(params_.rgb_weight);
-  for (int t = 0; t < grid.scales; ++t) {
-    const int half = 2 * params_.bin_sizes_px[t];
-    const double inv_area = 1.0 / (4.0 * half * half);
-    for (int j = 0; j < ny; ++j) {
-      const int y0 = c0 + step * j - half, y1 = c0 + step * j + half;
-      const cv::Vec3d* top = integral.ptr<cv::Vec3d>(y0);
-      const cv::Vec3d* bottom = integral.ptr<cv::Vec3d>(y1);
-      for (int i = 0; i < nx; ++i) {
-        const int x0 = c0 + step * i - half, x1 = c0 + step * i + half;
-        const cv::Vec3d sum = bottom[x1] - bottom[x0] - top[x1] + top[x0];
-        float* row = grid.features.row(grid.rowOf(gx + i, gy + j, t));
-        for (int c = 0; c < 3; ++c) row[kSiftDims + c] = w * static_cast<float>(sum[c] * inv_area);
-      }
-    }
+        grid.textured[static_cast<size_t>(grid.rowOf(gx + i, gy + j, t))] =
+            norms[static_cast<size_t>(j) * nx + i] >= threshold;
   }
 }
 

@@ -9,6 +9,7 @@
 // support near the border, the last partial cell) are the image mirrored at its border
 // (BORDER_REFLECT_101), so a grid point's descriptor does not depend on which region is computed.
 #include <algorithm>
+#include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
@@ -45,6 +46,9 @@ struct FeatureGrid {
   /// One row per descriptor: row (t * nx * ny + j * nx + i) for grid point (i, j) of the region
   /// and scale t; columns: 128 SIFT (VLFeat order) then R, G, B.
   ReusableMatrix features;
+  /// Per row: 1 when its descriptor's norm reached the contrast threshold (its SIFT part was
+  /// computed; 0: the SIFT part is all zero and only R, G, B describe it).
+  std::vector<uint8_t> textured;
   int64_t rowOf(int i, int j, int t) const { return (int64_t{t} * ny + j) * nx + i; }
 };
 
@@ -81,6 +85,7 @@ class DenseFeatureExtractor {
   cv::Mat rgb_padded_;   ///< CV_32FC3 in R, G, B order, 0..1
   cv::Mat smooth_, integral_;  ///< scratch
   std::vector<float> norms_;   ///< scratch
+  std::vector<float> rgb_;     ///< scratch: mean R, G, B of one scale's grid points
 };
 
 }  // namespace slamaware::recognizer

@@ -44,58 +44,54 @@ void growTo(std::vector<T>* v, size_t n) {
   if (v->size() < n) v->resize(n);
 }
 
+// A descriptor's sum and sum of squares (its mass and its L2 norm), in a fixed order of partial
+// sums (VLFeat adds them one by one; the results differ in rounding only); VLFeat's
+// _vl_dsift_normalize_histogram (divide by the L2 norm + epsilon) as a multiplication by the
+// reciprocal. With AVX2 the descriptor is held as 16 vectors of 8 elements.
 #ifdef __AVX2__
 inline float horizontalSum(__m256 v) {
   const __m128 s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
   const __m128 t = _mm_add_ps(s, _mm_movehl_ps(s, s));
   return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
 }
-#endif
 
-// Sum of the 128 elements and sum of their squares, in a fixed order of partial sums (VLFeat adds
-// them one by one; the results differ in rounding only).
-inline float sum128(const float* h) {
-#ifdef __AVX2__
-  __m256 a[4] = {_mm256_loadu_ps(h), _mm256_loadu_ps(h + 8), _mm256_loadu_ps(h + 16),
-                 _mm256_loadu_ps(h + 24)};
-  for (int i = 32; i < kSiftLength; i += 32)
-    for (int q = 0; q < 4; ++q) a[q] = _mm256_add_ps(a[q], _mm256_loadu_ps(h + i + 8 * q));
+inline float sumOf16(const __m256* v) {
+  __m256 a[4];
+  for (int q = 0; q < 4; ++q)
+    a[q] = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(v[q], v[4 + q]), v[8 + q]), v[12 + q]);
   return horizontalSum(_mm256_add_ps(_mm256_add_ps(a[0], a[1]), _mm256_add_ps(a[2], a[3])));
+}
+
+inline float sumSquaresOf16(const __m256* v) {
+  __m256 a[4];
+  for (int q = 0; q < 4; ++q) {
+    a[q] = _mm256_mul_ps(v[q], v[q]);
+    for (int r = 1; r < 4; ++r) a[q] = _mm256_fmadd_ps(v[4 * r + q], v[4 * r + q], a[q]);
+  }
+  return horizontalSum(_mm256_add_ps(_mm256_add_ps(a[0], a[1]), _mm256_add_ps(a[2], a[3])));
+}
+
+inline void scaleByInverseNorm(__m256* v) {
+  const __m256 inv = _mm256_set1_ps(1.0F / (vl_fast_sqrt_f(sumSquaresOf16(v)) + VL_EPSILON_F));
+  for (int q = 0; q < 16; ++q) v[q] = _mm256_mul_ps(v[q], inv);
+}
 #else
+inline float sum128(const float* h) {
   float acc = 0;
   for (int i = 0; i < kSiftLength; ++i) acc += h[i];
   return acc;
-#endif
 }
 
-inline float sumSquares128(const float* h) {
-#ifdef __AVX2__
-  __m256 a[4];
-  for (int q = 0; q < 4; ++q) {
-    const __m256 x = _mm256_loadu_ps(h + 8 * q);
-    a[q] = _mm256_mul_ps(x, x);
-  }
-  for (int i = 32; i < kSiftLength; i += 32)
-    for (int q = 0; q < 4; ++q) {
-      const __m256 x = _mm256_loadu_ps(h + i + 8 * q);
-      a[q] = _mm256_fmadd_ps(x, x, a[q]);
-    }
-  return horizontalSum(_mm256_add_ps(_mm256_add_ps(a[0], a[1]), _mm256_add_ps(a[2], a[3])));
-#else
-  float acc = 0;
-  for (int i = 0; i < kSiftLength; ++i) acc += h[i] * h[i];
-  return acc;
-#endif
-}
-
-// VLFeat's _vl_dsift_normalize_histogram (divide by the L2 norm + epsilon), as a multiplication
-// by the reciprocal, then (clamp) VLFeat's clamping of the elements at 0.2.
+// Then (clamp) VLFeat's clamping of the elements at 0.2.
 inline void normalizeHistogram(float* h, bool clamp) {
-  const float inv = 1.0F / (vl_fast_sqrt_f(sumSquares128(h)) + VL_EPSILON_F);
+  float ss = 0;
+  for (int i = 0; i < kSiftLength; ++i) ss += h[i] * h[i];
+  const float inv = 1.0F / (vl_fast_sqrt_f(ss) + VL_EPSILON_F);
   for (int i = 0; i < kSiftLength; ++i) h[i] *= inv;
   if (clamp)
     for (int i = 0; i < kSiftLength; ++i) h[i] = std::min(h[i], 0.2F);
 }
+#endif
 
 // Orientation-binned gradient of image row y, columns [x0, x1], into out ((x1 - x0 + 1) x 8,
 // zero except the two bins each pixel votes for). VLFeat's formulas, term by term.
@@ -243,12 +239,15 @@ void triangleFilter(const float* in, int64_t in_step, int64_t in_stride, int b, 
 }  // namespace
 
 void denseSiftFlat(const float* image, int width, int height, const DsiftGeometry& g,
-                   float* descriptors, size_t stride, float* norms, size_t row_pitch) {
+                   const DsiftOutput& out) {
   const int b = g.bin;
   if (b < 1 || g.step < 1 || g.nx < 1 || g.ny < 1 ||
-      (row_pitch != 0 && row_pitch < static_cast<size_t>(g.nx)))
+      (out.row_pitch != 0 && out.row_pitch < static_cast<size_t>(g.nx)))
     throw std::invalid_argument("denseSiftFlat: bad geometry");
-  const size_t pitch_out = row_pitch ? row_pitch : static_cast<size_t>(g.nx);
+  if (!out.descriptors || !out.norms || out.tail_dims < 0 || (out.tail_dims > 0 && !out.tail) ||
+      out.stride < static_cast<size_t>(kSiftLength + out.tail_dims))
+    throw std::invalid_argument("denseSiftFlat: bad output");
+  const size_t pitch_out = out.row_pitch ? out.row_pitch : static_cast<size_t>(g.nx);
   const int span_x = g.step * (g.nx - 1) + 3 * b, span_y = g.step * (g.ny - 1) + 3 * b;
   // Pixels the frames read: their bin centres +- (b - 1).
   const int x0 = g.min_x - (b - 1), x1 = g.min_x + span_x + (b - 1);
@@ -300,9 +299,36 @@ void denseSiftFlat(const float* image, int width, int height, const DsiftGeometr
   const float frame_size = static_cast<float>(3 * b + 1);
   const float norm_constant = frame_size * frame_size / (static_cast<float>(b) * b);
   const int step_cols = g.step / pitch, bin_cols = b / pitch;
+  // Each descriptor is assembled, measured and normalised in registers and written once (the
+  // output grid is far larger than the cache).
   for (int j = 0; j < g.ny; ++j)
     for (int i = 0; i < g.nx; ++i) {
-      float* d = descriptors + (static_cast<size_t>(j) * pitch_out + i) * stride;
+      const size_t frame = static_cast<size_t>(j) * g.nx + i;
+      float* d = out.descriptors + (static_cast<size_t>(j) * pitch_out + i) * out.stride;
+      float& norm = out.norms[frame];
+      if (out.tail_dims > 0)
+        std::memcpy(d + kSiftLength, out.tail + frame * out.tail_dims,
+                    sizeof(float) * out.tail_dims);
+#ifdef __AVX2__
+      __m256 v[16];
+      for (int by = 0; by < 4; ++by) {
+        const float* src_row = filtered.data() + (j * step_cols + by * bin_cols) * row_stride;
+        for (int bx = 0; bx < 4; ++bx)
+          v[by * 4 + bx] = _mm256_mul_ps(
+              _mm256_set1_ps(weight[by][bx]),
+              _mm256_loadu_ps(src_row + (i * step_cols + bx * bin_cols) * kOrientations));
+      }
+      norm = sumOf16(v) / norm_constant;
+      if (norm < out.zero_below) {
+        for (int q = 0; q < 16; ++q) _mm256_storeu_ps(d + 8 * q, _mm256_setzero_ps());
+        continue;
+      }
+      scaleByInverseNorm(v);
+      const __m256 clamp = _mm256_set1_ps(0.2F);
+      for (int q = 0; q < 16; ++q) v[q] = _mm256_min_ps(v[q], clamp);
+      scaleByInverseNorm(v);
+      for (int q = 0; q < 16; ++q) _mm256_storeu_ps(d + 8 * q, v[q]);
+#else
       for (int by = 0; by < 4; ++by) {
         const float* src_row = filtered.data() + (j * step_cols + by * bin_cols) * row_stride;
         for (int bx = 0; bx < 4; ++bx) {
@@ -311,10 +337,14 @@ void denseSiftFlat(const float* image, int width, int height, const DsiftGeometr
           for (int c = 0; c < kOrientations; ++c) dst[c] = weight[by][bx] * src[c];
         }
       }
-      const float mass = sum128(d);
-      norms[static_cast<size_t>(j) * g.nx + i] = mass / norm_constant;
+      norm = sum128(d) / norm_constant;
+      if (norm < out.zero_below) {
+        std::memset(d, 0, sizeof(float) * kSiftLength);
+        continue;
+      }
       normalizeHistogram(d, true);
       normalizeHistogram(d, false);
+#endif
     }
 }
 

@@ -25,14 +25,30 @@ struct DsiftGeometry {
   int nx = 0, ny = 0;
 };
 
-/// Computes nx * ny descriptors of 128 floats (VLFeat's element order: orientation fastest, then
-/// bin x, then bin y) of a row-major float image. Descriptor (i, j) goes to descriptors +
-/// (j * row_pitch + i) * stride (row_pitch 0: nx; a larger one writes into a wider grid), its mean
-/// gradient mass (VLFeat's keypoint norm) to norms[j * nx + i].
+/// Where denseSiftFlat writes frame (i, j)'s results.
+struct DsiftOutput {
+  /// Its 128 floats (VLFeat's element order: orientation fastest, then bin x, then bin y) at
+  /// descriptors + (j * row_pitch + i) * stride (row_pitch 0: nx; a larger one writes into a
+  /// wider grid).
+  float* descriptors = nullptr;
+  size_t stride = 128;
+  size_t row_pitch = 0;
+  /// Its mean gradient mass (VLFeat's keypoint norm) at norms[j * nx + i].
+  float* norms = nullptr;
+  /// A descriptor whose norm is below this is written as 128 zeros instead (the contrast
+  /// threshold; 0: none is).
+  float zero_below = 0;
+  /// tail_dims floats of tail[(j * nx + i) * tail_dims] written after its 128 elements, in the
+  /// same pass (stride >= 128 + tail_dims).
+  const float* tail = nullptr;
+  int tail_dims = 0;
+};
+
+/// Computes nx * ny descriptors of a row-major float image into `out`.
 /// Every frame's support (origin - bin + 1 .. origin + 4 bins - 1) must lie inside the image.
-/// Throws std::invalid_argument otherwise.
+/// Throws std::invalid_argument otherwise, or when `out` cannot hold them.
 void denseSiftFlat(const float* image, int width, int height, const DsiftGeometry& geometry,
-                   float* descriptors, size_t stride, float* norms, size_t row_pitch = 0);
+                   const DsiftOutput& out);
 
 /// The same descriptors computed by VLFeat's vl_dsift (for tests and comparisons; slow).
 void denseSiftVlfeat(const float* image, int width, int height, const DsiftGeometry& geometry,

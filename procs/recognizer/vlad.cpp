@@ -86,7 +86,8 @@ float* FrameCodes::addEntry(int16_t word, float count) {
 
 namespace {
 
-constexpr int64_t kAssignChunk = 2048;
+// Rows coded at a time: assigned to codewords, then pooled while they are still in the cache.
+constexpr size_t kGroupRows = 2048;
 
 // True when the SIFT part of a feature row is not all zero (-0 counts as zero).
 bool hasGradient(const float* f) {
@@ -99,44 +100,47 @@ bool hasGradient(const float* f) {
   return any != 0;
 }
 
-// Index of the largest score (ties: the lower index).
-int16_t argmax(const float* s, int k) {
-  int best = 0;
-  for (int c = 1; c < k; ++c)
-    if (s[c] > s[best]) best = c;
-  return static_cast<int16_t>(best);
+// argmax_k y.c_k - |c_k|^2 / 2 with y = x B - offset  =  argmax_k x (B c_k) - bias_k.
+Eigen::RowVectorXf wordBiasOf(const Pca& pca, const Vocabulary& vocabulary) {
+  return pca.offset() * vocabulary.centers.transpose() +
+         0.5f * vocabulary.centers.rowwise().squaredNorm().transpose();
 }
 
-}  // namespace
-
-FeatureCoder::FeatureCoder(const Pca& pca, const Vocabulary& vocabulary)
-    : pca_(pca), vocabulary_(vocabulary) {
+WordScores checkedWordScores(const Pca& pca, const Vocabulary& vocabulary) {
   if (pca.outDims() != vocabulary.dims())
     throw std::invalid_argument("FeatureCoder: PCA and vocabulary dimensions differ");
   if (pca.inDims() != kFeatureDims)
     throw std::invalid_argument("FeatureCoder: PCA is not of " + std::to_string(kFeatureDims) +
                                 "-D features");
-  // argmax_k y.c_k - |c_k|^2 / 2 with y = x B - offset  =  argmax_k x (B c_k) - bias_k.
-  const Eigen::MatrixXf ct = vocabulary.centers.transpose();
-  offset_ = pca.offset();
-  word_scores_ = pca.basis * ct;
-  word_bias_ = offset_ * ct + 0.5f * vocabulary.centers.rowwise().squaredNorm().transpose();
-  rgb_scores_ = word_scores_.bottomRows<3>();
+  return WordScores(pca.basis * vocabulary.centers.transpose(), wordBiasOf(pca, vocabulary));
 }
 
-void FeatureCoder::assignChunk(const FeatureGrid& grid) {
-  const int64_t n = static_cast<int64_t>(textured_.size());
-  if (n == 0) return;
-  chunk_.resize(n, kFeatureDims);
-  for (int64_t i = 0; i < n; ++i)
-    std::memcpy(chunk_.row(i).data(), grid.features.row(rows_[static_cast<size_t>(textured_[i])]),
-                sizeof(float) * kFeatureDims);
-  chunk_scores_.noalias() = chunk_ * word_scores_;
-  chunk_scores_.rowwise() -= word_bias_;
-  const int K = vocabulary_.size();
-  for (int64_t i = 0; i < n; ++i)
-    row_words_[static_cast<size_t>(textured_[i])] = argmax(chunk_scores_.row(i).data(), K);
-  textured_.clear();
+}  // namespace
+
+FeatureCoder::FeatureCoder(const Pca& pca, const Vocabulary& vocabulary)
+    : pca_(pca),
+      vocabulary_(vocabulary),
+      words_(checkedWordScores(pca, vocabulary)),
+      offset_(pca.offset()) {}
+
+void FeatureCoder::assignRows(const FeatureGrid& grid, size_t begin, size_t end) {
+  // Rows with and without gradient apart: the latter only from their R, G, B. The flag spares
+  // reading the SIFT part of rows the extractor left at zero.
+  for (auto& list : group_rows_) list.clear();
+  for (auto& list : group_at_) list.clear();
+  for (size_t i = begin; i < end; ++i) {
+    const float* f = grid.features.row(rows_[i]);
+    row_textured_[i] = grid.textured[static_cast<size_t>(rows_[i])] && hasGradient(f);
+    group_rows_[row_textured_[i]].push_back(f);
+    group_at_[row_textured_[i]].push_back(i);
+  }
+  for (int textured = 0; textured < 2; ++textured) {
+    group_words_.resize(group_rows_[textured].size());
+    words_.assign(group_rows_[textured].data(), static_cast<int64_t>(group_words_.size()),
+                  group_words_.data(), textured ? 0 : kSiftDims);
+    for (size_t j = 0; j < group_words_.size(); ++j)
+      row_words_[group_at_[textured][j]] = group_words_[j];
+  }
 }
 
 void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes* out,
@@ -144,6 +148,8 @@ void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes*
   if (grid.features.cols() != kFeatureDims)
     throw std::invalid_argument("FeatureCoder: features are not " + std::to_string(kFeatureDims) +
                                 "-D");
+  if (grid.textured.size() != static_cast<size_t>(grid.features.rows()))
+    throw std::invalid_argument("FeatureCoder: the grid has no textured flag per row");
   const CellRect& region = grid.region;
   const int K = vocabulary_.size(), D = pca_.outDims(), s = steps_per_cell;
   const int64_t cells = region.area();
@@ -167,53 +173,49 @@ void FeatureCoder::code(const FeatureGrid& grid, int steps_per_cell, FrameCodes*
         for (int gy = gy0; gy < gy0 + s; ++gy)
           for (int gx = gx0; gx < gx0 + s; ++gx) rows_.push_back(grid.rowOf(gx, gy, t));
     }
-  // 2. The codeword of each: flat rows from their R, G, B (the last 3 rows of word_scores_),
-  // the others by a matrix product per chunk.
   row_words_.resize(rows_.size());
-  textured_.clear();
-  std::vector<float> scores(static_cast<size_t>(K));
-  for (size_t i = 0; i < rows_.size(); ++i) {
-    const float* f = grid.features.row(rows_[i]);
-    if (hasGradient(f)) {
-      textured_.push_back(static_cast<int64_t>(i));
-      if (static_cast<int64_t>(textured_.size()) == kAssignChunk) assignChunk(grid);
-      continue;
-    }
-    const float r = f[kSiftDims], g = f[kSiftDims + 1], b = f[kSiftDims + 2];
-    for (int k = 0; k < K; ++k)
-      scores[static_cast<size_t>(k)] =
-          r * rgb_scores_(0, k) + g * rgb_scores_(1, k) + b * rgb_scores_(2, k) - word_bias_[k];
-    row_words_[i] = argmax(scores.data(), K);
-  }
-  assignChunk(grid);
-  // 3. Per cell and codeword: the count and the raw sum of its descriptors.
+  row_textured_.resize(rows_.size());
   out->reset(region, D);
   acc_.assign(static_cast<size_t>(K) * kFeatureDims, 0.f);
   acc_n_.assign(static_cast<size_t>(K), 0.f);
-  const int per_cell = s * s * grid.scales;
+  const size_t per_cell = static_cast<size_t>(s) * s * grid.scales;
   size_t next = 0;
   sums_.resize(0, kFeatureDims);
-  for (int64_t c = 0; c < cells; ++c) {
-    if (covered[static_cast<size_t>(c)]) {
-      for (int i = 0; i < per_cell; ++i, ++next) {
-        const int k = row_words_[next];
-        float* __restrict a = acc_.data() + int64_t{k} * kFeatureDims;
-        const float* __restrict f = grid.features.row(rows_[next]);
-        for (int e = 0; e < kFeatureDims; ++e) a[e] += f[e];
-        acc_n_[static_cast<size_t>(k)] += 1.f;
+  for (int64_t c = 0; c < cells;) {
+    // 2. The codeword of each row of the next group of cells (textured rows by WordScores, flat
+    // ones from their R, G, B) ...
+    int64_t group_end = c;
+    size_t rows_end = next;
+    while (group_end < cells && rows_end - next < kGroupRows)
+      if (covered[static_cast<size_t>(group_end++)]) rows_end += per_cell;
+    assignRows(grid, next, rows_end);
+    // 3. ... then per cell and codeword, the count and the raw sum of its descriptors.
+    for (; c < group_end; ++c) {
+      if (covered[static_cast<size_t>(c)]) {
+        for (size_t i = 0; i < per_cell; ++i, ++next) {
+          const int k = row_words_[next];
+          float* __restrict a = acc_.data() + int64_t{k} * kFeatureDims;
+          const float* __restrict f = grid.features.row(rows_[next]);
+          if (row_textured_[next]) {
+            for (int e = 0; e < kFeatureDims; ++e) a[e] += f[e];
+          } else {  // the SIFT part is zero: adding it would change no sum
+            for (int e = kSiftDims; e < kFeatureDims; ++e) a[e] += f[e];
+          }
+          acc_n_[static_cast<size_t>(k)] += 1.f;
+        }
+        for (int k = 0; k < K; ++k) {
+          if (acc_n_[static_cast<size_t>(k)] == 0.f) continue;
+          const int64_t e = static_cast<int64_t>(out->words.size());
+          out->addEntry(static_cast<int16_t>(k), acc_n_[static_cast<size_t>(k)]);
+          sums_.resize(e + 1, kFeatureDims);
+          float* a = acc_.data() + int64_t{k} * kFeatureDims;
+          std::memcpy(sums_.row(e), a, sizeof(float) * kFeatureDims);
+          std::fill(a, a + kFeatureDims, 0.f);
+          acc_n_[static_cast<size_t>(k)] = 0.f;
+        }
       }
-      for (int k = 0; k < K; ++k) {
-        if (acc_n_[static_cast<size_t>(k)] == 0.f) continue;
-        const int64_t e = static_cast<int64_t>(out->words.size());
-        out->addEntry(static_cast<int16_t>(k), acc_n_[static_cast<size_t>(k)]);
-        sums_.resize(e + 1, kFeatureDims);
-        float* a = acc_.data() + int64_t{k} * kFeatureDims;
-        std::memcpy(sums_.row(e), a, sizeof(float) * kFeatureDims);
-        std::fill(a, a + kFeatureDims, 0.f);
-        acc_n_[static_cast<size_t>(k)] = 0.f;
-      }
+      out->endCell();
     }
-    out->endCell();
   }
   // 4. Residual sums: (sum x) B - n (offset + c_k), one product for all entries.
   const int64_t n = static_cast<int64_t>(out->words.size());

@@ -21,6 +21,7 @@
 
 #include "procs/recognizer/dense_features.h"
 #include "procs/recognizer/pca_vocabulary.h"
+#include "procs/recognizer/word_scores.h"
 
 namespace slamaware::recognizer {
 
@@ -87,20 +88,22 @@ class FeatureCoder {
             const std::vector<CellRect>* only = nullptr);
 
  private:
-  void assignChunk(const FeatureGrid& grid);
+  /// The codewords of rows_[begin, end) into row_words_ (and row_textured_).
+  void assignRows(const FeatureGrid& grid, size_t begin, size_t end);
 
   const Pca& pca_;
   const Vocabulary& vocabulary_;
-  Eigen::MatrixXf word_scores_;   ///< 131 x K: basis x centres^T
-  Eigen::RowVectorXf word_bias_;  ///< K: offset x centres^T + |c|^2 / 2
-  Eigen::RowVectorXf offset_;     ///< mean x basis
-  Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor>
-      rgb_scores_;  ///< R, G, B rows of word_scores_
+  WordScores words_;           ///< the codeword of a row
+  Eigen::RowVectorXf offset_;  ///< mean x basis
   // Scratch, reused across frames.
   std::vector<int64_t> rows_;  ///< grid rows to code, cell by cell
   std::vector<int16_t> row_words_;
-  std::vector<int64_t> textured_;  ///< positions in rows_ waiting for the matrix product
-  MatrixRM chunk_, chunk_scores_;
+  std::vector<uint8_t> row_textured_;  ///< per entry of rows_: its SIFT part is not all zero
+  /// Of the group of rows being assigned, without and with gradient: the rows, their positions
+  /// in rows_, their words.
+  std::vector<const float*> group_rows_[2];
+  std::vector<size_t> group_at_[2];
+  std::vector<int16_t> group_words_;
   ReusableMatrix sums_;     ///< entries x 131: raw sums
   std::vector<float> acc_;  ///< K x 131 sums of the cell being pooled
   std::vector<float> acc_n_;

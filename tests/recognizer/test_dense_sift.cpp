@@ -42,7 +42,10 @@ TEST_P(DenseSiftVsVlfeat, DescriptorsAndNormsMatch) {
   ASSERT_GT(g.ny, 5);
   const size_t n = static_cast<size_t>(g.nx) * g.ny;
   std::vector<float> ours(n * 128), theirs(n * 128), our_norms(n), their_norms(n);
-  denseSiftFlat(image.ptr<float>(), image.cols, image.rows, g, ours.data(), 128, our_norms.data());
+  DsiftOutput out;
+  out.descriptors = ours.data();
+  out.norms = our_norms.data();
+  denseSiftFlat(image.ptr<float>(), image.cols, image.rows, g, out);
   denseSiftVlfeat(image.ptr<float>(), image.cols, image.rows, g, theirs.data(), 128,
                   their_norms.data());
   double max_diff = 0, max_norm_rel = 0, max_value = 0;
@@ -69,8 +72,14 @@ TEST(DenseSift, RefusesFramesReachingOutOfTheImage) {
   g.min_x = 2;  // the first bin needs 7 px on its left
   g.min_y = 10;
   g.nx = g.ny = 1;
-  EXPECT_THROW(denseSiftFlat(image.data(), 64, 64, g, d.data(), 128, norm.data()),
-               std::invalid_argument);
+  DsiftOutput out;
+  out.descriptors = d.data();
+  out.norms = norm.data();
+  EXPECT_THROW(denseSiftFlat(image.data(), 64, 64, g, out), std::invalid_argument);
+  g.min_x = 10;
+  EXPECT_NO_THROW(denseSiftFlat(image.data(), 64, 64, g, out));
+  out.tail_dims = 3;  // no room after the 128 elements, and no tail
+  EXPECT_THROW(denseSiftFlat(image.data(), 64, 64, g, out), std::invalid_argument);
 }
 
 TEST(DenseFeatures, GridPointFeatureDoesNotDependOnTheRegionComputed) {
