@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <sstream>
@@ -11,6 +12,7 @@
 
 #include "common/bus/log_reader.h"
 #include "common/dataset.h"
+#include "procs/supervisor/proc_stats.h"
 #include "slamaware/keyframe_t.hpp"
 #include "slamaware/point_cloud_t.hpp"
 #include "slamaware/pose_t.hpp"
@@ -23,6 +25,18 @@ namespace slamaware {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+double cpuAt(const std::vector<CpuSample>& trace, int64_t t_us) {
+  if (trace.empty()) return 0;
+  if (t_us <= trace.front().wall_us) return trace.front().cpu_s;
+  if (t_us >= trace.back().wall_us) return trace.back().cpu_s;
+  const auto after = std::lower_bound(trace.begin(), trace.end(), t_us,
+                                      [](const CpuSample& s, int64_t t) { return s.wall_us < t; });
+  const auto before = after - 1;
+  const double f = static_cast<double>(t_us - before->wall_us) /
+                   static_cast<double>(std::max<int64_t>(1, after->wall_us - before->wall_us));
+  return before->cpu_s + f * (after->cpu_s - before->cpu_s);
+}
 
 SE3 poseOf(const double position[3], const double orientation[4]) {
   return se3FromArrays(position, orientation);
@@ -43,6 +57,10 @@ std::vector<std::string> stageList(const std::string& comma_separated) {
   for (std::string name; std::getline(in, name, ',');)
     if (!name.empty()) names.push_back(name);
   return names;
+}
+
+double cpuSecondsBetween(const std::vector<CpuSample>& trace, int64_t from_us, int64_t to_us) {
+  return cpuAt(trace, to_us) - cpuAt(trace, from_us);
 }
 
 PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_path,
@@ -123,7 +141,30 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   ChildProcess camera(camera_argv, log_path + ".camera.txt");
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(
       1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, frames))));
-  const int camera_rc = camera.wait(timeout);
+  // Wait for the camera, sampling every process's CPU time meanwhile.
+  const auto sampleCpu = [&] {
+    const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                               std::chrono::system_clock::now().time_since_epoch())
+                               .count();
+    const double tick_s = 1.0 / static_cast<double>(sysconf(_SC_CLK_TCK));
+    const auto add = [&](const std::string& name, pid_t pid) {
+      if (const auto s = supervisor::sampleProcess(pid))
+        result.cpu_trace[name].push_back({now_us, static_cast<double>(s->cpu_ticks) * tick_s});
+    };
+    add("camera", camera.pid());
+    for (size_t i = 0; i < procs.size(); ++i) add(stages[i].name, procs[i]->pid());
+  };
+  const auto camera_deadline = Clock::now() + timeout;
+  int camera_rc = -1;
+  for (;;) {
+    sampleCpu();
+    if (!camera.running()) {
+      camera_rc = camera.wait(std::chrono::milliseconds(0));
+      break;
+    }
+    if (Clock::now() > camera_deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   // The last messages reach the logger (in real time, the stages also finish their last frames).
   std::this_thread::sleep_for(std::chrono::milliseconds(options.realtime ? 2000 : 300));
   bool crashed = false;

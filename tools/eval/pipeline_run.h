@@ -38,6 +38,16 @@ struct PipelineRunOptions {
   bool realtime = false;
 };
 
+/// A process's CPU time (all threads) at one wall-clock moment.
+struct CpuSample {
+  int64_t wall_us = 0;  ///< system clock, µs since the epoch (as a recording's event times)
+  double cpu_s = 0;
+};
+
+/// CPU seconds a process used between two wall-clock moments, interpolated between the samples
+/// around each (clamped to the first and last sample).
+double cpuSecondsBetween(const std::vector<CpuSample>& trace, int64_t from_us, int64_t to_us);
+
 struct PipelineRun {
   bool ok = false;
   std::string error;
@@ -45,6 +55,9 @@ struct PipelineRun {
   std::string lockstep_channel;
   double rss_mb_total = 0;  ///< sum of the peak resident memory of the camera and every stage
   std::map<std::string, double> cpu_s;  ///< CPU time (all threads) of the camera and each stage
+  /// The same, sampled every 50 ms while the camera ran: what each process used while frames
+  /// streamed, start-up apart (its start-up is before the camera's first frame).
+  std::map<std::string, std::vector<CpuSample>> cpu_trace;
 };
 
 /// Runs the pipeline on `sequence_dir` (a sequence folder or an LCM log with CAMERA), recording the
