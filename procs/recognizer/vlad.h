@@ -75,7 +75,7 @@ struct FrameCodes {
 /// projected descriptors of one codeword is the projection of their raw sum: the assignment is one
 /// product with (PCA basis x codewords^T) (131 x K) per descriptor, and the projection (131 x D)
 /// runs once per (cell, codeword), not per descriptor. Descriptors whose SIFT part is zero
-/// (below the contrast threshold; a third of a typical frame) are assigned from their R, G, B
+/// (below the contrast threshold; three quarters of a real frame) are assigned from their R, G, B
 /// alone. The result equals projecting and assigning every descriptor up to float rounding
 /// (ties between two codewords within rounding may go either way).
 class FeatureCoder {
