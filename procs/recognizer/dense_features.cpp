@@ -228,10 +228,14 @@ void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out
     out_sift.tail = rgb_.data();
     out_sift.tail_dims = 3;
     denseSiftFlat(smooth.ptr<float>(), smooth.cols, smooth.rows, geometry, out_sift);
+    // A positive mass leaves a non-zero normalised descriptor; a zero one (possible with a
+    // threshold of 0) an all-zero one.
     for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
+      for (int i = 0; i < nx; ++i) {
+        const float norm = norms[static_cast<size_t>(j) * nx + i];
         grid.textured[static_cast<size_t>(grid.rowOf(gx + i, gy + j, t))] =
-            norms[static_cast<size_t>(j) * nx + i] >= threshold;
+            norm >= threshold && norm > 0;
+      }
   }
 }
 

@@ -46,8 +46,8 @@ struct FeatureGrid {
   /// One row per descriptor: row (t * nx * ny + j * nx + i) for grid point (i, j) of the region
   /// and scale t; columns: 128 SIFT (VLFeat order) then R, G, B.
   ReusableMatrix features;
-  /// Per row: 1 when its descriptor's norm reached the contrast threshold (its SIFT part was
-  /// computed; 0: the SIFT part is all zero and only R, G, B describe it).
+  /// Per row: 1 when its SIFT part is not all zero (its norm is positive and reached the contrast
+  /// threshold); 0: the SIFT part is all zero and only R, G, B describe it.
   std::vector<uint8_t> textured;
   int64_t rowOf(int i, int j, int t) const { return (int64_t{t} * ny + j) * nx + i; }
 };

@@ -89,17 +89,6 @@ namespace {
 // Rows coded at a time: assigned to codewords, then pooled while they are still in the cache.
 constexpr size_t kGroupRows = 2048;
 
-// True when the SIFT part of a feature row is not all zero (-0 counts as zero).
-bool hasGradient(const float* f) {
-  uint32_t any = 0;
-  for (int i = 0; i < kSiftDims; ++i) {
-    uint32_t u;
-    std::memcpy(&u, f + i, sizeof u);
-    any |= u & 0x7fffffffu;
-  }
-  return any != 0;
-}
-
 // argmax_k y.c_k - |c_k|^2 / 2 with y = x B - offset  =  argmax_k x (B c_k) - bias_k.
 Eigen::RowVectorXf wordBiasOf(const Pca& pca, const Vocabulary& vocabulary) {
   return pca.offset() * vocabulary.centers.transpose() +
@@ -124,13 +113,13 @@ FeatureCoder::FeatureCoder(const Pca& pca, const Vocabulary& vocabulary)
       offset_(pca.offset()) {}
 
 void FeatureCoder::assignRows(const FeatureGrid& grid, size_t begin, size_t end) {
-  // Rows with and without gradient apart: the latter only from their R, G, B. The flag spares
-  // reading the SIFT part of rows the extractor left at zero.
+  // Rows with and without gradient apart (the extractor's flags): the latter only from their R,
+  // G, B.
   for (auto& list : group_rows_) list.clear();
   for (auto& list : group_at_) list.clear();
   for (size_t i = begin; i < end; ++i) {
     const float* f = grid.features.row(rows_[i]);
-    row_textured_[i] = grid.textured[static_cast<size_t>(rows_[i])] && hasGradient(f);
+    row_textured_[i] = grid.textured[static_cast<size_t>(rows_[i])];
     group_rows_[row_textured_[i]].push_back(f);
     group_at_[row_textured_[i]].push_back(i);
   }

@@ -145,13 +145,13 @@ WordScores::WordScores(const Eigen::MatrixXf& scores, const Eigen::RowVectorXf& 
       scores.cols() > 32767)
     throw std::invalid_argument("WordScores: expected " + std::to_string(kFeatureDims) +
                                 " x K scores and K biases");
-  k_ = static_cast<int>(scores.cols());
-  padded_ = (k_ + 15) / 16 * 16;
+  const int k = static_cast<int>(scores.cols());
+  padded_ = (k + 15) / 16 * 16;
   w_.assign(static_cast<size_t>(kFeatureDims) * padded_, 0.0F);
   bias_.assign(static_cast<size_t>(padded_), std::numeric_limits<float>::infinity());
   for (int d = 0; d < kFeatureDims; ++d)
-    for (int k = 0; k < k_; ++k) w_[static_cast<size_t>(d) * padded_ + k] = scores(d, k);
-  for (int k = 0; k < k_; ++k) bias_[static_cast<size_t>(k)] = bias[k];
+    for (int c = 0; c < k; ++c) w_[static_cast<size_t>(d) * padded_ + c] = scores(d, c);
+  for (int c = 0; c < k; ++c) bias_[static_cast<size_t>(c)] = bias[c];
 }
 
 bool WordScores::available(Kernel kernel) {

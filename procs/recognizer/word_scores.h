@@ -35,10 +35,9 @@ class WordScores {
   static bool available(Kernel kernel);
 
  private:
-  int k_ = 0;                ///< codewords
-  int padded_ = 0;           ///< k_ rounded up to a multiple of 16
-  std::vector<float> w_;     ///< kFeatureDims x padded_, row-major, zero beyond k_
-  std::vector<float> bias_;  ///< padded_, +infinity beyond k_ (never the largest score)
+  int padded_ = 0;           ///< the codewords K rounded up to a multiple of 16
+  std::vector<float> w_;     ///< kFeatureDims x padded_, row-major, zero beyond K
+  std::vector<float> bias_;  ///< padded_, +infinity beyond K (never the largest score)
 };
 
 }  // namespace slamaware::recognizer

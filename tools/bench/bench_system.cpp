@@ -253,8 +253,8 @@ int main(int argc, char** argv) {
   // cores go at 30 Hz. With its start-up (loading, warming up; a sample of seconds makes it a
   // large share) as before: the process's whole CPU time per second of stream.
   double total = 0;
+  const double window_s = 1e-6 * static_cast<double>(rt.last_camera - rt.first_camera);
   for (const auto& [name, trace] : run.cpu_trace) {
-    const double window_s = 1e-6 * static_cast<double>(rt.last_camera - rt.first_camera);
     const double cores =
         window_s > 0 ? cpuSecondsBetween(trace, rt.first_camera, rt.last_camera) / window_s : 0;
     j["realtime_cpu_cores"][name] = cores;

@@ -141,8 +141,9 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   ChildProcess camera(camera_argv, log_path + ".camera.txt");
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(
       1000 * (30 + options.timeout_per_frame_s * std::max<size_t>(1, frames))));
-  // Wait for the camera, sampling every process's CPU time meanwhile.
+  // Wait for the camera; in real time, sampling every process's CPU time meanwhile.
   const auto sampleCpu = [&] {
+    if (!options.realtime) return;
     const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
                                std::chrono::system_clock::now().time_since_epoch())
                                .count();
@@ -156,15 +157,11 @@ PipelineRun runPipeline(const std::string& sequence_dir, const std::string& log_
   };
   const auto camera_deadline = Clock::now() + timeout;
   int camera_rc = -1;
-  for (;;) {
+  do {
     sampleCpu();
-    if (!camera.running()) {
-      camera_rc = camera.wait(std::chrono::milliseconds(0));
-      break;
-    }
-    if (Clock::now() > camera_deadline) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+    camera_rc = camera.wait(std::chrono::milliseconds(50));
+  } while (camera_rc == -1 && Clock::now() < camera_deadline);
+  sampleCpu();
   // The last messages reach the logger (in real time, the stages also finish their last frames).
   std::this_thread::sleep_for(std::chrono::milliseconds(options.realtime ? 2000 : 300));
   bool crashed = false;

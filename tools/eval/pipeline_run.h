@@ -55,8 +55,8 @@ struct PipelineRun {
   std::string lockstep_channel;
   double rss_mb_total = 0;  ///< sum of the peak resident memory of the camera and every stage
   std::map<std::string, double> cpu_s;  ///< CPU time (all threads) of the camera and each stage
-  /// The same, sampled every 50 ms while the camera ran: what each process used while frames
-  /// streamed, start-up apart (its start-up is before the camera's first frame).
+  /// Real time only: the same, sampled every 50 ms while the camera ran: what each process used
+  /// while frames streamed, start-up apart (its start-up is before the camera's first frame).
   std::map<std::string, std::vector<CpuSample>> cpu_trace;
 };
 
