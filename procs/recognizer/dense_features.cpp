@@ -69,6 +69,9 @@ void EncodingParams::validate() const {
                                 std::to_string(kFeatureDims));
   if (vocabulary_size <= 1 || vocabulary_size > 32767)
     throw std::invalid_argument("encoding parameters: vocabulary_size must be in 2..32767");
+  if (shape_bins == 1 || shape_bins < 0 || shape_bins > pca_dims)
+    throw std::invalid_argument("encoding parameters: shape_bins must be 0 or in 2..pca_dims (" +
+                                std::to_string(pca_dims) + ")");
 }
 
 CellRect CellRect::united(const CellRect& o) const {

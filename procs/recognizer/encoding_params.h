@@ -1,7 +1,8 @@
 #pragma once
 // Parameters of the image encoding (docs/architecture.md §3): dense SIFT + mean RGB, PCA,
-// vocabulary, VLAD with a 1x1 + 2x2 + 4x4 spatial pyramid. They are fixed when a model is trained
-// and stored in the model file; the recognizer always encodes with the parameters of its model.
+// vocabulary, VLAD with a 1x1 + 2x2 + 4x4 spatial pyramid, then the box's shape (its aspect
+// ratio, soft-binned). They are fixed when a model is trained and stored in the model file; the
+// recognizer always encodes with the parameters of its model.
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
@@ -80,20 +81,33 @@ struct FeatureParams {
   int marginPx() const;
 };
 
+/// The box-shape block covers log aspect ratios ln(width / height) in [-kShapeLogAspectMax,
+/// kShapeLogAspectMax] (aspect 0.22 to 4.5); a box beyond counts as the end bin.
+constexpr double kShapeLogAspectMax = 1.5;
+
 struct EncodingParams {
   FeatureParams features;
   int pca_dims = 80;         ///< D: descriptors are projected to this many dimensions
   int vocabulary_size = 64;  ///< K: k-means codewords
+  /// Bins of the box's log aspect ratio appended to its VLAD vector (vlad.h, encodeBoxShape);
+  /// 0: no shape block (models made before it existed).
+  int shape_bins = 13;
 
   template <class V>
   void visit(V& v) {
     v.section("features", features);
     v("pca_dims", pca_dims, "dimensions kept by PCA");
     v("vocabulary_size", vocabulary_size, "k-means codewords");
+    v("shape_bins", shape_bins, "bins of the box's log aspect ratio (0: none)");
   }
   void validate() const;
-  /// Length of an encoded box: 21 pyramid cells x K x D.
+  /// Length of a box's VLAD vector: 21 pyramid cells x K x D.
   int64_t vladDims() const { return int64_t{kPyramidCells} * vocabulary_size * pca_dims; }
+  /// Length of the shape block: one block of D values (the first shape_bins used), so that an
+  /// encoded box is still a whole number of D-blocks; 0 without shape bins.
+  int64_t shapeDims() const { return shape_bins > 0 ? pca_dims : 0; }
+  /// Length of an encoded box: its VLAD vector, then its shape block.
+  int64_t encodedDims() const { return vladDims() + shapeDims(); }
 };
 
 }  // namespace slamaware::recognizer

@@ -1,7 +1,10 @@
 #include "procs/recognizer/frame_encoder.h"
 
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <random>
 #include <stdexcept>
 
 namespace slamaware::recognizer {
@@ -18,6 +21,37 @@ CellRect spanOf(const std::vector<PyramidBox>& boxes) {
   CellRect r;
   for (const auto& b : boxes) r = r.united(b.cells());
   return r;
+}
+
+// A hash of an image's size and 64 of its pixels (an 8 x 8 grid): what tells two training crops
+// apart, cheaply.
+uint64_t contentHash(const cv::Mat& bgr) {
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&](uint64_t v) { h = (h ^ v) * 1099511628211ull; };
+  mix(static_cast<uint64_t>(bgr.cols));
+  mix(static_cast<uint64_t>(bgr.rows));
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) {
+      const cv::Vec3b p =
+          bgr.at<cv::Vec3b>(bgr.rows * (2 * j + 1) / 16, bgr.cols * (2 * i + 1) / 16);
+      mix(static_cast<uint64_t>(p[0]) | static_cast<uint64_t>(p[1]) << 8 |
+          static_cast<uint64_t>(p[2]) << 16);
+    }
+  return h;
+}
+
+uint64_t hashBox(uint64_t h, const PyramidBox& b) {
+  for (int k = 0; k < 5; ++k)
+    h = (h ^ static_cast<uint64_t>(b.u[k] * 65536 + b.v[k])) * 1099511628211ull;
+  return h;
+}
+
+// A standard normal deviate by Box-Muller from the generator's raw output (std::normal_distribution
+// is implementation-defined).
+double standardNormal(std::mt19937_64& rng) {
+  const double u1 = (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
+  const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
 }  // namespace
@@ -89,7 +123,7 @@ EncoderKind FrameEncoder::choose(const std::vector<PyramidBox>& boxes) const {
 
 void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes,
                           EncoderKind kind, ReusableMatrix* out, Stats* stats) {
-  const int64_t dims = params_.vladDims();
+  const int64_t dims = params_.encodedDims();
   out->resize(static_cast<int64_t>(boxes.size()), dims);
   Stats local;
   Stats& st = stats ? *stats : local;
@@ -125,6 +159,19 @@ void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& box
     DirectEncoder direct(codes_, vocabulary_);
     for (size_t i = 0; i < boxes.size(); ++i)
       direct.encode(boxes[i], out->row(static_cast<int64_t>(i)));
+  }
+  if (params_.shapeDims() > 0) {
+    const uint64_t image_hash = shape_noise_ > 0 ? contentHash(bgr) : 0;
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      double offset = 0;
+      if (shape_noise_ > 0) {
+        const PyramidBox& b = boxes[i];
+        std::mt19937_64 rng(hashBox(image_hash, b));
+        offset = shape_noise_ * standardNormal(rng);
+      }
+      encodeBoxShape(boxes[i], params_.shape_bins, static_cast<int>(params_.shapeDims()),
+                     out->row(static_cast<int64_t>(i)) + params_.vladDims(), offset);
+    }
   }
   st.encode_ms = msSince(t0);
 }

@@ -61,7 +61,8 @@ class FrameEncoder {
   /// Estimated ms of each encoder for these boxes (excluding features and coding).
   double estimateMs(const std::vector<PyramidBox>& boxes, EncoderKind kind) const;
 
-  /// Encodes `boxes` of the 8-bit BGR image into the rows of *out (boxes.size() x vladDims).
+  /// Encodes `boxes` of the 8-bit BGR image into the rows of *out (boxes.size() x encodedDims:
+  /// each box's VLAD vector, then its shape block).
   void encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes, EncoderKind kind,
               ReusableMatrix* out, Stats* stats = nullptr);
 
@@ -72,6 +73,12 @@ class FrameEncoder {
   /// cold frame's time (a whole VGA frame: about 540 ms the first time, 70 ms after). Later
   /// results do not depend on it. Returns the ms spent.
   double warmUp(int width, int height, EncoderKind kind);
+
+  /// Training only: the log aspect ratio each box's shape block is made from is moved by a
+  /// Gaussian of this standard deviation (TrainOptions::shape_noise), drawn from the box and the
+  /// image's content, so that the same box of the same image gets the same offset whichever
+  /// thread encodes it. 0 (the default): the box's own aspect.
+  void setShapeNoise(double sigma) { shape_noise_ = sigma; }
 
   /// The last frame's codes (for benchmarks and tests).
   const FrameCodes& codes() const { return codes_; }
@@ -88,6 +95,7 @@ class FrameEncoder {
   FrameCodes codes_;
   std::vector<CellRect> box_cells_;
   FlairEncoder flair_;
+  double shape_noise_ = 0;
 };
 
 }  // namespace slamaware::recognizer

@@ -111,6 +111,7 @@ void writeField(Writer& w, const RecognizerModel& m) {
   w.pod<int32_t>(f.pool_cell_px);
   w.pod<int32_t>(m.params.pca_dims);
   w.pod<int32_t>(m.params.vocabulary_size);
+  w.pod<int32_t>(m.params.shape_bins);
   w.pod<int32_t>(m.pca.inDims());
   w.floats(m.pca.mean.data(), static_cast<size_t>(m.pca.mean.size()));
   w.floats(m.pca.basis.data(), static_cast<size_t>(m.pca.basis.size()));  // column-major
@@ -132,7 +133,7 @@ void writeField(Writer& w, const RecognizerModel& m) {
   // as negatives of a class added later: 4 bits keep a file of 360 of them under 5 MB.
   const ExampleSet& e = m.exemplars;
   const int64_t bd = m.params.pca_dims;
-  if (e.size() > 0 && m.params.vladDims() / bd > 65535)
+  if (e.size() > 0 && m.params.encodedDims() / bd > 65535)
     throw ModelError("exemplars of more than 65535 blocks cannot be stored");
   w.pod<uint64_t>(static_cast<uint64_t>(e.size()));
   std::vector<int32_t> index;
@@ -164,7 +165,7 @@ void writeField(Writer& w, const RecognizerModel& m) {
 
 // Reads the exemplars written by writeField into m->exemplars (labels checked against the classes).
 void readExemplars(Reader& r, const std::string& what, RecognizerModel* m) {
-  const int64_t dims = m->params.vladDims(), bd = m->params.pca_dims, blocks = dims / bd;
+  const int64_t dims = m->params.encodedDims(), bd = m->params.pca_dims, blocks = dims / bd;
   m->exemplars = ExampleSet(dims, bd);
   const uint64_t n = r.pod<uint64_t>("exemplar_count");
   if (n > 1000000)
@@ -215,6 +216,7 @@ RecognizerModel readFields(Reader& r, const std::string& what, uint32_t version)
   f.pool_cell_px = r.pod<int32_t>("pool_cell_px");
   m.params.pca_dims = r.pod<int32_t>("pca_dims");
   m.params.vocabulary_size = r.pod<int32_t>("vocabulary_size");
+  m.params.shape_bins = version >= 3 ? r.pod<int32_t>("shape_bins") : 0;
   try {
     m.params.validate();
   } catch (const std::exception& e) {
@@ -238,9 +240,9 @@ RecognizerModel readFields(Reader& r, const std::string& what, uint32_t version)
     throw ModelError(what + ": implausible number of classes " + std::to_string(C));
   for (int c = 0; c < C; ++c) m.classifier.classes.push_back(r.str("class_name"));
   const int64_t dims = r.pod<int64_t>("classifier_dims");
-  if (dims != m.params.vladDims())
+  if (dims != m.params.encodedDims())
     throw ModelError(what + ": classifiers have " + std::to_string(dims) +
-                     " inputs, the encoding gives " + std::to_string(m.params.vladDims()));
+                     " inputs, the encoding gives " + std::to_string(m.params.encodedDims()));
   auto weights = r.floats("weights", static_cast<uint64_t>(C) * static_cast<uint64_t>(dims));
   m.classifier.weights = Eigen::Map<MatrixRM>(weights.data(), C, dims);
   auto bias = r.floats("bias", static_cast<uint64_t>(C));
@@ -251,7 +253,7 @@ RecognizerModel readFields(Reader& r, const std::string& what, uint32_t version)
   if (version >= 2)
     readExemplars(r, what, &m);
   else
-    m.exemplars = ExampleSet(m.params.vladDims(), m.params.pca_dims);
+    m.exemplars = ExampleSet(m.params.encodedDims(), m.params.pca_dims);
   if (!r.done()) throw ModelError(what + ": unexpected bytes after the last field");
   return m;
 }
@@ -279,11 +281,11 @@ void RecognizerModel::check(const std::string& what) const {
   const int C = classifier.numClasses();
   if (C < 1) fail("no classes");
   if (classifier.weights.rows() != C || classifier.bias.size() != C ||
-      classifier.dims() != params.vladDims())
+      classifier.dims() != params.encodedDims())
     fail("classifier weights are not " + std::to_string(C) + " x " +
-         std::to_string(params.vladDims()));
+         std::to_string(params.encodedDims()));
   if (exemplars.size() > 0 &&
-      (exemplars.dims() != params.vladDims() || exemplars.blockDims() != params.pca_dims))
+      (exemplars.dims() != params.encodedDims() || exemplars.blockDims() != params.pca_dims))
     fail("exemplars are not encoded vectors of this model");
   for (int64_t i = 0; i < exemplars.size(); ++i)
     if (exemplars.label(i) < 0 || exemplars.label(i) >= C)

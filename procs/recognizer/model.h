@@ -9,8 +9,9 @@
 //  16  uint64   payload size in bytes
 //  24  uint32   payload CRC-32 (IEEE 802.3 polynomial)
 //  28  payload: the fields in the order of writeModel() (model.cpp), each array preceded by its
-//      element count. Version 2 adds the exemplars after the provenance; version 1 files (no
-//      exemplars) are still read.
+//      element count. Version 2 adds the exemplars after the provenance, version 3 the shape
+//      bins after the vocabulary size; version 1 and 2 files (no exemplars, no shape block) are
+//      still read.
 // Written to a temporary file beside the target, fsync'ed, then renamed over it, so that a reader
 // sees the old file or the new one, never a half-written one.
 #include <cstdint>
@@ -25,7 +26,7 @@
 
 namespace slamaware::recognizer {
 
-constexpr uint32_t kModelFormatVersion = 2;
+constexpr uint32_t kModelFormatVersion = 3;
 
 class ModelError : public std::runtime_error {
  public:

@@ -243,6 +243,21 @@ void sumPyramidLevels(float* v, float* counts, int K, int D) {
   }
 }
 
+void encodeBoxShape(const PyramidBox& box, int bins, int block_dims, float* out,
+                    double log_aspect_offset) {
+  std::fill(out, out + block_dims, 0.f);
+  if (bins < 2) return;
+  const int w = box.u[4] - box.u[0], h = box.v[4] - box.v[0];
+  if (w <= 0 || h <= 0) return;
+  const double a = std::clamp(std::log(static_cast<double>(w) / h) + log_aspect_offset,
+                              -kShapeLogAspectMax, kShapeLogAspectMax);
+  const double at = (a + kShapeLogAspectMax) / (2 * kShapeLogAspectMax) * (bins - 1);
+  const int lo = std::min(static_cast<int>(at), bins - 2);
+  const double f = at - lo;
+  out[lo] = static_cast<float>(1.0 - f);
+  out[lo + 1] = static_cast<float>(f);
+}
+
 void finishVlad(float* v, const float* counts, int K, int D) {
   const int64_t n = int64_t{kPyramidCells} * K * D;
   for (int64_t b = 0; b < int64_t{kPyramidCells} * K; ++b)

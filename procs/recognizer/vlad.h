@@ -115,6 +115,17 @@ class FeatureCoder {
 /// zero when it is all zero). `counts` holds 21 * K descriptor counts.
 void finishVlad(float* v, const float* counts, int K, int D);
 
+/// The shape block of a box (EncodingParams::shapeDims() floats): its log aspect ratio
+/// a = ln(width / height), clamped to [-kShapeLogAspectMax, kShapeLogAspectMax], spread over
+/// `bins` evenly spaced centres by linear interpolation between the two nearest (two values
+/// summing to 1, the rest of the block zero). The VLAD vector describes what a box holds but not
+/// its outline, since every box is pooled into the same 4x4 grid; a soda can, a mug and a bowl
+/// differ in aspect first. The classifiers learn what each aspect means for each class; with
+/// values summing to 1 each bin acts as a bias of its own, on the footing of the unit-norm VLAD
+/// vector. `log_aspect_offset` is added to a before binning (the trainer's box-shape noise).
+void encodeBoxShape(const PyramidBox& box, int bins, int block_dims, float* out,
+                    double log_aspect_offset = 0);
+
 /// Sums the 4x4 cells (5..20) into the 2x2 cells (1..4) and the whole box (0), for sums (K * D
 /// per cell) and counts (K per cell).
 void sumPyramidLevels(float* v, float* counts, int K, int D);

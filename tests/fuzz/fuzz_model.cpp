@@ -29,7 +29,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   saveModel(model, dir + "/again.model");
   const RecognizerModel again = loadModel(dir + "/again.model");
   if (again.classifier.classes != model.classifier.classes ||
-      again.params.vladDims() != model.params.vladDims() || again.provenance != model.provenance) {
+      again.params.encodedDims() != model.params.encodedDims() ||
+      again.provenance != model.provenance) {
     std::fprintf(stderr, "fuzz_model: a saved model loads differently\n");
     std::abort();
   }

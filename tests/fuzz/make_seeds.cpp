@@ -111,11 +111,12 @@ void seedMapStore(const ObjectMapEngine& engine) {
   fs::remove_all(dir);
 }
 
-// A tiny model that passes every check: 2 PCA dimensions, 2 codewords, 2 classes.
+// A tiny model that passes every check: 2 PCA dimensions, 2 codewords, 2 shape bins, 2 classes.
 void seedModel() {
   RecognizerModel m;
   m.params.pca_dims = 2;
   m.params.vocabulary_size = 2;
+  m.params.shape_bins = 2;
   std::mt19937 rng(1);
   std::normal_distribution<float> g;
   m.pca.mean = Eigen::RowVectorXf::NullaryExpr(kFeatureDims, [&] { return g(rng); });
@@ -123,7 +124,7 @@ void seedModel() {
   m.pca.variance = Eigen::VectorXf::Ones(2);
   m.vocabulary.centers = MatrixRM::NullaryExpr(2, 2, [&] { return g(rng); });
   m.classifier.classes = {"mug", "background"};
-  m.classifier.weights = MatrixRM::NullaryExpr(2, m.params.vladDims(), [&] { return g(rng); });
+  m.classifier.weights = MatrixRM::NullaryExpr(2, m.params.encodedDims(), [&] { return g(rng); });
   m.classifier.bias = Eigen::VectorXf::Zero(2);
   m.classifier.uniform_mix = 0.1f;
   m.provenance = "{\"seed\":true}";

@@ -1,7 +1,7 @@
 // FLAIR and the direct encoder give the same VLAD vectors (to float rounding) on random boxes of
 // a real-sized frame, including boxes touching the image border and boxes smaller than a pyramid
 // cell; a box's vector does not depend on the other boxes of the frame; FLAIR's tables cover only
-// the boxes' span.
+// the boxes' span; the shape block bins the box's log aspect ratio.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -99,13 +99,20 @@ TEST(Encoders, FlairAndDirectAgreeOnRandomBorderAndTinyBoxes) {
   EXPECT_EQ(sd.used, EncoderKind::kDirect);
   EXPECT_EQ(sf.used, EncoderKind::kFlair);
   ASSERT_EQ(direct.rows(), static_cast<int64_t>(boxes.size()));
-  ASSERT_EQ(direct.cols(), fx.params.vladDims());
+  ASSERT_EQ(direct.cols(), fx.params.encodedDims());
   const Diff d = compare(direct, flair);
   // Elements of a unit vector of 107,520 dims are ~0.003 to 0.05; float rounding stays far below.
   EXPECT_LT(d.max_abs, 2e-4);
   EXPECT_GT(d.min_cos, 0.99999);
-  // Every vector is a unit vector.
-  for (int64_t r = 0; r < direct.rows(); ++r) EXPECT_NEAR(direct.map().row(r).norm(), 1.0, 1e-4);
+  // Every VLAD vector is a unit vector; its shape block is two interpolation weights summing to 1
+  // (the same from both encoders: the boxes are the same).
+  const int64_t vlad = fx.params.vladDims();
+  for (int64_t r = 0; r < direct.rows(); ++r) {
+    EXPECT_NEAR(direct.map().row(r).head(vlad).norm(), 1.0, 1e-4);
+    EXPECT_NEAR(direct.map().row(r).tail(fx.params.shapeDims()).sum(), 1.0, 1e-6);
+    EXPECT_EQ(direct.map().row(r).tail(fx.params.shapeDims()),
+              flair.map().row(r).tail(fx.params.shapeDims()));
+  }
 }
 
 TEST(Encoders, BoxVectorDoesNotDependOnTheOtherBoxes) {
@@ -293,4 +300,99 @@ TEST(Encoders, CodesEqualProjectingAndAssigningEveryDescriptor) {
   EXPECT_LE(moved, g.features.rows() / 1000) << moved << " of " << g.features.rows();
   EXPECT_LT(entries, g.features.rows()) << "entries pool descriptors per cell and codeword";
   EXPECT_LT(max_err, 5e-5) << max_err;
+}
+
+// The shape block: a box's log aspect ratio by linear interpolation between the two nearest of
+// `bins` centres over [-1.5, 1.5]; a tall can, a square mug and a wide bowl fall in different bins.
+TEST(Encoders, ShapeBlockBinsTheBoxesLogAspectRatio) {
+  const int bins = 13, block = 80;  // centres 0.25 apart in ln(w / h)
+  auto shape = [&](int w_cells, int h_cells) {
+    const PyramidBox b = pyramidFromCells(CellRect{3, 2, 3 + w_cells, 2 + h_cells});
+    std::vector<float> out(block, -1.f);
+    encodeBoxShape(b, bins, block, out.data());
+    return out;
+  };
+  auto expectOnly = [&](const std::vector<float>& v, std::vector<std::pair<int, float>> want) {
+    std::vector<float> expected(block, 0.f);
+    for (auto [i, x] : want) expected[static_cast<size_t>(i)] = x;
+    for (int i = 0; i < block; ++i) EXPECT_NEAR(v[static_cast<size_t>(i)], expected[i], 1e-6) << i;
+  };
+  expectOnly(shape(6, 6), {{6, 1.f}});  // square: the middle centre, ln 1 = 0
+  // Tall 5 x 9 (a soda can): ln(5/9) = -0.588 lies between centres -0.75 (bin 3) and -0.5 (bin 4).
+  const double at = (std::log(5.0 / 9.0) + 1.5) / 0.25;
+  expectOnly(shape(5, 9), {{3, static_cast<float>(4 - at)}, {4, static_cast<float>(at - 3)}});
+  // Wide 9 x 5 (a bowl): the mirror of tall, in the mirror bins.
+  const std::vector<float> wide = shape(9, 5), tall = shape(5, 9);
+  for (int i = 0; i < bins; ++i)
+    EXPECT_NEAR(wide[static_cast<size_t>(i)], tall[static_cast<size_t>(bins - 1 - i)], 1e-6);
+  // Beyond the range: the end bins.
+  expectOnly(shape(40, 1), {{12, 1.f}});
+  expectOnly(shape(1, 40), {{0, 1.f}});
+  // No bins: an all-zero block.
+  std::vector<float> none(block, -1.f);
+  encodeBoxShape(pyramidFromCells(CellRect{0, 0, 4, 4}), 0, block, none.data());
+  EXPECT_EQ(std::count(none.begin(), none.end(), 0.f), block);
+}
+
+// Parameters that cannot make a shape block are refused by name.
+TEST(Encoders, ShapeBinsAreChecked) {
+  EncodingParams p;
+  for (int bins : {-1, 1, p.pca_dims + 1}) {
+    p.shape_bins = bins;
+    try {
+      p.validate();
+      ADD_FAILURE() << bins << " shape bins accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("shape_bins"), std::string::npos) << e.what();
+    }
+  }
+  p.shape_bins = 0;
+  EXPECT_NO_THROW(p.validate());
+  EXPECT_EQ(p.encodedDims(), p.vladDims());
+  p.shape_bins = 2;
+  EXPECT_EQ(p.encodedDims(), p.vladDims() + p.pca_dims);
+}
+
+// The trainer's box-shape noise: the same box of the same image gets the same offset (whichever
+// encoder, whichever order), the VLAD part is untouched, and over many boxes the offsets of the
+// log aspect ratio have the standard deviation asked for.
+TEST(Encoders, ShapeNoiseIsRepeatableAndHasTheRequestedSpread) {
+  Fixture& fx = fixture();
+  const double sigma = 0.15, spacing = 2 * kShapeLogAspectMax / (fx.params.shape_bins - 1);
+  std::vector<PyramidBox> boxes;
+  for (int k = 0; k < 400; ++k) {  // square boxes: ln(w / h) = 0, the middle centre
+    const int u = k % 20, v = k / 20 % 20, side = 6 + k % 7;
+    boxes.push_back(pyramidFromCells(CellRect{u, v, u + side, v + side}));
+  }
+  FrameEncoder plain(fx.params, fx.pca, fx.vocabulary), a(fx.params, fx.pca, fx.vocabulary),
+      b(fx.params, fx.pca, fx.vocabulary);
+  a.setShapeNoise(sigma);
+  b.setShapeNoise(sigma);
+  ReusableMatrix p, x, y, y_reversed;
+  plain.encode(fx.frame, boxes, EncoderKind::kDirect, &p);
+  a.encode(fx.frame, boxes, EncoderKind::kDirect, &x);
+  std::vector<PyramidBox> reversed(boxes.rbegin(), boxes.rend());
+  b.encode(fx.frame, {boxes[7]}, EncoderKind::kDirect, &y);  // another call, one box
+  b.encode(fx.frame, reversed, EncoderKind::kDirect, &y_reversed);
+  const int64_t vlad = fx.params.vladDims(), n = static_cast<int64_t>(boxes.size()),
+                S = fx.params.shapeDims();
+  EXPECT_EQ(y.map().row(0).tail(S), x.map().row(7).tail(S));
+  double sum = 0, sum2 = 0;
+  for (int64_t r = 0; r < n; ++r) {
+    EXPECT_EQ(y_reversed.map().row(n - 1 - r).tail(S), x.map().row(r).tail(S));
+    EXPECT_EQ(x.map().row(r).head(vlad), p.map().row(r).head(vlad));
+    // The log aspect back from the two interpolation weights.
+    const float* shape = x.row(r) + vlad;
+    int lo = 0;
+    while (shape[lo] == 0.f) ++lo;
+    const double at = lo + (lo + 1 < fx.params.shape_bins ? shape[lo + 1] : 0.f);
+    const double offset = at * spacing - kShapeLogAspectMax;
+    sum += offset;
+    sum2 += offset * offset;
+  }
+  const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
+  EXPECT_NEAR(mean, 0.0, 3 * sigma / std::sqrt(static_cast<double>(n)));
+  EXPECT_NEAR(sd, sigma, 0.15 * sigma);
+  // Without noise every square box sits on the middle centre.
+  for (int64_t r = 0; r < n; ++r) EXPECT_EQ(p.row(r)[vlad + fx.params.shape_bins / 2], 1.f);
 }

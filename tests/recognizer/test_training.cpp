@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -12,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "common/atomic_file.h"
 #include "common/config.h"
 #include "common/dataset.h"
 #include "common/image_codec.h"
@@ -186,7 +188,14 @@ TEST(Training, ProposalBoxesAreLabelledByTheirOverlapWithTheGroundTruth) {
   // Suppression at IoU 0.5 in rank order: the top of the mug overlaps the first box by IoU 0.55.
   EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, -1, -1, 2, 2, 2}));
   o.proposal_nms_iou = 1;  // every box
-  EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, 1, -1, 2, 2, 2}));
+  std::vector<double> offsets;
+  EXPECT_EQ(labelProposals(frame, classes, 2, o, &offsets), (std::vector<int>{1, 1, -1, 2, 2, 2}));
+  // The views of an object (IoU >= 0.5, whatever their label) give their log aspect ratio minus
+  // their object's: the mug's whole box and its top, and the calculator's.
+  ASSERT_EQ(offsets.size(), 3u);
+  EXPECT_DOUBLE_EQ(offsets[0], 0.0);
+  EXPECT_NEAR(offsets[1], std::log(100.0 / 60.0), 1e-12);
+  EXPECT_NEAR(offsets[2], std::log(60.0 / 62.0), 1e-12);
   o.proposal_background_iou = 0.5;  // no gap: every box is an example
   EXPECT_EQ(labelProposals(frame, classes, 2, o), (std::vector<int>{1, 1, 2, 2, 2, 2}));
 }
@@ -345,6 +354,8 @@ TEST(ModelFile, ReloadsToIdenticalPredictions) {
   const RecognizerModel loaded = loadModel(t.model_path);
   EXPECT_EQ(loaded.classifier.classes, t.model.classifier.classes);
   EXPECT_EQ(loaded.provenance, t.model.provenance);
+  EXPECT_GT(loaded.params.shape_bins, 0);
+  EXPECT_EQ(loaded.params.shape_bins, t.model.params.shape_bins);
   Recognizer a(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions());
   Recognizer b(std::make_shared<const RecognizerModel>(loaded), RecognizerOptions());
   const cv::Mat frame = test::texturedFrame(31);
@@ -355,6 +366,46 @@ TEST(ModelFile, ReloadsToIdenticalPredictions) {
   ASSERT_EQ(db.boxes.size(), 3u);
   for (size_t i = 0; i < 3; ++i)
     EXPECT_EQ(da.boxes[i].log_prob, db.boxes[i].log_prob);  // bit for bit
+}
+
+// A model of format version 2 (no shape block) still loads and classifies as before: the version
+// 3 file of a model without shape bins, rewritten as version 2 (its shape_bins field cut out).
+TEST(ModelFile, AVersion2ModelWithoutShapeBlockStillLoads) {
+  const Trained& t = synthetic();
+  RecognizerModel plain = t.model;
+  plain.params.shape_bins = 0;
+  plain.classifier.weights = MatrixRM(t.model.classifier.weights.leftCols(plain.params.vladDims()));
+  plain.exemplars = ExampleSet(plain.params.vladDims(), plain.params.pca_dims);
+  const std::string dir = test::tempDir("model_v2");
+  saveModel(plain, dir + "/v3.model");
+  std::ifstream in(dir + "/v3.model", std::ios::binary);
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+  // Header 28 bytes; then step_px (4), bin_sizes_px (8 + 4 each), smoothing_magnif,
+  // contrast_threshold, rgb_weight (8 each), pool_cell_px, pca_dims, vocabulary_size (4 each).
+  const size_t at = 28 + 4 + 8 + 4 * plain.params.features.bin_sizes_px.size() + 24 + 12;
+  int32_t field = -1;
+  std::memcpy(&field, bytes.data() + at, 4);
+  ASSERT_EQ(field, 0) << "the shape_bins field is not where version 3 puts it";
+  std::vector<uint8_t> payload(bytes.begin() + 28, bytes.end());
+  payload.erase(payload.begin() + static_cast<std::ptrdiff_t>(at - 28),
+                payload.begin() + static_cast<std::ptrdiff_t>(at - 28 + 4));
+  std::vector<uint8_t> v2 = modelFileBytes(payload);
+  const uint32_t version = 2;
+  std::memcpy(v2.data() + 8, &version, 4);
+  const uint32_t header_crc = crc32(v2.data() + 16, 12, crc32(v2.data(), 12));
+  std::memcpy(v2.data() + 12, &header_crc, 4);
+  std::ofstream(dir + "/v2.model", std::ios::binary)
+      .write(reinterpret_cast<const char*>(v2.data()), static_cast<std::streamsize>(v2.size()));
+  const RecognizerModel loaded = loadModel(dir + "/v2.model");
+  EXPECT_EQ(loaded.params.shape_bins, 0);
+  Recognizer a(std::make_shared<const RecognizerModel>(plain), RecognizerOptions());
+  Recognizer b(std::make_shared<const RecognizerModel>(loaded), RecognizerOptions());
+  const cv::Mat frame = test::texturedFrame(32);
+  const std::vector<BoxRequest> boxes = {{10, 20, 200, 150, 0}, {300, 100, 64, 96, 1}};
+  const FrameDetections da = a.recognize(frame, boxes), db = b.recognize(frame, boxes);
+  ASSERT_EQ(db.boxes.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) EXPECT_EQ(da.boxes[i].log_prob, db.boxes[i].log_prob);
 }
 
 TEST(ModelFile, TruncatedBitFlippedAndForeignFilesAreRefusedNamingTheFile) {
@@ -809,7 +860,7 @@ TEST(AddClasses, ANewClassFromItsViewsAloneIsRecognisedAndTheOldOnesKeep) {
         << e.what();
   }
   RecognizerModel old = t.model;
-  old.exemplars = ExampleSet(old.params.vladDims(), old.params.pca_dims);
+  old.exemplars = ExampleSet(old.params.encodedDims(), old.params.pca_dims);
   try {
     addClasses(old, {dir + "/new"}, o, false, nullptr);
     ADD_FAILURE() << "a model without exemplars was accepted";

@@ -101,7 +101,7 @@ void setRandomClassifier(RecognizerModel* m, int classes) {
   c.classes.clear();
   for (int i = 0; i < classes; ++i) c.classes.push_back("class_" + std::to_string(i));
   c.classes.push_back("background");
-  c.weights = MatrixRM::Random(classes + 1, m->params.vladDims()) * 0.01f;
+  c.weights = MatrixRM::Random(classes + 1, m->params.encodedDims()) * 0.01f;
   c.bias = Eigen::VectorXf::Zero(classes + 1);
 }
 
@@ -249,7 +249,7 @@ void benchCostModel(const cv::Mat& f, const RecognizerModel& model, FrameEncoder
   encoder.encode(f, {full}, EncoderKind::kDirect, &out_rows);
   FlairEncoder flair;
   flair.build(encoder.codes(), model.vocabulary, encoder.codes().region);
-  std::vector<float> v(static_cast<size_t>(model.params.vladDims()));
+  std::vector<float> v(static_cast<size_t>(model.params.encodedDims()));
   auto perBox = [&](const PyramidBox& b) {
     std::vector<double> batches;
     for (int r = 0; r < 15; ++r) {

@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
   try {
     TrainOptions options = loadConfig<TrainOptions>(config, "train", false);
     example_kb =
-        ExampleSet(options.encoding.vladDims(), options.encoding.pca_dims).maxRowBytes() / 1000;
+        ExampleSet(options.encoding.encodedDims(), options.encoding.pca_dims).maxRowBytes() / 1000;
     if (seed >= 0) options.seed = static_cast<int>(seed);
     options.threads = threads;
     TrainReport report;

@@ -483,7 +483,8 @@ std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path
 }
 
 std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes,
-                                int background, const TrainOptions& options) {
+                                int background, const TrainOptions& options,
+                                std::vector<double>* aspect_offsets) {
   std::vector<int> labels;
   std::vector<cv::Rect2d> kept;  // suppression in the file's (rank) order
   for (const auto& r : frame.proposals) {
@@ -495,16 +496,22 @@ std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::
     kept.push_back(r);
     double best = 0;
     int label = background;
+    size_t object = 0;
     for (size_t o = 0; o < frame.objects.size(); ++o) {
       const double overlap = iou(r, frame.objects[o]);
       if (overlap <= best) continue;
       best = overlap;
+      object = o;
       const int c = indexOf(classes, frame.object_classes[o]);
       label = c >= 0 ? c : background;
     }
-    if (best >= options.proposal_positive_iou)
+    if (best >= options.proposal_positive_iou) {
       labels.push_back(label);
-    else
+      if (aspect_offsets)
+        aspect_offsets->push_back(
+            std::log(r.width / r.height) -
+            std::log(frame.objects[object].width / frame.objects[object].height));
+    } else
       labels.push_back(best < options.proposal_background_iou ? background : -1);
   }
   return labels;
@@ -716,7 +723,7 @@ ExampleSet encodeCrops(const std::vector<LabeledCrop>& crops,
                        const std::vector<std::string>& instances, FrameEncoder& encoder,
                        bool mirror, const std::function<void(int64_t, int64_t)>& progress,
                        int other_label) {
-  ExampleSet set(encoder.params().vladDims(), encoder.params().pca_dims);
+  ExampleSet set(encoder.params().encodedDims(), encoder.params().pca_dims);
   ReusableMatrix buffer;
   for (size_t i = 0; i < crops.size(); ++i) {
     cv::Mat image = readCrop(crops[i]);
@@ -1064,7 +1071,10 @@ void encodeSceneObjects(const TrainingData& d, const TrainOptions& options, Work
       ReusableMatrix rows;
       std::vector<int> labels;
       int64_t partials = 0, proposal_positives = 0, proposal_others = 0;
+      std::vector<double> aspect_offsets;  // of the proposal boxes that are views of an object
     };
+    double offset_sum = 0, offset_sum2 = 0;
+    int64_t offsets = 0;
     orderedParallelFor<Encoded>(
         frames.size(), workers, kFrameWindow,
         [&](size_t f, std::unique_ptr<FrameEncoder>& worker) {
@@ -1104,7 +1114,8 @@ void encodeSceneObjects(const TrainingData& d, const TrainOptions& options, Work
           // The boxes the proposals stage drew here: views of objects as the pipeline frames them,
           // and its boxes on parts, on several objects, on the table (background).
           const std::vector<int> proposal_labels =
-              proposals ? labelProposals(frames[f], classes, bg, options) : std::vector<int>();
+              proposals ? labelProposals(frames[f], classes, bg, options, &e.aspect_offsets)
+                        : std::vector<int>();
           for (size_t n = 0; n < proposal_labels.size(); ++n) {
             const auto& r = frames[f].proposals[n];
             PyramidBox b;
@@ -1124,6 +1135,11 @@ void encodeSceneObjects(const TrainingData& d, const TrainOptions& options, Work
           partials += e.partials;
           proposal_positives += e.proposal_positives;
           proposal_others += e.proposal_others;
+          for (double x : e.aspect_offsets) {
+            offset_sum += x;
+            offset_sum2 += x * x;
+            ++offsets;
+          }
           for (int64_t i = 0; i < e.rows.rows(); ++i) {
             const int label = e.labels[static_cast<size_t>(i)];
             all.add(e.rows.row(i), label, -1 - static_cast<int>(f), frames[f].real ? 1 : 0);
@@ -1137,6 +1153,14 @@ void encodeSceneObjects(const TrainingData& d, const TrainOptions& options, Work
         "(background: {} "
         "parts); of them from the proposal boxes: {} of the model's categories, {} background",
         positives, others, partials, proposal_positives, proposal_others);
+    if (offsets > 1) {
+      const double mean = offset_sum / offsets;
+      spdlog::info(
+          "proposal boxes that are views of an object: log aspect ratio minus the object's, mean "
+          "{:.3f}, standard deviation {:.3f} over {} boxes (train.shape_noise {:.3f})",
+          mean, std::sqrt(std::max(0.0, offset_sum2 / offsets - mean * mean)), offsets,
+          options.shape_noise);
+    }
   }
 }
 
@@ -1274,9 +1298,11 @@ RecognizerModel trainModel(const std::vector<std::string>& object_dirs,
     bar.finish();
   }
   Workers workers;
-  for (int w = 0; w < workerThreads(options.threads); ++w)
+  for (int w = 0; w < workerThreads(options.threads); ++w) {
     workers.push_back(std::make_unique<FrameEncoder>(model.params, model.pca, model.vocabulary));
-  Examples ex(model.params.vladDims(), model.params.pca_dims);
+    workers.back()->setShapeNoise(options.shape_noise);
+  }
+  Examples ex(model.params.encodedDims(), model.params.pca_dims);
   // The crops on one thread: the first worker's encoder (no encoder's buffers held twice).
   encodeCropExamples(d, options, *workers.front(), &ex);
   encodeCropsInContext(d, options, *workers.front(), &ex);
@@ -1378,10 +1404,12 @@ HeldOutResult evaluateFolds(const std::vector<LabeledCrop>& crops,
       if (progress) progress(stage + " vocabulary", d, t);
     });
     FrameEncoder encoder(options.encoding, pca, vocabulary);
+    encoder.setShapeNoise(options.shape_noise);
     const ExampleSet train = encodeCrops(train_crops, result.classes, instances, encoder,
                                          options.mirror_crops, [&](int64_t d, int64_t t) {
                                            if (progress) progress(stage + " encode", d, t);
                                          });
+    encoder.setShapeNoise(0);  // the held-out crops as they are
     const ExampleSet test = encodeCrops(test_crops, result.classes, instances, encoder);
     const LinearClassifier clf = trainOneVsAll(
         train, result.classes, sgd,
@@ -1509,7 +1537,7 @@ std::vector<std::string> classesWithAdded(const RecognizerModel& base,
 ExampleSet keptExemplars(const RecognizerModel& base, const std::vector<std::string>& classes,
                          const std::vector<std::string>& replaced) {
   const std::vector<std::string>& old = base.classifier.classes;
-  const int64_t dims = base.params.vladDims();
+  const int64_t dims = base.params.encodedDims();
   ExampleSet set(dims, base.params.pca_dims);
   std::vector<float> row(static_cast<size_t>(dims));
   for (int64_t i = 0; i < base.exemplars.size(); ++i) {
@@ -1531,7 +1559,7 @@ LinearClassifier mergedClassifier(const RecognizerModel& base,
   const int C = static_cast<int>(classes.size());
   LinearClassifier clf;
   clf.classes = classes;
-  clf.weights.resize(C, base.params.vladDims());
+  clf.weights.resize(C, base.params.encodedDims());
   clf.bias.resize(C);
   for (size_t i = 0; i < old.size(); ++i) {
     if (indexOf(trained, old[i]) >= 0) continue;
@@ -1604,6 +1632,7 @@ RecognizerModel addClasses(const RecognizerModel& base, const std::vector<std::s
     for (const auto& c : crops)
       if (indexOf(instances, c.instance) < 0) instances.push_back(c.instance);
     FrameEncoder encoder(base.params, base.pca, base.vocabulary);
+    encoder.setShapeNoise(options.shape_noise);
     ProgressBar bar("encode views", static_cast<int64_t>(crops.size()));
     fresh = encodeCrops(
         crops, classes, instances, encoder, options.mirror_crops,

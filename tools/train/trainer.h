@@ -56,6 +56,11 @@ struct TrainOptions {
   /// this share of the class's weight (the same share in every class, background included, so that
   /// looking like a photograph is no evidence for any class); <= 0: every example weighs 1.
   double real_share = 0.5;
+  /// Standard deviation of the Gaussian added to the log aspect ratio of every training box's
+  /// shape block (FrameEncoder::setShapeNoise): how far a box the proposals draw around an object
+  /// differs in aspect from the object's own box (measured on the training scenes, README). A
+  /// class is then told apart by its shape only where it differs by more than boxes do.
+  double shape_noise = 0.15;
   int seed = 7;                         ///< every random choice of the trainer
   int vocabulary_descriptors = 100000;  ///< features sampled for PCA and k-means
   int kmeans_iterations = 100;
@@ -108,6 +113,8 @@ struct TrainOptions {
       "share of each class's weight carried by its photographed examples when it also has rendered "
       "ones "
       "(<= 0: all examples weigh the same)");
+    v("shape_noise", shape_noise,
+      "standard deviation added to each training box's log aspect ratio (box shape noise)");
     v("seed", seed, "seed of every random choice of the trainer");
     v("vocabulary_descriptors", vocabulary_descriptors, "features sampled for PCA and k-means");
     v("kmeans_iterations", kmeans_iterations, "maximum k-means iterations");
@@ -203,9 +210,12 @@ std::map<int, std::vector<cv::Rect2d>> readProposalBoxes(const std::string& path
 /// The examples a frame's proposal boxes give: the label of each box (index into `classes`; an
 /// object of a category the model lacks is `background`), or -1 for a box between the two IoU
 /// thresholds (neither a view of an object nor background) and for a box suppressed by one ahead
-/// of it (proposal_nms_iou).
+/// of it (proposal_nms_iou). With `aspect_offsets`, appends for each box that is a view of an
+/// object ln(aspect of the box) - ln(aspect of the object's box): the spread shape_noise stands
+/// for.
 std::vector<int> labelProposals(const SceneFrame& frame, const std::vector<std::string>& classes,
-                                int background, const TrainOptions& options);
+                                int background, const TrainOptions& options,
+                                std::vector<double>* aspect_offsets = nullptr);
 
 /// Sets the weights of `set`'s examples (ExampleSet::weight, ExampleSet::domain: 1 photographed) so
 /// that in every class holding both domains the photographed examples carry `real_share` of the
