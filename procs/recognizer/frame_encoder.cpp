@@ -23,26 +23,26 @@ CellRect spanOf(const std::vector<PyramidBox>& boxes) {
   return r;
 }
 
+// One FNV-1a step: the hashes below that seed the trainer's box-shape noise.
+uint64_t fnvMix(uint64_t h, uint64_t v) { return (h ^ v) * 1099511628211ull; }
+
 // A hash of an image's size and 64 of its pixels (an 8 x 8 grid): what tells two training crops
 // apart, cheaply.
 uint64_t contentHash(const cv::Mat& bgr) {
-  uint64_t h = 1469598103934665603ull;
-  auto mix = [&](uint64_t v) { h = (h ^ v) * 1099511628211ull; };
-  mix(static_cast<uint64_t>(bgr.cols));
-  mix(static_cast<uint64_t>(bgr.rows));
+  uint64_t h = fnvMix(fnvMix(1469598103934665603ull, static_cast<uint64_t>(bgr.cols)),
+                      static_cast<uint64_t>(bgr.rows));
   for (int j = 0; j < 8; ++j)
     for (int i = 0; i < 8; ++i) {
       const cv::Vec3b p =
           bgr.at<cv::Vec3b>(bgr.rows * (2 * j + 1) / 16, bgr.cols * (2 * i + 1) / 16);
-      mix(static_cast<uint64_t>(p[0]) | static_cast<uint64_t>(p[1]) << 8 |
-          static_cast<uint64_t>(p[2]) << 16);
+      h = fnvMix(h, static_cast<uint64_t>(p[0]) | static_cast<uint64_t>(p[1]) << 8 |
+                        static_cast<uint64_t>(p[2]) << 16);
     }
   return h;
 }
 
 uint64_t hashBox(uint64_t h, const PyramidBox& b) {
-  for (int k = 0; k < 5; ++k)
-    h = (h ^ static_cast<uint64_t>(b.u[k] * 65536 + b.v[k])) * 1099511628211ull;
+  for (int k = 0; k < 5; ++k) h = fnvMix(h, static_cast<uint64_t>(b.u[k] * 65536 + b.v[k]));
   return h;
 }
 
@@ -165,8 +165,7 @@ void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& box
     for (size_t i = 0; i < boxes.size(); ++i) {
       double offset = 0;
       if (shape_noise_ > 0) {
-        const PyramidBox& b = boxes[i];
-        std::mt19937_64 rng(hashBox(image_hash, b));
+        std::mt19937_64 rng(hashBox(image_hash, boxes[i]));
         offset = shape_noise_ * standardNormal(rng);
       }
       encodeBoxShape(boxes[i], params_.shape_bins, static_cast<int>(params_.shapeDims()),
