@@ -431,6 +431,8 @@ SlamStats SlamSystem::stats() const {
   if (mapper_) {
     s.bundle_adjustments = mapper_->bundleAdjustments();
     s.keyframes_culled = mapper_->culledKeyFrames();
+    s.mapping_ms = mapper_->mappingMicros() / 1000.0;
+    s.bundle_adjustment_ms = mapper_->bundleAdjustmentMicros() / 1000.0;
   }
   if (depth_) {
     const DepthFilterStats d = depth_->stats();

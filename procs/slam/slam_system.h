@@ -95,10 +95,12 @@ struct SlamStats {
   int64_t relocalizations = 0, reinitializations = 0;
   int64_t depth_seeds = 0, depth_points = 0, depth_frames_skipped = 0;
   int64_t bundle_adjustments = 0, keyframes_culled = 0;
-  double track_ms = 0;         ///< last frame: features and tracking
-  double extract_ms = 0;       ///< last frame: features
-  double depth_update_ms = 0;  ///< last depth-filter update
-  int64_t depth_updates = 0;   ///< depth-filter updates so far
+  double track_ms = 0;              ///< last frame: features and tracking
+  double extract_ms = 0;            ///< last frame: features
+  double depth_update_ms = 0;       ///< last depth-filter update
+  int64_t depth_updates = 0;        ///< depth-filter updates so far
+  double mapping_ms = 0;            ///< local mapping of every keyframe so far (wall clock)
+  double bundle_adjustment_ms = 0;  ///< of it, local bundle adjustment
 };
 
 /// Nice increments of SLAM's background threads (system.yaml `scheduling`); tracking, on every

@@ -2,6 +2,7 @@
 // to the noise level and brings a perturbed camera back to its true pose; fixed cameras stay put.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "procs/slam/optimization/bundle_adjustment.h"
@@ -85,4 +86,48 @@ TEST(BundleAdjustment, AnOutlierDoesNotDragTheSolutionWithTheRobustLoss) {
   EXPECT_LT(
       (ba.cameras[1].T_camera_world.inverse().translation() - b.inverse().translation()).norm(),
       0.005);
+}
+
+// The cost function's analytic derivatives are those of its residual: central differences in
+// every coordinate of the quaternion (not normalised: Ceres evaluates off the unit sphere too),
+// the translation and the point, in front of the camera and with the point behind it (clamped
+// depth: its derivative along z is zero).
+TEST(BundleAdjustment, AnalyticJacobiansMatchFiniteDifferences) {
+  BaProblem ba;
+  ba.fx = 520;
+  ba.fy = 515;
+  ba.cx = 319.5;
+  ba.cy = 239.5;
+  BaObservation obs{0, 0, Eigen::Vector2d(300.0, 200.0), 1.0 / 1.44};
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 40; ++trial) {
+    double q[4] = {0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng), 1 + 0.1 * u(rng)};
+    double t[3] = {0.2 * u(rng), 0.2 * u(rng), 0.3 * u(rng)};
+    double p[3] = {u(rng), u(rng), trial < 30 ? 3 + u(rng) : -3 + u(rng)};
+    double r[2], jq[8], jt[6], jp[6];
+    reprojectionResidual(ba, obs, q, t, p, r, jq, jt, jp);
+    struct Block {
+      double* x;
+      int n;
+      const double* j;
+    } blocks[3] = {{q, 4, jq}, {t, 3, jt}, {p, 3, jp}};
+    for (const Block& b : blocks) {
+      for (int k = 0; k < b.n; ++k) {
+        const double h = 1e-6, x0 = b.x[k];
+        double rp[2], rm[2];
+        b.x[k] = x0 + h;
+        reprojectionResidual(ba, obs, q, t, p, rp, nullptr, nullptr, nullptr);
+        b.x[k] = x0 - h;
+        reprojectionResidual(ba, obs, q, t, p, rm, nullptr, nullptr, nullptr);
+        b.x[k] = x0;
+        for (int row = 0; row < 2; ++row) {
+          const double numeric = (rp[row] - rm[row]) / (2 * h);
+          EXPECT_NEAR(b.j[row * b.n + k], numeric, 1e-4 * (1 + std::abs(numeric)))
+              << "trial " << trial << ", block of " << b.n << ", coordinate " << k << ", row "
+              << row;
+        }
+      }
+    }
+  }
 }

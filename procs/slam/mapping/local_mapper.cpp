@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <set>
 #include <shared_mutex>
@@ -104,6 +105,12 @@ void LocalMapper::run() {
 }
 
 void LocalMapper::process(const Job& job, bool more_waiting) {
+  const auto start = std::chrono::steady_clock::now();
+  auto micros = [](std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -
+                                                                 since)
+        .count();
+  };
   Map& map = *job.first;
   const auto& kf = job.second;
   if (recent_map_id_ != map.id) {
@@ -113,7 +120,10 @@ void LocalMapper::process(const Job& job, bool more_waiting) {
   MappingEvents events;
   {
     std::unique_lock<std::shared_mutex> lock(map.mutex);
-    if (kf->bad) return;
+    if (kf->bad) {
+      mapping_us_ += micros(start);
+      return;
+    }
     linkKeyFrame(map, kf);
     cullRecentPoints(map, kf);
   }
@@ -123,10 +133,13 @@ void LocalMapper::process(const Job& job, bool more_waiting) {
       std::unique_lock<std::shared_mutex> lock(map.mutex);
       fuseNeighbors(map, kf);
     }
+    const auto ba_start = std::chrono::steady_clock::now();
     localBundleAdjustment(map, kf, &events);
+    ba_us_ += micros(ba_start);
     std::unique_lock<std::shared_mutex> lock(map.mutex);
     cullKeyFrames(map, kf, &events);
   }
+  mapping_us_ += micros(start);
   std::lock_guard<std::mutex> lock(mutex_);
   for (auto& k : events.moved) events_.moved.push_back(k);
   for (auto& k : events.culled) events_.culled.push_back(k);

@@ -49,6 +49,10 @@ class LocalMapper {
 
   int64_t bundleAdjustments() const { return bundle_adjustments_.load(); }
   int64_t culledKeyFrames() const { return culled_keyframes_.load(); }
+  /// Time spent so far (wall clock, microseconds) mapping keyframes, and of it in local bundle
+  /// adjustment (both passes).
+  int64_t mappingMicros() const { return mapping_us_.load(); }
+  int64_t bundleAdjustmentMicros() const { return ba_us_.load(); }
 
  private:
   using Job = std::pair<std::shared_ptr<Map>, std::shared_ptr<KeyFrame>>;
@@ -73,7 +77,7 @@ class LocalMapper {
   std::atomic<bool> abort_ba_{false};
   std::list<std::shared_ptr<MapPoint>> recent_points_;  ///< points created lately (worker only)
   int recent_map_id_ = -1;
-  std::atomic<int64_t> bundle_adjustments_{0}, culled_keyframes_{0};
+  std::atomic<int64_t> bundle_adjustments_{0}, culled_keyframes_{0}, mapping_us_{0}, ba_us_{0};
   std::thread thread_;
 };
 
