@@ -50,7 +50,10 @@ double recallOfRandomScene(uint64_t seed) {
 /// A seed and the recall its first 120 frames must reach. Measured 2026-12-02 with the support
 /// as now chosen / as it was: seed 4 95.6 / 78.9 %; seeds 5 and 7 (guards) 80.8 and 81.6 % under
 /// both. Seed 9 (the bistro table), with a level plane without structure admitted as the support
-/// / without: 78.5 / 42.6 %.
+/// / without: 78.5 / 42.6 %. Seed 7 moves with the last digits of SLAM's map: 81.6 % before the
+/// bundle adjustment of 2026-12-06 and 78.4 % after (the same trajectory and keyframes), 74.9 % in
+/// the sanitizer build (other floating-point rounding); its floor leaves room for that and still
+/// fails a table that breaks the way the bistro table did (21-43 %).
 struct Floor {
   int seed;
   double recall;
@@ -68,6 +71,6 @@ TEST_P(RandomSceneProposals, ObjectsOfARandomTableAreProposed) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, RandomSceneProposals,
-                         ::testing::Values(Floor{4, 88.0}, Floor{5, 75.0}, Floor{7, 75.0},
+                         ::testing::Values(Floor{4, 88.0}, Floor{5, 75.0}, Floor{7, 70.0},
                                            Floor{9, 70.0}),
                          [](const auto& info) { return "seed" + std::to_string(info.param.seed); });
