@@ -146,11 +146,8 @@ std::vector<MapPoint> cropRobust(const std::vector<MapPoint>& in, double percent
   return out;
 }
 
-// Points that several keyframes agree on: a surface is seen, and seeded, from many keyframes,
-// while a wrong depth (a seed that converged on the wrong match, a smear at an occluding edge) is
-// one keyframe's mistake. Keeps the points whose voxel and its 26 neighbours hold points of at
-// least `min_keyframes` different keyframes (counted in a 128-bit mask of keyframe id hashes:
-// exact for the small counts the threshold looks at).
+}  // namespace
+
 std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint>>& by_keyframe,
                                     double voxel, int min_keyframes) {
   std::vector<MapPoint> out;
@@ -158,40 +155,87 @@ std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint
     for (const auto& [kf, pts] : by_keyframe) out.insert(out.end(), pts.begin(), pts.end());
     return out;
   }
-  struct Mask {
-    uint64_t bits[2] = {0, 0};
+  // A voxel's indices packed 21 bits per axis (z lowest), offset so that they are never negative:
+  // a neighbour's key is the voxel's plus a constant, and the voxels of one (x, y) row are
+  // consecutive keys. (A map spans far fewer than 2^20 voxels on each side of its origin.)
+  constexpr int64_t kBias = int64_t{1} << 20;
+  const auto linear = [](int64_t x, int64_t y, int64_t z) {
+    return ((x + kBias) << 42) | ((y + kBias) << 21) | (z + kBias);
   };
-  std::unordered_map<int64_t, Mask> masks;
+  // Every point's voxel (as voxelKey() finds it) and its keyframe's bit, in the order of the input.
+  std::vector<const MapPoint*> points;
+  std::vector<uint8_t> bit;
+  std::vector<std::pair<int64_t, uint32_t>> keyed;  // (voxel, point)
+  size_t count = 0;
+  for (const auto& [kf, pts] : by_keyframe) count += pts.size();
+  points.reserve(count);
+  bit.reserve(count);
+  keyed.reserve(count);
   for (const auto& [kf, pts] : by_keyframe) {
-    const uint32_t h = static_cast<uint32_t>(kf) * 2654435761u >> 25;  // 0..127
-    for (const auto& m : pts) masks[voxelKey(m.p, voxel)].bits[h >> 6] |= uint64_t{1} << (h & 63);
-  }
-  std::unordered_map<int64_t, bool> keep;
-  keep.reserve(masks.size());
-  for (const auto& [kf, pts] : by_keyframe)
+    const auto h = static_cast<uint8_t>(static_cast<uint32_t>(kf) * 2654435761u >> 25);  // 0..127
     for (const auto& m : pts) {
-      const int64_t key = voxelKey(m.p, voxel);
-      auto it = keep.find(key);
-      if (it == keep.end()) {
-        const Eigen::Vector3i c = voxelOf(m.p, voxel);
-        Mask all;
-        for (int dx = -1; dx <= 1; ++dx)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dz = -1; dz <= 1; ++dz) {
-              const auto n = masks.find(voxelKeyAt(c + Eigen::Vector3i(dx, dy, dz), voxel));
-              if (n == masks.end()) continue;
-              all.bits[0] |= n->second.bits[0];
-              all.bits[1] |= n->second.bits[1];
-            }
-        it = keep.emplace(key,
-                          __builtin_popcountll(all.bits[0]) + __builtin_popcountll(all.bits[1]) >=
-                              min_keyframes)
-                 .first;
-      }
-      if (it->second) out.push_back(m);
+      const auto q = [&](float v) { return static_cast<int64_t>(std::floor(v / voxel)); };
+      keyed.emplace_back(linear(q(m.p.x()), q(m.p.y()), q(m.p.z())),
+                         static_cast<uint32_t>(points.size()));
+      points.push_back(&m);
+      bit.push_back(h);
     }
+  }
+  std::sort(keyed.begin(), keyed.end());
+  // The occupied voxels in key order, their keyframe masks, and the first point of each: the one
+  // whose voxel's neighbours are looked up (voxelOf() may put a point on a voxel's border into
+  // the next; the first decides for all, as it always has).
+  struct Voxel {
+    int64_t key;
+    uint64_t mask[2] = {0, 0};
+    uint32_t first;
+    int64_t query = 0;
+    bool keep = false;
+  };
+  std::vector<Voxel> voxels;
+  voxels.reserve(count / 2);
+  std::vector<uint32_t> voxel_of(count);
+  for (const auto& [key, i] : keyed) {
+    if (voxels.empty() || voxels.back().key != key) voxels.push_back(Voxel{key, {0, 0}, i});
+    voxels.back().mask[bit[i] >> 6] |= uint64_t{1} << (bit[i] & 63);
+    voxel_of[i] = static_cast<uint32_t>(voxels.size() - 1);
+  }
+  std::vector<uint32_t> order(voxels.size());
+  for (size_t v = 0; v < voxels.size(); ++v) {
+    const Eigen::Vector3i c = voxelOf(points[voxels[v].first]->p, voxel);
+    voxels[v].query = linear(c.x(), c.y(), c.z());
+    order[v] = static_cast<uint32_t>(v);
+  }
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return voxels[a].query < voxels[b].query; });
+  // One sweep: for each of the 9 (x, y) rows around a voxel, a cursor into the occupied voxels
+  // that only moves forward as the queries grow; the row's three voxels are consecutive keys.
+  int64_t row_offset[9];
+  size_t cursor[9];
+  for (int r = 0; r < 9; ++r) {
+    row_offset[r] = (int64_t{r / 3 - 1} << 42) + (int64_t{r % 3 - 1} << 21);
+    cursor[r] = 0;
+  }
+  for (const uint32_t v : order) {
+    uint64_t all[2] = {0, 0};
+    for (int r = 0; r < 9; ++r) {
+      const int64_t lo = voxels[v].query + row_offset[r] - 1, hi = lo + 2;
+      size_t& j = cursor[r];
+      while (j < voxels.size() && voxels[j].key < lo) ++j;
+      for (size_t k = j; k < voxels.size() && voxels[k].key <= hi; ++k) {
+        all[0] |= voxels[k].mask[0];
+        all[1] |= voxels[k].mask[1];
+      }
+    }
+    voxels[v].keep = __builtin_popcountll(all[0]) + __builtin_popcountll(all[1]) >= min_keyframes;
+  }
+  out.reserve(points.size());
+  for (size_t i = 0; i < points.size(); ++i)
+    if (voxels[voxel_of[i]].keep) out.push_back(*points[i]);
   return out;
 }
+
+namespace {
 
 // With a support: clusters lower than min_height over it are its texture; the others stand on
 // it, so their footprint (their points dropped onto the plane) belongs to them: it covers the

@@ -154,6 +154,15 @@ class CandidateMap {
   ClusterStats stats_;
 };
 
+/// Points that several keyframes agree on: a surface is seen, and seeded, from many keyframes,
+/// while a wrong depth (a seed that converged on the wrong match, a smear at an occluding edge) is
+/// one keyframe's mistake. Keeps the points whose voxel and its 26 neighbours hold points of at
+/// least `min_keyframes` different keyframes (counted in a 128-bit mask of keyframe id hashes:
+/// exact for the small counts the threshold looks at), in their input order. One sort and one
+/// sweep over the occupied voxels. Exposed for tests.
+std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint>>& by_keyframe,
+                                    double voxel, int min_keyframes);
+
 /// The options with every length multiplied by `scale`.
 ProposalOptions scaledLengths(const ProposalOptions& options, double scale);
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <random>
 #include <set>
 #include <thread>
 
@@ -344,6 +345,53 @@ TEST(ProposalClustering, ABrimThatIsMuchOfTheBandIsStillTheObjects) {
 }
 
 // Of two candidates on one line of sight, the far one is culled; moved aside, both are kept.
+// The multi-keyframe check against its definition, counted point by point: a point is kept when
+// its voxel and the 26 around it hold points of at least min_keyframes keyframes. Points on both
+// sides of the origin (negative voxel indices), keyframes that agree and keyframes alone.
+TEST(ProposalFilters, MultiViewCheckKeepsWhatEnoughKeyframesAgreeOn) {
+  const double voxel = 0.01;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> where(-0.05f, 0.05f), jitter(-0.012f, 0.012f);
+  std::map<int32_t, std::vector<MapPoint>> by_keyframe;
+  std::set<uint32_t> hashes;
+  for (int32_t kf = 3; kf < 15; ++kf) {
+    hashes.insert(static_cast<uint32_t>(kf) * 2654435761u >> 25);
+    // Each keyframe sees a few shared spots, and a few of its own far from everything else.
+    for (int spot = 0; spot < 6; ++spot) {
+      if ((kf + spot) % 3 == 0) continue;
+      const Eigen::Vector3f centre(0.1f * float(spot - 3), 0.02f * float(spot % 2), -0.01f);
+      for (int i = 0; i < 15; ++i)
+        by_keyframe[kf].push_back(
+            MapPoint{centre + Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng))});
+    }
+    for (int i = 0; i < 10; ++i)
+      by_keyframe[kf].push_back(MapPoint{Eigen::Vector3f(float(kf), where(rng), where(rng))});
+  }
+  ASSERT_EQ(hashes.size(), 12u) << "the test needs keyframes of distinct hashes";
+  std::vector<std::pair<int32_t, Eigen::Vector3f>> all;
+  for (const auto& [kf, pts] : by_keyframe)
+    for (const auto& m : pts) all.emplace_back(kf, m.p);
+  const auto index = [&](const Eigen::Vector3f& p) {
+    return Eigen::Vector3i(int(std::floor(p.x() / voxel)), int(std::floor(p.y() / voxel)),
+                           int(std::floor(p.z() / voxel)));
+  };
+  for (const int min_keyframes : {2, 4, 7}) {
+    std::vector<Eigen::Vector3f> expected;
+    for (const auto& [kf, p] : all) {
+      std::set<int32_t> agree;
+      for (const auto& [other, q] : all)
+        if ((index(q) - index(p)).cwiseAbs().maxCoeff() <= 1) agree.insert(other);
+      if (static_cast<int>(agree.size()) >= min_keyframes) expected.push_back(p);
+    }
+    const std::vector<MapPoint> kept = keepMultiView(by_keyframe, voxel, min_keyframes);
+    ASSERT_EQ(kept.size(), expected.size()) << "min_keyframes " << min_keyframes;
+    for (size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(kept[i].p, expected[i]) << i;
+    EXPECT_GT(kept.size(), 0u);
+    EXPECT_LT(kept.size(), all.size());
+  }
+  EXPECT_EQ(keepMultiView(by_keyframe, voxel, 1).size(), all.size()) << "1: off";
+}
+
 TEST(ProposalProjection, FarCandidateBehindANearOneIsCulled) {
   const ProposalOptions o = metricOptions();
   auto candidate = [](int id, float x, float z) {

@@ -1,7 +1,9 @@
 // slamaware-bench-proposals (make bench): the proposals stage's two costs on a synthetic
 // semi-dense map of ~100k points (a table with a dozen objects, 2 mm noise): re-clustering the
 // whole map at every density scale (what a new keyframe costs) and projecting the candidates
-// into a frame with occlusion culling and suppression (what every frame costs). Medians.
+// into a frame with occlusion culling and suppression (what every frame costs). Medians. With
+// --replay, also the stage's whole lockstep work on a recording of SLAM's messages (the
+// lockstep.lcm that slamaware-bench-system leaves): a real map as it grows, keyframe by keyframe.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -10,8 +12,11 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "common/bus/log_reader.h"
+#include "common/bus/system_config.h"
 #include "common/config.h"
 #include "procs/proposals/projector.h"
+#include "procs/proposals/proposal_engine.h"
 #include "procs/proposals/synthetic_map.h"
 
 using namespace slamaware;
@@ -29,17 +34,63 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
+// The proposals stage's handlers on every SLAM message of a recording, clustering in onPose as
+// in lockstep: total ms and the share of the poses that re-clustered.
+struct Replay {
+  double total_ms = 0, recluster_ms = 0;
+  int poses = 0, reclusters = 0;
+};
+
+Replay replay(const std::vector<LogRecord>& records, const ProposalOptions& options) {
+  const Channels ch = SystemConfig{}.channels.resolved();
+  ProposalEngine engine(options, false);
+  Replay r;
+  std::string why;
+  for (const LogRecord& rec : records) {
+    const auto t0 = std::chrono::steady_clock::now();
+    bool reclustered = false;
+    if (rec.channel == ch.camera_info) {
+      camera_info_t m;
+      if (decodeRecord(rec, &m)) engine.onCameraInfo(m, &why);
+    } else if (rec.channel == ch.slam_map) {
+      point_cloud_t m;
+      if (decodeRecord(rec, &m)) engine.onMap(m, &why);
+    } else if (rec.channel == ch.slam_keyframe) {
+      keyframe_t m;
+      if (decodeRecord(rec, &m)) engine.onKeyframe(m);
+    } else if (rec.channel == ch.slam_pose) {
+      pose_t m;
+      if (!decodeRecord(rec, &m)) continue;
+      engine.onPose(m, &why, &reclustered);
+      engine.takeLateProposals();
+      ++r.poses;
+    } else {
+      continue;
+    }
+    const double ms = msSince(t0);
+    r.total_ms += ms;
+    if (reclustered) {
+      r.recluster_ms += ms;
+      ++r.reclusters;
+    }
+  }
+  return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"slamaware-bench-proposals: clustering and projection times of the proposals stage"};
   std::string out = "build/bench/parts/proposals.json", config;
+  std::string replay_log;
   int repeats = 5, frames = 200;
   app.add_option("--out", out, "JSON fragment to write");
   app.add_option("--config", config,
                  "proposals options (default: built-in, as config/proposals.yaml)");
   app.add_option("--repeats", repeats, "re-clusterings timed");
   app.add_option("--frames", frames, "frames projected");
+  app.add_option("--replay", replay_log,
+                 "also replay the SLAM messages of this recording through the stage (lockstep)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_pattern("[%H:%M:%S.%e] [bench-proposals] [%^%l%$] %v");
   try {
@@ -92,6 +143,23 @@ int main(int argc, char** argv) {
         {"filter", st.filter_ms}, {"structure", st.structure_ms}, {"clustering", st.cluster_ms}};
     j["proposals_project_ms_per_frame"] = median(project_ms);
     j["proposals_boxes_per_frame_mean"] = static_cast<double>(boxes) / std::max(1, frames);
+    if (!replay_log.empty()) {
+      const std::vector<LogRecord> records = LogReader::readAll(replay_log);
+      std::vector<double> total, recluster;
+      Replay r;
+      for (int k = 0; k < 3; ++k) {
+        r = replay(records, options);
+        total.push_back(r.total_ms);
+        recluster.push_back(r.recluster_ms);
+      }
+      j["proposals_replay"] = {{"log", replay_log},
+                               {"poses", r.poses},
+                               {"reclusters", r.reclusters},
+                               {"total_ms", median(total)},
+                               {"recluster_ms", median(recluster)}};
+      spdlog::info("replay of {}: {} poses, {} re-clusterings, {:.0f} ms ({:.0f} re-clustering)",
+                   replay_log, r.poses, r.reclusters, median(total), median(recluster));
+    }
     std::ofstream(out) << j.dump(2) << "\n";
     spdlog::info("last recluster: filter {:.0f} ms, structure {:.0f} ms, clustering {:.0f} ms",
                  st.filter_ms, st.structure_ms, st.cluster_ms);
