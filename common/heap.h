@@ -22,8 +22,9 @@ struct HeapUse {
 std::optional<HeapUse> heapUse();
 
 /// Fixes the threshold at `bytes` (glibc's limits: at most 32 MiB, larger values are clamped):
-/// blocks of `bytes` or more are mapped apart from then on, whatever was freed before. Returns
-/// false if glibc refused.
+/// blocks of `bytes` or more are mapped apart from then on, whatever was freed before; and, as
+/// glibc's sliding threshold does, a heap keeps up to twice that freed at its top before handing
+/// it back. Returns false if glibc refused.
 bool mapBlocksApartFrom(size_t bytes);
 
 }  // namespace slamaware
