@@ -157,10 +157,12 @@ std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint
   }
   // A voxel's indices packed 21 bits per axis (z lowest), offset so that they are never negative:
   // a neighbour's key is the voxel's plus a constant, and the voxels of one (x, y) row are
-  // consecutive keys. (A map spans far fewer than 2^20 voxels on each side of its origin.)
-  constexpr int64_t kBias = int64_t{1} << 20;
+  // consecutive keys. (A map spans far fewer than 2^20 voxels on each side of its origin; a point
+  // beyond would share the border voxels.)
+  constexpr int64_t kBias = int64_t{1} << 20, kY = int64_t{1} << 21, kX = int64_t{1} << 42;
   const auto linear = [](int64_t x, int64_t y, int64_t z) {
-    return ((x + kBias) << 42) | ((y + kBias) << 21) | (z + kBias);
+    const auto field = [](int64_t v) { return std::clamp<int64_t>(v + kBias, 0, 2 * kBias - 1); };
+    return field(x) * kX + field(y) * kY + field(z);
   };
   // Every point's voxel (as voxelKey() finds it) and its keyframe's bit, in the order of the input.
   std::vector<const MapPoint*> points;
@@ -213,7 +215,7 @@ std::vector<MapPoint> keepMultiView(const std::map<int32_t, std::vector<MapPoint
   int64_t row_offset[9];
   size_t cursor[9];
   for (int r = 0; r < 9; ++r) {
-    row_offset[r] = (int64_t{r / 3 - 1} << 42) + (int64_t{r % 3 - 1} << 21);
+    row_offset[r] = (r / 3 - 1) * kX + (r % 3 - 1) * kY;
     cursor[r] = 0;
   }
   for (const uint32_t v : order) {
