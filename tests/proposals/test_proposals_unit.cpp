@@ -344,7 +344,6 @@ TEST(ProposalClustering, ABrimThatIsMuchOfTheBandIsStillTheObjects) {
   }
 }
 
-// Of two candidates on one line of sight, the far one is culled; moved aside, both are kept.
 // The multi-keyframe check against its definition, counted point by point: a point is kept when
 // its voxel and the 26 around it hold points of at least min_keyframes keyframes. Points on both
 // sides of the origin (negative voxel indices), keyframes that agree and keyframes alone.
@@ -392,6 +391,7 @@ TEST(ProposalFilters, MultiViewCheckKeepsWhatEnoughKeyframesAgreeOn) {
   EXPECT_EQ(keepMultiView(by_keyframe, voxel, 1).size(), all.size()) << "1: off";
 }
 
+// Of two candidates on one line of sight, the far one is culled; moved aside, both are kept.
 TEST(ProposalProjection, FarCandidateBehindANearOneIsCulled) {
   const ProposalOptions o = metricOptions();
   auto candidate = [](int id, float x, float z) {

@@ -8,16 +8,16 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "common/bus/log_reader.h"
 #include "common/bus/system_config.h"
 #include "common/config.h"
 #include "procs/proposals/projector.h"
-#include "procs/proposals/proposal_engine.h"
 #include "procs/proposals/synthetic_map.h"
+#include "tools/eval/proposal_metrics.h"
 
 using namespace slamaware;
 using namespace slamaware::proposals;
@@ -32,49 +32,6 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-// The proposals stage's handlers on every SLAM message of a recording, clustering in onPose as
-// in lockstep: total ms and the share of the poses that re-clustered.
-struct Replay {
-  double total_ms = 0, recluster_ms = 0;
-  int poses = 0, reclusters = 0;
-};
-
-Replay replay(const std::vector<LogRecord>& records, const ProposalOptions& options) {
-  const Channels ch = SystemConfig{}.channels.resolved();
-  ProposalEngine engine(options, false);
-  Replay r;
-  std::string why;
-  for (const LogRecord& rec : records) {
-    const auto t0 = std::chrono::steady_clock::now();
-    bool reclustered = false;
-    if (rec.channel == ch.camera_info) {
-      camera_info_t m;
-      if (decodeRecord(rec, &m)) engine.onCameraInfo(m, &why);
-    } else if (rec.channel == ch.slam_map) {
-      point_cloud_t m;
-      if (decodeRecord(rec, &m)) engine.onMap(m, &why);
-    } else if (rec.channel == ch.slam_keyframe) {
-      keyframe_t m;
-      if (decodeRecord(rec, &m)) engine.onKeyframe(m);
-    } else if (rec.channel == ch.slam_pose) {
-      pose_t m;
-      if (!decodeRecord(rec, &m)) continue;
-      engine.onPose(m, &why, &reclustered);
-      engine.takeLateProposals();
-      ++r.poses;
-    } else {
-      continue;
-    }
-    const double ms = msSince(t0);
-    r.total_ms += ms;
-    if (reclustered) {
-      r.recluster_ms += ms;
-      ++r.reclusters;
-    }
-  }
-  return r;
 }
 
 }  // namespace
@@ -144,21 +101,28 @@ int main(int argc, char** argv) {
     j["proposals_project_ms_per_frame"] = median(project_ms);
     j["proposals_boxes_per_frame_mean"] = static_cast<double>(boxes) / std::max(1, frames);
     if (!replay_log.empty()) {
-      const std::vector<LogRecord> records = LogReader::readAll(replay_log);
+      // The evaluator's re-run of the stage (tools/eval): every SLAM message of the recording,
+      // clustering in step; timed with reading the recording.
+      const Channels channels =
+          loadSystemConfig(
+              std::filesystem::exists("config/system.yaml") ? "config/system.yaml" : "", false)
+              .channels;
       std::vector<double> total, recluster;
-      Replay r;
+      ProposalRecording run;
       for (int k = 0; k < 3; ++k) {
-        r = replay(records, options);
-        total.push_back(r.total_ms);
-        recluster.push_back(r.recluster_ms);
+        const auto t0 = std::chrono::steady_clock::now();
+        run = rerunProposals(replay_log, channels, options, nullptr, 1, nullptr);
+        total.push_back(msSince(t0));
+        recluster.push_back(run.recluster_ms);
       }
       j["proposals_replay"] = {{"log", replay_log},
-                               {"poses", r.poses},
-                               {"reclusters", r.reclusters},
+                               {"poses", static_cast<int64_t>(run.localized.size())},
+                               {"reclusters", run.reclusters},
                                {"total_ms", median(total)},
                                {"recluster_ms", median(recluster)}};
       spdlog::info("replay of {}: {} poses, {} re-clusterings, {:.0f} ms ({:.0f} re-clustering)",
-                   replay_log, r.poses, r.reclusters, median(total), median(recluster));
+                   replay_log, run.localized.size(), run.reclusters, median(total),
+                   median(recluster));
     }
     std::ofstream(out) << j.dump(2) << "\n";
     spdlog::info("last recluster: filter {:.0f} ms, structure {:.0f} ms, clustering {:.0f} ms",

@@ -206,6 +206,8 @@ ProposalRecording rerunProposals(const std::string& log_path, const Channels& ch
       }
       if (reclustered) {
         const ClusterStats& s = engine.map().stats();
+        ++run.reclusters;
+        run.recluster_ms += s.ms;
         spdlog::debug(
             "frame {}: map {} points{} ({} cropped, {} single-view, voxel {:.4f}), {} planes with "
             "{} points, "

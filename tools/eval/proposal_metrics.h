@@ -30,6 +30,8 @@ std::vector<Box2> selectiveSearch(const cv::Mat& bgr, int width, int max_boxes);
 struct ProposalRecording {
   std::map<int32_t, std::vector<Box2>> boxes;  ///< ranked, best first
   std::map<int32_t, bool> localized;
+  int reclusters = 0;       ///< rerunProposals: re-clusterings of the stage
+  double recluster_ms = 0;  ///< ... and their time (ClusterStats::ms, summed)
 };
 
 /// PROPOSALS and SLAM_POSE of a recorded log. Throws LogError for a damaged log.
