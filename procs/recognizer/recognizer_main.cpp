@@ -8,7 +8,9 @@
 // DETECTIONS message, in order, empty when it has no usable boxes or no frame. Real time: after
 // draining the bus, only the newest joined frame is classified; older joined ones are dropped and
 // counted (frames_dropped). Proposals for a frame older than those already taken (the late
-// proposals of a map's reference keyframe, procs/proposals) are classified, never dropped. Bad
+// proposals of a map's reference keyframe, procs/proposals) are classified, never dropped: in
+// real time on a background thread with a recognizer of their own (the same model), so that the
+// newest frames never wait behind a whole frame of new views; their DETECTIONS follow. Bad
 // input (a proposal for a frame never seen, boxes outside the image or of zero size, a corrupt
 // JPEG, an unreadable model, classes the config names but the model lacks) is counted in
 // RECOGNIZER_STATUS and never stops the process.
@@ -24,8 +26,10 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <deque>
 #include <future>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -37,6 +41,7 @@
 #include "common/bus/status.h"
 #include "common/config.h"
 #include "common/image_codec.h"
+#include "common/serial_worker.h"
 #include "common/thread_priority.h"
 #include "procs/recognizer/recognizer.h"
 #include "procs/recognizer/seq_joiner.h"
@@ -76,20 +81,33 @@ FileStamp stampOf(const std::string& path) {
           static_cast<int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
 }
 
-/// Loads the model file and prepares a recognizer with it (buffers grown: `warm_up_ms`). Throws on
-/// a missing or bad model; a failed warm-up is only logged (the first frames grow the buffers).
-std::unique_ptr<Recognizer> loadRecognizer(const RecognizerOptions& options, double* warm_up_ms) {
+/// The recognizer of the live frames and, in real time, a second one on the same model for late
+/// frames: buffers of its own, so that a late frame is classified on a background thread while the
+/// live frames go on (the direct encoder: no FLAIR tables kept for a rare frame).
+struct Recognizers {
+  std::unique_ptr<Recognizer> live;
+  std::shared_ptr<Recognizer> late;
+};
+
+/// Loads the model file and prepares the recognizers with it: the live one's buffers are grown
+/// (`warm_up_ms`; without that, its first frames take several times as long), the late one's on
+/// its own thread (RecognizerNode::warmUpLate). Throws on a missing or bad model; a failed warm-up
+/// is only logged (the first frames grow the buffers).
+Recognizers loadRecognizers(const RecognizerOptions& options, bool with_late, double* warm_up_ms) {
   auto model = std::make_shared<const RecognizerModel>(loadModel(options.model));
-  auto recognizer = std::make_unique<Recognizer>(model, options);
+  RecognizerOptions late_options = options;
+  late_options.encoder = "direct";
+  Recognizers out{std::make_unique<Recognizer>(model, options),
+                  with_late ? std::make_shared<Recognizer>(model, late_options) : nullptr};
   *warm_up_ms = 0;
   try {
-    *warm_up_ms = recognizer->warmUp(options.warm_up_width, options.warm_up_height);
+    *warm_up_ms = out.live->warmUp(options.warm_up_width, options.warm_up_height);
   } catch (const std::exception& e) {
     spdlog::warn(
         "preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
         options.warm_up_width, options.warm_up_height, e.what());
   }
-  return recognizer;
+  return out;
 }
 
 class RecognizerNode {
@@ -101,10 +119,14 @@ class RecognizerNode {
         ch_(sys.channels),
         lockstep_(sys.bus.lockstep),
         options_(options),
+
         selector_(options.view_selection),
         joiner_(static_cast<size_t>(std::max(1, options.frame_buffer)),
                 static_cast<size_t>(std::max(1, options.proposals_buffer)),
                 options.pending_timeout_s) {
+    if (!lockstep_)
+      late_worker_ =
+          std::make_unique<SerialWorker>(true, "recognizer-late", sys.scheduling.background_nice);
     bus_.subscribe<image_t>(
         ch_.camera,
         [this](const image_t& m) { joiner_.addFrame(m.seq, std::make_shared<const image_t>(m)); },
@@ -132,7 +154,10 @@ class RecognizerNode {
     try {
       const FileStamp stamp = stampOf(options_.model);
       double warm_up_ms = 0;
-      recognizer_ = loadRecognizer(options_, &warm_up_ms);
+      Recognizers r = loadRecognizers(options_, !lockstep_, &warm_up_ms);
+      recognizer_ = std::move(r.live);
+      late_recognizer_ = std::move(r.late);
+      warmUpLate();
       loaded_stamp_ = stamp;
       afterLoad(warm_up_ms);
     } catch (const std::exception& e) {
@@ -161,9 +186,9 @@ class RecognizerNode {
     }
     spdlog::info("reloading the model {} ({})", options_.model, why);
     loading_stamp_ = stampOf(options_.model);
-    loading_ = std::async(std::launch::async, [options = options_] {
+    loading_ = std::async(std::launch::async, [options = options_, with_late = !lockstep_] {
       Loaded l;
-      l.recognizer = loadRecognizer(options, &l.warm_up_ms);
+      l.recognizers = loadRecognizers(options, with_late, &l.warm_up_ms);
       return l;
     });
   }
@@ -185,7 +210,9 @@ class RecognizerNode {
       return;
     try {
       Loaded l = loading_.get();
-      recognizer_ = std::move(l.recognizer);
+      recognizer_ = std::move(l.recognizers.live);
+      late_recognizer_ = std::move(l.recognizers.late);  // a late frame in progress keeps the old
+      warmUpLate();
       selector_.clear();  // results of the old model are not carried into the new one's frames
       loaded_stamp_ = loading_stamp_;
       status_.count("reloads");
@@ -206,12 +233,13 @@ class RecognizerNode {
   /// Handles the jobs that are ready.
   void process() {
     joiner_.expire(nowS());
+    finishLate();
     auto& ready = joiner_.ready();
     // Real time: of the joined frames waiting, only the newest is classified. The frames it
     // overtook are answered first, at once and without their pixels: each box whose candidate has
     // a result (of the last frame handled) carries it, the others are left out (boxes_unlabelled).
-    // Proposals without a frame are still answered (cheaply), and so are late ones (for an older
-    // frame, sent late on purpose: rare).
+    // Proposals without a frame are still answered (cheaply), and late ones (for an older frame,
+    // sent late on purpose: rare) go to the background thread.
     if (!lockstep_) {
       joiner_.markRealTimeDrops();
       for (Joiner::Job& job : ready)
@@ -220,14 +248,20 @@ class RecognizerNode {
     while (!ready.empty() && !shutdownRequested()) {
       Joiner::Job job = std::move(ready.front());
       ready.pop_front();
-      if (!job.drop) handle(job);
+      if (job.drop) continue;
+      if (job.late) {
+        late_.push_back(std::move(job));
+        continue;
+      }
+      if (auto prepared = prepare(job)) finish(classify(*recognizer_, std::move(*prepared)));
     }
+    startLate();
     status_.setQueueDepth(static_cast<int32_t>(joiner_.pending()));
   }
 
  private:
   struct Loaded {
-    std::unique_ptr<Recognizer> recognizer;
+    Recognizers recognizers;
     double warm_up_ms = 0;
   };
 
@@ -254,10 +288,26 @@ class RecognizerNode {
     }
   }
 
-  void handle(Joiner::Job& job) {
+  /// A frame's boxes, ready to classify: the proposals, their views and the requests.
+  struct Prepared {
+    proposals_t proposals;
+    std::shared_ptr<const image_t> frame;
+    std::vector<CandidateView> views;
+    std::vector<BoxRequest> requests;
+  };
+  /// What classify() found.
+  struct Classified {
+    Prepared job;
+    FrameDetections detections;
+    std::string corrupt;  ///< the frame's JPEG could not be decoded: why
+    std::string failed;   ///< recognition threw: why
+  };
+
+  /// Counts the input and selects the views to classify; answers at once (and returns nothing)
+  /// when there is nothing to classify: no frame, or no model.
+  std::optional<Prepared> prepare(const Joiner::Job& job) {
     const proposals_t& p = job.proposals;
     status_.noteInput(p.utime, p.seq);
-    detections_t out = emptyAnswer(p);
     if (!job.frame) {
       const char* why = job.outcome == Joiner::Outcome::kOverflow ? "waiting queue full"
                         : job.outcome == Joiner::Outcome::kTimedOut
@@ -265,30 +315,22 @@ class RecognizerNode {
                             : "its frame was never received";
       bus_.reject(ch_.proposals, "proposals for seq " + std::to_string(p.seq) + ": " + why);
       status_.count("proposals_without_frame");
-      publish(out);
-      return;
+      publish(emptyAnswer(p));
+      return std::nullopt;
     }
     if (!recognizer_) {
       status_.count("frames_without_model");
-      publish(out);
-      return;
+      publish(emptyAnswer(p));
+      return std::nullopt;
     }
-    cv::Mat bgr;
-    try {
-      bgr = decodeImageMessage(**job.frame, ch_.camera + " seq " + std::to_string(p.seq));
-    } catch (const std::exception& e) {
-      bus_.reject(ch_.camera, e.what());
-      status_.count("frames_corrupt");
-      publish(out);
-      return;
-    }
+    Prepared out{p, *job.frame, {}, {}};
     const size_t n = static_cast<size_t>(p.num_boxes);
-    std::vector<CandidateView> views(n);
+    out.views.resize(n);
     for (size_t i = 0; i < n; ++i) {
       const box_t& b = p.boxes[i];
       const auto& dir = p.view_direction[i];
-      views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
-                               p.median_depth[i], b.w, b.h};
+      out.views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
+                                   p.median_depth[i], b.w, b.h};
     }
     // A restarted camera stream starts the selection afresh (its seqs start again). Proposals
     // sent late for an older frame (a map's reference keyframe) are classified in full.
@@ -296,26 +338,58 @@ class RecognizerNode {
       restarts_seen_ = joiner_.restarts();
       selector_.clear();
     }
-    const std::vector<const CarriedView*> carried = selector_.select(p.map_id, p.seq, views);
-    std::vector<BoxRequest> requests(n);
+    const std::vector<const CarriedView*> carried = selector_.select(p.map_id, p.seq, out.views);
+    out.requests.resize(n);
     for (size_t i = 0; i < n; ++i) {
       const box_t& b = p.boxes[i];
-      requests[i] = BoxRequest{b.x, b.y, b.w, b.h, p.candidate_ids[i], carried[i]};
+      out.requests[i] = BoxRequest{b.x, b.y, b.w, b.h, p.candidate_ids[i], carried[i]};
     }
-    status_.addProcessed();
-    FrameDetections d;
+    return out;
+  }
+
+  /// Decodes the frame and classifies its boxes with `recognizer`. Touches nothing of the node:
+  /// runs on the background thread for late frames.
+  static Classified classify(Recognizer& recognizer, Prepared job) {
+    Classified out{std::move(job), {}, {}, {}};
+    const proposals_t& p = out.job.proposals;
+    cv::Mat bgr;
     try {
-      d = recognizer_->recognize(bgr, requests);
+      bgr = decodeImageMessage(*out.job.frame, "seq " + std::to_string(p.seq));
     } catch (const std::exception& e) {
-      status_.count("frames_failed");
-      status_.setMessage(std::string("recognition failed: ") + e.what());
-      spdlog::error("seq {}: recognition failed: {}", p.seq, e.what());
+      out.corrupt = e.what();
+      return out;
+    }
+    try {
+      out.detections = recognizer.recognize(bgr, out.job.requests);
+    } catch (const std::exception& e) {
+      out.failed = e.what();
+    }
+    return out;
+  }
+
+  /// Remembers the classified views, counts and publishes.
+  void finish(const Classified& c) {
+    const proposals_t& p = c.job.proposals;
+    detections_t out = emptyAnswer(p);
+    if (!c.corrupt.empty()) {
+      bus_.reject(ch_.camera, ch_.camera + " " + c.corrupt);
+      status_.count("frames_corrupt");
       publish(out);
       return;
     }
+    status_.addProcessed();
+    if (!c.failed.empty()) {
+      status_.count("frames_failed");
+      status_.setMessage("recognition failed: " + c.failed);
+      spdlog::error("seq {}: recognition failed: {}", p.seq, c.failed);
+      publish(out);
+      return;
+    }
+    FrameDetections d = c.detections;
     for (const auto& b : d.boxes)
       if (b.carried_seq < 0)
-        selector_.remember(p.map_id, p.seq, views[static_cast<size_t>(b.input_index)], b.log_prob);
+        selector_.remember(p.map_id, p.seq, c.job.views[static_cast<size_t>(b.input_index)],
+                           b.log_prob);
     const int64_t valid = countBoxes(&d);
     if (valid > d.carried) status_.count(std::string("encoder.") + encoderName(d.stats.used));
     const double ms = d.stats.features_ms + d.stats.coding_ms + d.stats.encode_ms;
@@ -324,6 +398,59 @@ class RecognizerNode {
     out.encode_ms = lockstep_ ? 0.f : static_cast<float>(ms);
     fill(d, &out);
     publish(out);
+  }
+
+  /// Real time: starts classifying the oldest waiting late frame in the background (one at a time),
+  /// with the late recognizer (the current model), its thread below the recognizer's own.
+  void startLate() {
+    while (!late_running_.valid() && !late_.empty()) {
+      Joiner::Job job = std::move(late_.front());
+      late_.pop_front();
+      std::optional<Prepared> prepared = prepare(job);
+      if (!prepared) continue;
+      // Late frames carry nothing (ViewSelector::select), so no request points into the selector.
+      for (auto& r : prepared->requests) r.carried = nullptr;
+      status_.count("frames_late");
+      if (!late_recognizer_) {  // lockstep never gets here; this is only a guard
+        finish(classify(*recognizer_, std::move(*prepared)));
+        continue;
+      }
+      auto done = std::make_shared<std::promise<Classified>>();
+      late_running_ = done->get_future();
+      late_worker_->post([done, recognizer = late_recognizer_,
+                          job = std::make_shared<const Prepared>(std::move(*prepared))] {
+        try {
+          done->set_value(classify(*recognizer, *job));
+        } catch (...) {  // classify() reports what it can name; this is only a guard
+          done->set_value(Classified{*job, {}, {}, "unexpected error"});
+        }
+      });
+    }
+  }
+
+  /// Real time: grows the late recognizer's buffers on the thread that will use them (its heap
+  /// arena too), queued before any late frame.
+  void warmUpLate() {
+    if (!late_worker_ || !late_recognizer_) return;
+    late_worker_->post(
+        [recognizer = late_recognizer_, w = options_.warm_up_width, h = options_.warm_up_height] {
+          try {
+            recognizer->warmUp(w, h);
+          } catch (const std::exception& e) {
+            spdlog::warn(
+                "preparing the late frames' buffers failed ({}); the first late frame grows them",
+                e.what());
+          }
+        });
+  }
+
+  /// Publishes the late frame classified in the background once it is done, then starts the next.
+  void finishLate() {
+    if (!late_running_.valid() ||
+        late_running_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+      return;
+    finish(late_running_.get());
+    startLate();
   }
 
   /// A frame that a newer one overtook, answered with what the selection holds of its candidates
@@ -403,6 +530,12 @@ class RecognizerNode {
   int64_t restarts_seen_ = 0;  ///< camera restarts when the selection last looked
   Joiner joiner_;
   std::unique_ptr<Recognizer> recognizer_;
+  std::shared_ptr<Recognizer> late_recognizer_;  ///< real time only
+  // Real time: late frames waiting for the background thread, and the one it classifies. The
+  // worker is declared after what its jobs use of the node (nothing: they hold their own).
+  std::deque<Joiner::Job> late_;
+  std::future<Classified> late_running_;
+  std::unique_ptr<SerialWorker> late_worker_;
   bool tried_ = false;
   Clock::time_point last_try_;
   // Live reload.

@@ -27,6 +27,7 @@ class SeqJoiner {
     std::optional<Frame> frame;  ///< set when joined
     Outcome outcome = Outcome::kJoined;
     bool drop = false;  ///< real time: a newer joined frame is waiting (markRealTimeDrops)
+    bool late = false;  ///< real time: joined, for a frame older than one taken before
   };
 
   SeqJoiner(size_t max_frames, size_t max_pending, double timeout_s)
@@ -95,15 +96,18 @@ class SeqJoiner {
   }
 
   /// Real time: of the joined jobs ready, only the newest is to be handled; the others get `drop`.
-  /// Late ones never do: a seq below the newest of the jobs ready at an earlier call is proposals
-  /// sent late on purpose for a frame still buffered (a map's reference keyframe, procs/proposals).
+  /// Late ones (`late`) never do: a seq below the newest of the jobs ready at an earlier call is
+  /// proposals sent late on purpose for a frame still buffered (a map's reference keyframe,
+  /// procs/proposals).
   void markRealTimeDrops() {
     const auto late = [this](const Job& j) { return taken_seq_ && j.seq < *taken_seq_; };
     size_t newest = ready_.size();
     for (size_t i = 0; i < ready_.size(); ++i)
       if (ready_[i].frame && !late(ready_[i])) newest = i;
-    for (size_t i = 0; i < ready_.size(); ++i)
-      ready_[i].drop = ready_[i].frame && i != newest && !late(ready_[i]);
+    for (size_t i = 0; i < ready_.size(); ++i) {
+      ready_[i].late = ready_[i].frame && late(ready_[i]);
+      ready_[i].drop = ready_[i].frame && i != newest && !ready_[i].late;
+    }
     for (const Job& j : ready_) taken_seq_ = std::max(taken_seq_.value_or(j.seq), j.seq);
   }
 

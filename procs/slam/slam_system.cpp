@@ -7,11 +7,11 @@
 #include <set>
 #include <shared_mutex>
 
+#include "common/serial_worker.h"
 #include "procs/slam/depth/depth_filter.h"
 #include "procs/slam/features/orb_extractor.h"
 #include "procs/slam/map/map.h"
 #include "procs/slam/mapping/local_mapper.h"
-#include "procs/slam/serial_worker.h"
 #include "procs/slam/tracking/tracker.h"
 
 namespace slamaware::slam {

@@ -19,13 +19,16 @@
 #include "common/geometry.h"
 #include "procs/slam/slam_options.h"
 
+namespace slamaware {
+class SerialWorker;
+}  // namespace slamaware
+
 namespace slamaware::slam {
 
 class OrbExtractor;
 class Tracker;
 class LocalMapper;
 class DepthFilter;
-class SerialWorker;
 class Map;
 class KeyFrame;
 struct Frame;

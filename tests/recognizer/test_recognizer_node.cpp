@@ -70,6 +70,7 @@ int64_t counter(const status_t& s, const std::string& name) {
 struct Listener {
   Bus bus{test::testUrl()};
   std::map<int32_t, detections_t> detections;
+  std::vector<int32_t> order;  ///< seqs in the order their DETECTIONS came
   int answers = 0;
   status_t last_status{};
   bool have_status = false;
@@ -77,6 +78,7 @@ struct Listener {
   Listener() {
     bus.subscribe<detections_t>("DETECTIONS", [this](const detections_t& d) {
       detections[d.seq] = d;
+      order.push_back(d.seq);
       ++answers;
     });
     bus.subscribe<status_t>("RECOGNIZER_STATUS", [this](const status_t& s) {
@@ -513,5 +515,46 @@ TEST(RecognizerNode, RealTimeAnswersTheFramesItHadNoTimeToClassify) {
   }
   EXPECT_EQ(counter(l.last_status, "boxes_unlabelled"), left_out);
   EXPECT_EQ(l.answers, 4);
+  EXPECT_EQ(node.stop(), 0) << node.log();
+}
+
+// Real time: proposals sent late for an older frame (a map's reference keyframe) are classified in
+// full on a background thread, and the live frame that comes after them does not wait: its
+// DETECTIONS come first.
+TEST(RecognizerNode, RealTimeClassifiesLateProposalsWithoutHoldingUpLiveFrames) {
+  const std::string dir = test::tempDir("recognizer_node_late_realtime");
+  const std::string config = configWithSmallModel(dir, "[disc, bar]");
+  Listener l;
+  test::ChildProcess node(
+      {test::binPath("slamaware-recognizer"), "--config", config, "--lcm-url", test::testUrl()},
+      dir + "/node.log");
+  ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
+  for (int32_t s = 0; s < 4; ++s)
+    l.bus.publish("CAMERA", makeImageMessage(test::texturedFrame(40 + s), 1000000 + s * 33333, s,
+                                             image_t::PIXEL_FORMAT_JPEG));
+  l.bus.handle(20);
+  const std::array<float, 4> box{200, 150, 96, 96};
+  l.bus.publish("PROPOSALS", proposals(2, {box}));
+  ASSERT_TRUE(l.pump([&] { return l.detections.count(2) > 0; }, 10s)) << node.log();
+  // Frame 0's late proposals: 150 boxes, far more work than frame 3's one box.
+  std::vector<std::array<float, 4>> boxes;
+  for (int i = 0; i < 150; ++i)
+    boxes.push_back({static_cast<float>(7 * (i % 50)),
+                     static_cast<float>(20 * (i / 50) + 5 * i % 17),
+                     static_cast<float>(60 + i % 7 * 30), static_cast<float>(50 + i % 5 * 40)});
+  l.bus.publish("PROPOSALS", proposals(0, boxes));
+  l.bus.publish("PROPOSALS", proposals(3, {box}));
+  ASSERT_TRUE(l.pump([&] { return l.detections.count(0) && l.detections.count(3); }, 20s))
+      << node.log();
+  EXPECT_EQ(l.order, (std::vector<int32_t>{2, 3, 0})) << "the live frame waited for the late one";
+  const detections_t& late = l.detections.at(0);
+  ASSERT_GT(late.num_boxes, 10);
+  EXPECT_EQ(late.classified_seq, std::vector<int32_t>(static_cast<size_t>(late.num_boxes), 0))
+      << "every box of the late frame classified from its own pixels";
+  EXPECT_EQ(l.detections.at(3).classified_seq, (std::vector<int32_t>{3}));
+  const int statuses = l.statuses;
+  ASSERT_TRUE(l.pump([&] { return l.statuses >= statuses + 2; }, 5s));
+  EXPECT_EQ(counter(l.last_status, "frames_late"), 1);
+  EXPECT_EQ(l.answers, 3);
   EXPECT_EQ(node.stop(), 0) << node.log();
 }

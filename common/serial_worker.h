@@ -8,7 +8,7 @@
 #include <string>
 #include <thread>
 
-namespace slamaware::slam {
+namespace slamaware {
 
 class SerialWorker {
  public:
@@ -38,4 +38,4 @@ class SerialWorker {
   std::thread thread_;
 };
 
-}  // namespace slamaware::slam
+}  // namespace slamaware

@@ -1,10 +1,10 @@
-#include "procs/slam/serial_worker.h"
+#include "common/serial_worker.h"
 
 #include <spdlog/spdlog.h>
 
 #include "common/thread_priority.h"
 
-namespace slamaware::slam {
+namespace slamaware {
 
 SerialWorker::SerialWorker(bool threaded, std::string name, int nice)
     : threaded_(threaded), name_(std::move(name)), nice_(nice) {
@@ -69,4 +69,4 @@ void SerialWorker::run() {
   idle_cv_.notify_all();
 }
 
-}  // namespace slamaware::slam
+}  // namespace slamaware
