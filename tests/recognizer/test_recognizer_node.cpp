@@ -60,6 +60,16 @@ proposals_t proposals(int32_t seq, const std::vector<std::array<float, 4>>& boxe
   return p;
 }
 
+// 150 boxes of many sizes spread over a 640 x 480 frame: a frame that takes a while to classify.
+std::vector<std::array<float, 4>> manyBoxes() {
+  std::vector<std::array<float, 4>> boxes;
+  for (int i = 0; i < 150; ++i)
+    boxes.push_back({static_cast<float>(7 * (i % 50)),
+                     static_cast<float>(20 * (i / 50) + 5 * i % 17),
+                     static_cast<float>(60 + i % 7 * 30), static_cast<float>(50 + i % 5 * 40)});
+  return boxes;
+}
+
 int64_t counter(const status_t& s, const std::string& name) {
   for (int i = 0; i < s.num_counters; ++i)
     if (s.counter_names[static_cast<size_t>(i)] == name)
@@ -467,11 +477,7 @@ TEST(RecognizerNode, RealTimeAnswersTheFramesItHadNoTimeToClassify) {
       dir + "/node.log");
   ASSERT_TRUE(l.pump([&] { return l.have_status; }, 10s)) << node.log();
   // 150 boxes over the frame: classifying frame 0 takes long enough for frames 1-3 to arrive.
-  std::vector<std::array<float, 4>> boxes;
-  for (int i = 0; i < 150; ++i)
-    boxes.push_back({static_cast<float>(7 * (i % 50)),
-                     static_cast<float>(20 * (i / 50) + 5 * i % 17),
-                     static_cast<float>(60 + i % 7 * 30), static_cast<float>(50 + i % 5 * 40)});
+  const std::vector<std::array<float, 4>> boxes = manyBoxes();
   for (int32_t s = 0; s < 4; ++s)
     l.bus.publish("CAMERA", makeImageMessage(test::texturedFrame(30 + s), 1000000 + s * 33333, s,
                                              image_t::PIXEL_FORMAT_JPEG));
@@ -537,11 +543,7 @@ TEST(RecognizerNode, RealTimeClassifiesLateProposalsWithoutHoldingUpLiveFrames) 
   l.bus.publish("PROPOSALS", proposals(2, {box}));
   ASSERT_TRUE(l.pump([&] { return l.detections.count(2) > 0; }, 10s)) << node.log();
   // Frame 0's late proposals: 150 boxes, far more work than frame 3's one box.
-  std::vector<std::array<float, 4>> boxes;
-  for (int i = 0; i < 150; ++i)
-    boxes.push_back({static_cast<float>(7 * (i % 50)),
-                     static_cast<float>(20 * (i / 50) + 5 * i % 17),
-                     static_cast<float>(60 + i % 7 * 30), static_cast<float>(50 + i % 5 * 40)});
+  const std::vector<std::array<float, 4>> boxes = manyBoxes();
   l.bus.publish("PROPOSALS", proposals(0, boxes));
   l.bus.publish("PROPOSALS", proposals(3, {box}));
   ASSERT_TRUE(l.pump([&] { return l.detections.count(0) && l.detections.count(3); }, 20s))
