@@ -368,7 +368,7 @@ class RecognizerNode {
   }
 
   /// Remembers the classified views, counts and publishes.
-  void finish(const Classified& c) {
+  void finish(Classified c) {
     const proposals_t& p = c.job.proposals;
     detections_t out = emptyAnswer(p);
     if (!c.corrupt.empty()) {
@@ -385,7 +385,7 @@ class RecognizerNode {
       publish(out);
       return;
     }
-    FrameDetections d = c.detections;
+    FrameDetections& d = c.detections;
     for (const auto& b : d.boxes)
       if (b.carried_seq < 0)
         selector_.remember(p.map_id, p.seq, c.job.views[static_cast<size_t>(b.input_index)],
