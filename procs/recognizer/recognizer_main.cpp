@@ -89,24 +89,30 @@ struct Recognizers {
   std::shared_ptr<Recognizer> late;
 };
 
-/// Loads the model file and prepares the recognizers with it: the live one's buffers are grown
-/// (`warm_up_ms`; without that, its first frames take several times as long), the late one's on
-/// its own thread (RecognizerNode::warmUpLate). Throws on a missing or bad model; a failed warm-up
-/// is only logged (the first frames grow the buffers).
+/// Grows `recognizer`'s buffers to a warm_up_width x warm_up_height frame (without that, its first
+/// frames take several times as long); returns the ms spent. A failure is only logged: the first
+/// frames grow the buffers.
+double warmUp(Recognizer& recognizer, const RecognizerOptions& options) {
+  try {
+    return recognizer.warmUp(options.warm_up_width, options.warm_up_height);
+  } catch (const std::exception& e) {
+    spdlog::warn(
+        "preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
+        options.warm_up_width, options.warm_up_height, e.what());
+    return 0;
+  }
+}
+
+/// Loads the model file and prepares the recognizers with it: the live one warmed up here
+/// (`warm_up_ms`), the late one on its own thread (RecognizerNode::warmUpLate). Throws on a
+/// missing or bad model.
 Recognizers loadRecognizers(const RecognizerOptions& options, bool with_late, double* warm_up_ms) {
   auto model = std::make_shared<const RecognizerModel>(loadModel(options.model));
   RecognizerOptions late_options = options;
   late_options.encoder = "direct";
   Recognizers out{std::make_unique<Recognizer>(model, options),
                   with_late ? std::make_shared<Recognizer>(model, late_options) : nullptr};
-  *warm_up_ms = 0;
-  try {
-    *warm_up_ms = out.live->warmUp(options.warm_up_width, options.warm_up_height);
-  } catch (const std::exception& e) {
-    spdlog::warn(
-        "preparing the buffers of {}x{} frames failed ({}); the first frames will grow them",
-        options.warm_up_width, options.warm_up_height, e.what());
-  }
+  *warm_up_ms = warmUp(*out.live, options);
   return out;
 }
 
@@ -119,7 +125,6 @@ class RecognizerNode {
         ch_(sys.channels),
         lockstep_(sys.bus.lockstep),
         options_(options),
-
         selector_(options.view_selection),
         joiner_(static_cast<size_t>(std::max(1, options.frame_buffer)),
                 static_cast<size_t>(std::max(1, options.proposals_buffer)),
@@ -249,13 +254,14 @@ class RecognizerNode {
       Joiner::Job job = std::move(ready.front());
       ready.pop_front();
       if (job.drop) continue;
-      if (job.late) {
-        late_.push_back(std::move(job));
-        continue;
-      }
-      if (auto prepared = prepare(job)) finish(classify(*recognizer_, std::move(*prepared)));
+      const bool late = job.late;
+      std::optional<Prepared> prepared = prepare(std::move(job));
+      if (!prepared) continue;
+      if (late)
+        startLate(std::move(*prepared));
+      else
+        finish(classify(*recognizer_, std::move(*prepared)));
     }
-    startLate();
     status_.setQueueDepth(static_cast<int32_t>(joiner_.pending()));
   }
 
@@ -305,7 +311,7 @@ class RecognizerNode {
 
   /// Counts the input and selects the views to classify; answers at once (and returns nothing)
   /// when there is nothing to classify: no frame, or no model.
-  std::optional<Prepared> prepare(const Joiner::Job& job) {
+  std::optional<Prepared> prepare(Joiner::Job&& job) {
     const proposals_t& p = job.proposals;
     status_.noteInput(p.utime, p.seq);
     if (!job.frame) {
@@ -323,14 +329,15 @@ class RecognizerNode {
       publish(emptyAnswer(p));
       return std::nullopt;
     }
-    Prepared out{p, *job.frame, {}, {}};
-    const size_t n = static_cast<size_t>(p.num_boxes);
+    Prepared out{std::move(job.proposals), *job.frame, {}, {}};
+    const proposals_t& q = out.proposals;
+    const size_t n = static_cast<size_t>(q.num_boxes);
     out.views.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      const box_t& b = p.boxes[i];
-      const auto& dir = p.view_direction[i];
-      out.views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
-                                   p.median_depth[i], b.w, b.h};
+      const box_t& b = q.boxes[i];
+      const auto& dir = q.view_direction[i];
+      out.views[i] = CandidateView{q.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
+                                   q.median_depth[i], b.w, b.h};
     }
     // A restarted camera stream starts the selection afresh (its seqs start again). Proposals
     // sent late for an older frame (a map's reference keyframe) are classified in full.
@@ -338,11 +345,11 @@ class RecognizerNode {
       restarts_seen_ = joiner_.restarts();
       selector_.clear();
     }
-    const std::vector<const CarriedView*> carried = selector_.select(p.map_id, p.seq, out.views);
+    const std::vector<const CarriedView*> carried = selector_.select(q.map_id, q.seq, out.views);
     out.requests.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      const box_t& b = p.boxes[i];
-      out.requests[i] = BoxRequest{b.x, b.y, b.w, b.h, p.candidate_ids[i], carried[i]};
+      const box_t& b = q.boxes[i];
+      out.requests[i] = BoxRequest{b.x, b.y, b.w, b.h, q.candidate_ids[i], carried[i]};
     }
     return out;
   }
@@ -400,32 +407,22 @@ class RecognizerNode {
     publish(out);
   }
 
-  /// Real time: starts classifying the oldest waiting late frame in the background (one at a time),
-  /// with the late recognizer (the current model), its thread below the recognizer's own.
-  void startLate() {
-    while (!late_running_.valid() && !late_.empty()) {
-      Joiner::Job job = std::move(late_.front());
-      late_.pop_front();
-      std::optional<Prepared> prepared = prepare(job);
-      if (!prepared) continue;
-      // Late frames carry nothing (ViewSelector::select), so no request points into the selector.
-      for (auto& r : prepared->requests) r.carried = nullptr;
-      status_.count("frames_late");
-      if (!late_recognizer_) {  // lockstep never gets here; this is only a guard
-        finish(classify(*recognizer_, std::move(*prepared)));
-        continue;
+  /// Real time: queues a late frame on the background thread, after those already there, with the
+  /// late recognizer (the current model); the thread runs below the recognizer's own priority.
+  void startLate(Prepared job) {
+    // Late frames carry nothing (ViewSelector::select), so no request points into the selector.
+    for (auto& r : job.requests) r.carried = nullptr;
+    status_.count("frames_late");
+    auto done = std::make_shared<std::promise<Classified>>();
+    late_results_.push_back(done->get_future());
+    late_worker_->post([done, recognizer = late_recognizer_,
+                        job = std::make_shared<const Prepared>(std::move(job))] {
+      try {
+        done->set_value(classify(*recognizer, *job));
+      } catch (...) {  // classify() reports what it can name; this is only a guard
+        done->set_value(Classified{*job, {}, {}, "unexpected error"});
       }
-      auto done = std::make_shared<std::promise<Classified>>();
-      late_running_ = done->get_future();
-      late_worker_->post([done, recognizer = late_recognizer_,
-                          job = std::make_shared<const Prepared>(std::move(*prepared))] {
-        try {
-          done->set_value(classify(*recognizer, *job));
-        } catch (...) {  // classify() reports what it can name; this is only a guard
-          done->set_value(Classified{*job, {}, {}, "unexpected error"});
-        }
-      });
-    }
+    });
   }
 
   /// Real time: grows the late recognizer's buffers on the thread that will use them (its heap
@@ -433,24 +430,16 @@ class RecognizerNode {
   void warmUpLate() {
     if (!late_worker_ || !late_recognizer_) return;
     late_worker_->post(
-        [recognizer = late_recognizer_, w = options_.warm_up_width, h = options_.warm_up_height] {
-          try {
-            recognizer->warmUp(w, h);
-          } catch (const std::exception& e) {
-            spdlog::warn(
-                "preparing the late frames' buffers failed ({}); the first late frame grows them",
-                e.what());
-          }
-        });
+        [recognizer = late_recognizer_, options = options_] { warmUp(*recognizer, options); });
   }
 
-  /// Publishes the late frame classified in the background once it is done, then starts the next.
+  /// Publishes the late frames classified in the background that are done, in order.
   void finishLate() {
-    if (!late_running_.valid() ||
-        late_running_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-      return;
-    finish(late_running_.get());
-    startLate();
+    while (!late_results_.empty() &&
+           late_results_.front().wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      finish(late_results_.front().get());
+      late_results_.pop_front();
+    }
   }
 
   /// A frame that a newer one overtook, answered with what the selection holds of its candidates
@@ -531,10 +520,9 @@ class RecognizerNode {
   Joiner joiner_;
   std::unique_ptr<Recognizer> recognizer_;
   std::shared_ptr<Recognizer> late_recognizer_;  ///< real time only
-  // Real time: late frames waiting for the background thread, and the one it classifies. The
-  // worker is declared after what its jobs use of the node (nothing: they hold their own).
-  std::deque<Joiner::Job> late_;
-  std::future<Classified> late_running_;
+  // Real time: the late frames on the background thread, in order. The worker is declared last:
+  // its jobs hold what they use (nothing of the node) and it finishes them before it goes.
+  std::deque<std::future<Classified>> late_results_;
   std::unique_ptr<SerialWorker> late_worker_;
   bool tried_ = false;
   Clock::time_point last_try_;
