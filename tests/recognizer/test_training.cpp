@@ -3,15 +3,18 @@
 // bit-flipped or otherwise wrong model file is refused with a message that names it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <sstream>
 
 #include "common/atomic_file.h"
 #include "common/config.h"
@@ -740,10 +743,10 @@ TEST(EvalObjectsCommandLine, EveryBoxedFrameOfASequenceOfSeparateViewsIsClassifi
                                       [](const GroundTruthBox& b) { return b.frame % 5 == 0; });
   ASSERT_GT(all, first) << "the test needs boxes on frames other than 0 and 5";
   const std::string out = dir + "/objects.json";
-  const std::string cmd = test::binPath("slamaware-eval-objects") + " --out " + out +
-                          " --no-object-sets --model " +
-                          test::sourcePath("models/recognizer.model") + " --ss-boxes 50 " + video +
-                          " " + views + " > " + dir + "/eval.log 2>&1";
+  const std::string cmd =
+      test::binPath("slamaware-eval-objects") + " --out " + out + " --no-object-sets --model " +
+      test::sourcePath("models/recognizer.model") + " --ss-boxes 50 " + "--boxes-csv " + dir +
+      "/boxes.csv " + video + " " + views + " > " + dir + "/eval.log 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << "see " << dir << "/eval.log";
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(out));
   EXPECT_EQ(j["sequences"]["kitchen"]["gt_boxes"]["boxes"].get<int64_t>(), first);
@@ -756,6 +759,36 @@ TEST(EvalObjectsCommandLine, EveryBoxedFrameOfASequenceOfSeparateViewsIsClassifi
       << "a rendered video has the pipeline's mAP";
   ASSERT_TRUE(j["sequences"]["kitchen_views"].contains("single_view_ss"));
   EXPECT_EQ(j["sequences"]["kitchen_views"]["single_view_ss"]["frames_evaluated"].get<int>(), 7);
+  // --boxes-csv: every scored box once, called what the confusion matrix counts, by the best of
+  // its class probabilities.
+  std::ifstream csv(dir + "/boxes.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line.rfind("sequence,frame,x,y,w,h,class,instance,called,p_", 0), 0u) << line;
+  const std::vector<std::string> classes =
+      j["sequences"]["kitchen_views"]["gt_boxes"]["classes"].get<std::vector<std::string>>();
+  std::map<std::string, int64_t> rows, right;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream in(line);
+    for (std::string v; std::getline(in, v, ',');) f.push_back(v);
+    ASSERT_EQ(f.size(), 9 + classes.size()) << line;
+    ++rows[f[0]];
+    const auto called = std::find(classes.begin(), classes.end(), f[8]);
+    ASSERT_NE(called, classes.end()) << line;
+    for (size_t c = 0; c < classes.size(); ++c)
+      EXPECT_GE(std::stod(f[9 + static_cast<size_t>(called - classes.begin())]),
+                std::stod(f[9 + c]))
+          << line;
+    const bool known = std::find(classes.begin(), classes.end(), f[6]) != classes.end();
+    right[f[0]] += f[8] == (known ? f[6] : std::string("background"));
+  }
+  EXPECT_EQ(rows["kitchen"], first);
+  EXPECT_EQ(rows["kitchen_views"], all);
+  int64_t diagonal = 0;
+  const auto confusion = j["sequences"]["kitchen_views"]["gt_boxes"]["confusion"];
+  for (size_t c = 0; c < classes.size(); ++c) diagonal += confusion[c][c].get<int64_t>();
+  EXPECT_EQ(right["kitchen_views"], diagonal);
 }
 
 namespace {

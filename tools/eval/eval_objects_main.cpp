@@ -22,10 +22,13 @@
 //     (mAP) against the ground-truth boxes: detection on real frames without SLAM.
 //   {"sequences": {"<name>": {"gt_boxes": {...}, "single_view_ss": {...}}}, "overall": {"gt_boxes":
 //   {...}}}
+// --boxes-csv FILE: every scored ground-truth box with the class it was called and each class's
+// probability (which real objects fail, and how close they came).
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -57,6 +60,13 @@ std::vector<std::string> defaultObjectSets(const std::string& shared) {
   }
   return sets;
 }
+
+// One ground-truth box as the model saw it (--boxes-csv).
+struct BoxVerdict {
+  GroundTruthBox box;
+  int called = 0;               ///< index into the classes
+  std::vector<float> log_prob;  ///< calibrated, per class
+};
 
 // Accuracy of the model on ground-truth boxes of scene frames: the boxes themselves and one
 // jittered copy each (IoU >= 0.6, as a proposal would draw them).
@@ -126,7 +136,9 @@ struct BoxTally {
   }
 };
 
-BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, int stride) {
+// `verdicts`: each exact box's, appended.
+BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, int stride,
+                            std::vector<BoxVerdict>* verdicts) {
   BoxTally t;
   t.classes = recognizer.classes();
   const int C = static_cast<int>(t.classes.size());
@@ -139,17 +151,20 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
     const cv::Mat image = readImage(seq.framePath(static_cast<size_t>(frame)));
     std::vector<BoxRequest> req;
     std::vector<int> label;
+    std::vector<size_t> truth_of;  // of each request
     for (size_t i = 0; i < truth.size(); ++i) {
       const auto& b = truth[i];
       auto it = std::find(t.classes.begin(), t.classes.end(), b.cls);
       const int l = it == t.classes.end() ? C - 1 : static_cast<int>(it - t.classes.begin());
       req.push_back({b.x, b.y, b.w, b.h, 0});
       label.push_back(l);
+      truth_of.push_back(i);
       for (const auto& r :
            jitteredBoxes(cv::Rect2d(b.x, b.y, b.w, b.h), image.cols, image.rows, 1, 0.6,
                          static_cast<uint32_t>(frame * 131 + static_cast<int>(i)))) {
         req.push_back({r.x, r.y, r.width, r.height, 1});
         label.push_back(l);
+        truth_of.push_back(i);
       }
     }
     const FrameDetections d = recognizer.recognize(image, req);
@@ -165,6 +180,7 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
       ++t.boxes;
       t.correct += pred == truth_label;
       ++t.confusion[static_cast<size_t>(truth_label)][static_cast<size_t>(pred)];
+      verdicts->push_back({truth[truth_of[static_cast<size_t>(b.input_index)]], pred, b.log_prob});
       std::vector<float> lp = b.log_prob;
       std::nth_element(lp.begin(), lp.begin() + 1, lp.end(), std::greater<float>());
       t.runner_up_log_prob.push_back(lp.size() > 1 ? lp[1] : 0.0);
@@ -255,6 +271,7 @@ struct Args {
   std::string model_path = "models/recognizer.model";
   std::string out, config, shared = "../shared/data", protocol = "auto", log_level = "info";
   int max_views = -1, loio_max = 16, ss_boxes = 300, ss_width = 320;
+  std::string boxes_csv;
   bool skip_sets = false;
 };
 
@@ -303,6 +320,26 @@ void addOptions(CLI::App& app, Args& a) {
   app.add_option("--ss-width", a.ss_width,
                  "px, frames are downscaled to this width for selective search");
   app.add_flag("--no-object-sets", a.skip_sets, "only the ground-truth boxes of the sequences");
+  app.add_option("--boxes-csv", a.boxes_csv,
+                 "CSV file: every ground-truth box of the sequences with the class it was called "
+                 "and the probability of each class");
+}
+
+// The CSV of --boxes-csv: a header, then one row per box of `verdicts`.
+void writeBoxesCsv(const std::string& path, const std::vector<std::string>& classes,
+                   const std::vector<std::pair<std::string, BoxVerdict>>& verdicts) {
+  std::ofstream f(path);
+  f << "sequence,frame,x,y,w,h,class,instance,called";
+  for (const auto& c : classes) f << ",p_" << c;
+  f << "\n";
+  for (const auto& [sequence, v] : verdicts) {
+    f << fmt::format("{},{},{:g},{:g},{:g},{:g},{},{},{}", sequence, v.box.frame, v.box.x, v.box.y,
+                     v.box.w, v.box.h, v.box.cls, v.box.instance,
+                     classes[static_cast<size_t>(v.called)]);
+    for (float lp : v.log_prob) f << fmt::format(",{:.4f}", std::exp(lp));
+    f << "\n";
+  }
+  if (!f) throw std::runtime_error(path + ": cannot write");
 }
 
 void printConfusion(const std::vector<std::string>& classes,
@@ -371,11 +408,14 @@ void evaluateSequences(const Args& a, nlohmann::json& j) {
   const RecognizerOptions recognizer_options;
   Recognizer recognizer(model, recognizer_options);
   BoxTally suite;
+  std::vector<std::pair<std::string, BoxVerdict>> verdicts;
   for (const auto& dir : a.sequences) {
     const SequenceFolder seq = SequenceFolder::open(dir);
     if (!seq.hasBoxes()) continue;
-    const BoxTally t = classifySceneBoxes(recognizer, seq, 5);
+    std::vector<BoxVerdict> seen;
+    const BoxTally t = classifySceneBoxes(recognizer, seq, 5, &seen);
     const std::string name = folderName(dir);
+    for (BoxVerdict& v : seen) verdicts.emplace_back(name, std::move(v));
     j["sequences"][name]["gt_boxes"] = t.json();
     std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
               << " ground-truth boxes right (jittered: "
@@ -393,6 +433,7 @@ void evaluateSequences(const Args& a, nlohmann::json& j) {
     std::cout << name << ": selective search + recognizer, single-view mAP " << ss["mAP"] << " ("
               << ss["boxes_per_frame_after_suppression"] << " boxes per frame)\n";
   }
+  if (!a.boxes_csv.empty()) writeBoxesCsv(a.boxes_csv, recognizer.classes(), verdicts);
   if (suite.boxes > 0) {
     j["overall"]["gt_boxes"] = suite.json();
     std::cout << "suite: " << suite.json()["accuracy"].get<double>() << "% of " << suite.boxes
