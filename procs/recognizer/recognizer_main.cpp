@@ -312,32 +312,32 @@ class RecognizerNode {
   /// Counts the input and selects the views to classify; answers at once (and returns nothing)
   /// when there is nothing to classify: no frame, or no model.
   std::optional<Prepared> prepare(Joiner::Job&& job) {
-    const proposals_t& p = job.proposals;
-    status_.noteInput(p.utime, p.seq);
+    status_.noteInput(job.proposals.utime, job.proposals.seq);
     if (!job.frame) {
       const char* why = job.outcome == Joiner::Outcome::kOverflow ? "waiting queue full"
                         : job.outcome == Joiner::Outcome::kTimedOut
                             ? "its frame did not arrive in time"
                             : "its frame was never received";
-      bus_.reject(ch_.proposals, "proposals for seq " + std::to_string(p.seq) + ": " + why);
+      bus_.reject(ch_.proposals,
+                  "proposals for seq " + std::to_string(job.proposals.seq) + ": " + why);
       status_.count("proposals_without_frame");
-      publish(emptyAnswer(p));
+      publish(emptyAnswer(job.proposals));
       return std::nullopt;
     }
     if (!recognizer_) {
       status_.count("frames_without_model");
-      publish(emptyAnswer(p));
+      publish(emptyAnswer(job.proposals));
       return std::nullopt;
     }
     Prepared out{std::move(job.proposals), *job.frame, {}, {}};
-    const proposals_t& q = out.proposals;
-    const size_t n = static_cast<size_t>(q.num_boxes);
+    const proposals_t& p = out.proposals;  // job's, moved
+    const size_t n = static_cast<size_t>(p.num_boxes);
     out.views.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      const box_t& b = q.boxes[i];
-      const auto& dir = q.view_direction[i];
-      out.views[i] = CandidateView{q.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
-                                   q.median_depth[i], b.w, b.h};
+      const box_t& b = p.boxes[i];
+      const auto& dir = p.view_direction[i];
+      out.views[i] = CandidateView{p.candidate_ids[i], Eigen::Vector3f(dir[0], dir[1], dir[2]),
+                                   p.median_depth[i], b.w, b.h};
     }
     // A restarted camera stream starts the selection afresh (its seqs start again). Proposals
     // sent late for an older frame (a map's reference keyframe) are classified in full.
@@ -345,11 +345,11 @@ class RecognizerNode {
       restarts_seen_ = joiner_.restarts();
       selector_.clear();
     }
-    const std::vector<const CarriedView*> carried = selector_.select(q.map_id, q.seq, out.views);
+    const std::vector<const CarriedView*> carried = selector_.select(p.map_id, p.seq, out.views);
     out.requests.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      const box_t& b = q.boxes[i];
-      out.requests[i] = BoxRequest{b.x, b.y, b.w, b.h, q.candidate_ids[i], carried[i]};
+      const box_t& b = p.boxes[i];
+      out.requests[i] = BoxRequest{b.x, b.y, b.w, b.h, p.candidate_ids[i], carried[i]};
     }
     return out;
   }

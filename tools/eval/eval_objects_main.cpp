@@ -136,7 +136,7 @@ struct BoxTally {
   }
 };
 
-// `verdicts`: each exact box's, appended.
+// `verdicts` (may be null): each exact box's, appended.
 BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, int stride,
                             std::vector<BoxVerdict>* verdicts) {
   BoxTally t;
@@ -150,20 +150,18 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
     if (truth.empty()) continue;
     const cv::Mat image = readImage(seq.framePath(static_cast<size_t>(frame)));
     std::vector<BoxRequest> req;
-    std::vector<int> label;
+    std::vector<int> label;        // of each truth box
     std::vector<size_t> truth_of;  // of each request
     for (size_t i = 0; i < truth.size(); ++i) {
       const auto& b = truth[i];
       auto it = std::find(t.classes.begin(), t.classes.end(), b.cls);
-      const int l = it == t.classes.end() ? C - 1 : static_cast<int>(it - t.classes.begin());
+      label.push_back(it == t.classes.end() ? C - 1 : static_cast<int>(it - t.classes.begin()));
       req.push_back({b.x, b.y, b.w, b.h, 0});
-      label.push_back(l);
       truth_of.push_back(i);
       for (const auto& r :
            jitteredBoxes(cv::Rect2d(b.x, b.y, b.w, b.h), image.cols, image.rows, 1, 0.6,
                          static_cast<uint32_t>(frame * 131 + static_cast<int>(i)))) {
         req.push_back({r.x, r.y, r.width, r.height, 1});
-        label.push_back(l);
         truth_of.push_back(i);
       }
     }
@@ -171,7 +169,8 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
     for (const auto& b : d.boxes) {
       const auto best = std::max_element(b.log_prob.begin(), b.log_prob.end());
       const int pred = static_cast<int>(best - b.log_prob.begin());
-      const int truth_label = label[static_cast<size_t>(b.input_index)];
+      const size_t truth_index = truth_of[static_cast<size_t>(b.input_index)];
+      const int truth_label = label[truth_index];
       if (req[static_cast<size_t>(b.input_index)].candidate_id == 1) {
         ++t.jittered;
         t.jittered_correct += pred == truth_label;
@@ -180,7 +179,7 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
       ++t.boxes;
       t.correct += pred == truth_label;
       ++t.confusion[static_cast<size_t>(truth_label)][static_cast<size_t>(pred)];
-      verdicts->push_back({truth[truth_of[static_cast<size_t>(b.input_index)]], pred, b.log_prob});
+      if (verdicts) verdicts->push_back({truth[truth_index], pred, b.log_prob});
       std::vector<float> lp = b.log_prob;
       std::nth_element(lp.begin(), lp.begin() + 1, lp.end(), std::greater<float>());
       t.runner_up_log_prob.push_back(lp.size() > 1 ? lp[1] : 0.0);
@@ -413,7 +412,8 @@ void evaluateSequences(const Args& a, nlohmann::json& j) {
     const SequenceFolder seq = SequenceFolder::open(dir);
     if (!seq.hasBoxes()) continue;
     std::vector<BoxVerdict> seen;
-    const BoxTally t = classifySceneBoxes(recognizer, seq, 5, &seen);
+    const BoxTally t =
+        classifySceneBoxes(recognizer, seq, 5, a.boxes_csv.empty() ? nullptr : &seen);
     const std::string name = folderName(dir);
     for (BoxVerdict& v : seen) verdicts.emplace_back(name, std::move(v));
     j["sequences"][name]["gt_boxes"] = t.json();
