@@ -34,11 +34,12 @@ int main(int argc, char** argv) {
     const ProposalOptions opts = loadConfig<ProposalOptions>(node.config, "proposals");
     const bool lockstep = sys.bus.lockstep;
     // A re-clustering works on every point of the map at several scales (about 15 MB on a 100k
-    // point map, every few seconds) and frees it all. With glibc's sliding threshold those
-    // buffers came from the heap after the first one: the stage's RSS climbed 5 MB above what it
-    // holds (heap.used_kb 4.8 MB, heap.free_kb 14 MB) and swung with the time since the last
-    // trim. Every buffer of 128 kB (glibc's default) or more gets its own mapping.
-    mapBlocksApartFrom(128 * 1024);
+    // point map) and frees it all; while SLAM builds the map it runs four times a second. Every
+    // buffer comes from the heap (a threshold fixed at glibc's largest, 32 MB): mapping each one
+    // apart and unmapping it again cost a fifth of the stage's CPU on a first pass. The trim after
+    // each re-clustering hands their pages back, so the RSS does not swing with the time since
+    // the last one (docs/experiments/proposals.md, 2026-12-05 and 2026-12-07).
+    mapBlocksApartFrom(32u << 20);
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
     StatusReporter status(bus, node.nameOr("proposals"), ch.statusOf(node.nameOr("proposals")));
@@ -81,8 +82,7 @@ int main(int argc, char** argv) {
         status.setCounter("support", s.support ? 1 : 0);
         status.setCounter("recluster_ms", static_cast<int64_t>(s.ms));
         status.count("reclusters");
-        // Its smaller buffers, below the threshold, leave free pages inside the heaps (about
-        // 4 MB): handed back at once.
+        // Its buffers leave free pages inside the heaps: handed back at once.
         malloc_trim(0);
         spdlog::debug(
             "map {}: {} points, {} single-view, {} seen through, planes {}, {} clustered -> {} "
