@@ -34,11 +34,12 @@ int main(int argc, char** argv) {
     const ProposalOptions opts = loadConfig<ProposalOptions>(node.config, "proposals");
     const bool lockstep = sys.bus.lockstep;
     // A re-clustering works on every point of the map at several scales (about 15 MB on a 100k
-    // point map) and frees it all; while SLAM builds the map it runs four times a second. Every
-    // buffer comes from the heap (a threshold fixed at glibc's largest, 32 MB): mapping each one
-    // apart and unmapping it again cost a fifth of the stage's CPU on a first pass. The trim after
-    // each re-clustering hands their pages back, so the RSS does not swing with the time since
-    // the last one (docs/experiments/proposals.md, 2026-12-05 and 2026-12-07).
+    // point map) and frees it all; while SLAM builds the map it runs four times a second. Its
+    // buffers come from the heap (each is far under the threshold, fixed at glibc's largest,
+    // 32 MB): mapping each one apart and unmapping it again cost a fifth of the stage's CPU on a
+    // first pass. The trim after each re-clustering hands their pages back, so the RSS does not
+    // swing with the time since the last one (docs/experiments/proposals.md, 2026-12-05 and
+    // 2026-12-07).
     mapBlocksApartFrom(32u << 20);
     const Channels& ch = sys.channels;
     Bus bus(sys.bus.url);
