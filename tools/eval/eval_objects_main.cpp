@@ -63,6 +63,7 @@ std::vector<std::string> defaultObjectSets(const std::string& shared) {
 
 // One ground-truth box as the model saw it (--boxes-csv).
 struct BoxVerdict {
+  std::string sequence;  ///< the folder's name
   GroundTruthBox box;
   int called = 0;               ///< index into the classes
   std::vector<float> log_prob;  ///< calibrated, per class
@@ -141,6 +142,7 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
                             std::vector<BoxVerdict>* verdicts) {
   BoxTally t;
   t.classes = recognizer.classes();
+  const std::string sequence = verdicts ? folderName(seq.dir()) : std::string();
   const int C = static_cast<int>(t.classes.size());
   t.confusion.assign(static_cast<size_t>(C), std::vector<int64_t>(static_cast<size_t>(C), 0));
   std::map<int, std::vector<GroundTruthBox>> by_frame;
@@ -179,7 +181,7 @@ BoxTally classifySceneBoxes(Recognizer& recognizer, const SequenceFolder& seq, i
       ++t.boxes;
       t.correct += pred == truth_label;
       ++t.confusion[static_cast<size_t>(truth_label)][static_cast<size_t>(pred)];
-      if (verdicts) verdicts->push_back({truth[truth_index], pred, b.log_prob});
+      if (verdicts) verdicts->push_back({sequence, truth[truth_index], pred, b.log_prob});
       std::vector<float> lp = b.log_prob;
       std::nth_element(lp.begin(), lp.begin() + 1, lp.end(), std::greater<float>());
       t.runner_up_log_prob.push_back(lp.size() > 1 ? lp[1] : 0.0);
@@ -326,14 +328,14 @@ void addOptions(CLI::App& app, Args& a) {
 
 // The CSV of --boxes-csv: a header, then one row per box of `verdicts`.
 void writeBoxesCsv(const std::string& path, const std::vector<std::string>& classes,
-                   const std::vector<std::pair<std::string, BoxVerdict>>& verdicts) {
+                   const std::vector<BoxVerdict>& verdicts) {
   std::ofstream f(path);
   f << "sequence,frame,x,y,w,h,class,instance,called";
   for (const auto& c : classes) f << ",p_" << c;
   f << "\n";
-  for (const auto& [sequence, v] : verdicts) {
-    f << fmt::format("{},{},{:g},{:g},{:g},{:g},{},{},{}", sequence, v.box.frame, v.box.x, v.box.y,
-                     v.box.w, v.box.h, v.box.cls, v.box.instance,
+  for (const BoxVerdict& v : verdicts) {
+    f << fmt::format("{},{},{:g},{:g},{:g},{:g},{},{},{}", v.sequence, v.box.frame, v.box.x,
+                     v.box.y, v.box.w, v.box.h, v.box.cls, v.box.instance,
                      classes[static_cast<size_t>(v.called)]);
     for (float lp : v.log_prob) f << fmt::format(",{:.4f}", std::exp(lp));
     f << "\n";
@@ -407,15 +409,13 @@ void evaluateSequences(const Args& a, nlohmann::json& j) {
   const RecognizerOptions recognizer_options;
   Recognizer recognizer(model, recognizer_options);
   BoxTally suite;
-  std::vector<std::pair<std::string, BoxVerdict>> verdicts;
+  std::vector<BoxVerdict> verdicts;
   for (const auto& dir : a.sequences) {
     const SequenceFolder seq = SequenceFolder::open(dir);
     if (!seq.hasBoxes()) continue;
-    std::vector<BoxVerdict> seen;
     const BoxTally t =
-        classifySceneBoxes(recognizer, seq, 5, a.boxes_csv.empty() ? nullptr : &seen);
+        classifySceneBoxes(recognizer, seq, 5, a.boxes_csv.empty() ? nullptr : &verdicts);
     const std::string name = folderName(dir);
-    for (BoxVerdict& v : seen) verdicts.emplace_back(name, std::move(v));
     j["sequences"][name]["gt_boxes"] = t.json();
     std::cout << name << ": " << t.json()["accuracy"].get<double>() << "% of " << t.boxes
               << " ground-truth boxes right (jittered: "
