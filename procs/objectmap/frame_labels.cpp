@@ -8,36 +8,6 @@
 
 namespace slamaware::objectmap {
 
-namespace {
-
-/// Objectness of a candidate's views: each value with the frames its view stands for.
-using Sample = std::vector<std::pair<double, int32_t>>;
-
-double logMean(const Sample& p) {
-  double sum = 0, n = 0;
-  for (const auto& [v, frames] : p) {
-    sum += v * frames;
-    n += frames;
-  }
-  return std::log(std::max(1e-300, sum / n));
-}
-
-/// The median of a sorted sample with each value repeated as often as its frames.
-double logMedian(const Sample& p) {
-  int64_t n = 0;
-  for (const auto& s : p) n += s.second;
-  // The values at positions (n - 1) / 2 and n / 2 of the repeated sample (the same for odd n).
-  auto at = [&p](int64_t pos) {
-    for (const auto& [v, frames] : p)
-      if ((pos -= frames) < 0) return v;
-    return p.back().first;
-  };
-  const double median = (at((n - 1) / 2) + at(n / 2)) / 2;
-  return std::log(std::max(1e-300, median));
-}
-
-}  // namespace
-
 std::vector<double> logPosteriorFromLogEvidence(const std::vector<double>& log_evidence,
                                                 double weight, double views_exponent) {
   std::vector<double> e = scaledLogEvidence(log_evidence, weight, views_exponent);
@@ -67,33 +37,11 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
   std::vector<FrameBoxLabel> out(boxes.size());
   if (num_classes == 0) return out;
   const size_t bg = num_classes - 1;
-  // The candidates' and objects' typical views, once per frame.
-  std::map<int32_t, double> candidate_mean, candidate_median, object_median;
-  for (const FrameBox& b : boxes) {
-    const Object* o = table.objectOfCandidate(b.candidate);
-    if (o && o->log_evidence.size() == num_classes && !object_median.count(o->id)) {
-      Sample p;
-      for (int32_t c : o->candidates)
-        if (auto it = table.candidates().find(c); it != table.candidates().end())
-          p.insert(p.end(), it->second.objectness.begin(), it->second.objectness.end());
-      std::sort(p.begin(), p.end());  // the candidates' sorted runs, one after another
-      if (!p.empty()) object_median[o->id] = logMedian(p);
-    }
-    if (candidate_mean.count(b.candidate)) continue;
-    auto it = table.candidates().find(b.candidate);
-    if (it == table.candidates().end() || it->second.objectness.empty()) continue;
-    // Both over the sorted values the table keeps: walking the views' tree and taking each view's
-    // exponential again for every box of every frame grew with the session (a candidate kept
-    // about 2,000 views after 15 minutes before old views were merged) and was half of the node's
-    // time.
-    candidate_mean[b.candidate] = logMean(it->second.objectness);
-    candidate_median[b.candidate] = logMedian(it->second.objectness);
-  }
   for (size_t i = 0; i < boxes.size(); ++i) {
     const FrameBox& b = boxes[i];
     FrameBoxLabel& l = out[i];
     const Object* o = table.objectOfCandidate(b.candidate);
-    const bool in_object = o && o->log_evidence.size() == num_classes && object_median.count(o->id);
+    const bool in_object = o && o->log_evidence.size() == num_classes;
     std::vector<double> log_posterior;
     if (in_object) {
       l.object = o->id;
@@ -116,17 +64,10 @@ std::vector<FrameBoxLabel> labelFrameBoxes(const std::vector<FrameBox>& boxes,
     l.log_posterior = log_posterior;
     l.log_score = log_posterior;
     l.label = argmaxClass(log_posterior);
-    const double typical =
-        candidate_mean.count(b.candidate)
-            ? candidate_mean.at(b.candidate) +
-                  (in_object ? object_median.at(o->id) : candidate_median.at(b.candidate))
-            : 2 * (b.log_p.size() == num_classes ? logObjectness(b.log_p[bg]) : 0.0);
     l.log_weight.assign(num_classes, 0.0);
-    for (size_t c = 0; c < bg; ++c) {
-      const double own =
+    for (size_t c = 0; c < bg; ++c)
+      l.log_weight[c] =
           c < b.log_p.size() ? std::min(0.0, static_cast<double>(b.log_p[c])) : kMinLogProb;
-      l.log_weight[c] = (own + typical) / 3;
-    }
   }
   // One box per object stands for it; the others that overlap it are duplicates.
   std::map<int32_t, size_t> primary;

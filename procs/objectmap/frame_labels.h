@@ -4,16 +4,10 @@
 // each class. Only evidence fused so far is used: a label never depends on a later frame.
 //
 // A box of candidate k in object O is a detection of object class c with
-//   p(c, box) = p(c | O's views) x w_c,   w_c = cbrt(p(c | box) x mean_k x median_O),
-// where mean_k is the mean over k's views of p(object | view) = 1 - p(background | view) and
-// median_O the median of it over every view of O's candidates. O's views say which object it is;
-// the three factors say whether *this box* frames it: its own view (a box on a part of a mug, or
-// on the mug and half the table, is a view of the mug's object but not a mug detection), its
-// candidate's typical view (a candidate that is a part, or an object with a stretch of table, is
-// boxed alike in most views and most of them say so), and the object's typical view (a distractor
-// that most of its views call background keeps the class a few views give it in its posterior;
-// the median, not the mean: a minority of sure views does not make it an object). The background
-// gets the rest of the probability.
+//   p(c, box) = p(c | O's views) x p(c | box):
+// O's views say which object it is; the box's own view says whether *this box* frames an object of
+// that class (a box on a part of a mug, or on the mug and half the table, is a view of the mug's
+// object but not a mug detection). The background gets the rest of the probability.
 //
 // One box per object and frame stands for it (PRIMARY): the one its own view finds most object-like
 // (lowest p(background | box); ties: the earlier box). Another box of the same object that overlaps

@@ -168,18 +168,9 @@ bool betterView(const View& a, const View& b) {
   return a.area > b.area;
 }
 
-std::pair<double, int32_t> objectnessOf(const View& v) { return {viewObjectness(v), v.frames}; }
-
 /// The votes a voxel needs to be one of the candidate's (VotingOptions: min_votes, min_vote_share).
 double votesNeeded(const Candidate& c, const VotingOptions& options) {
   return std::max<double>(options.min_votes, options.min_vote_share * c.voting_views);
-}
-
-void refreshObjectness(Candidate* c) {
-  c->objectness.clear();
-  for (const auto& [key, v] : c->views)
-    if (!v.log_prob.empty()) c->objectness.push_back(objectnessOf(v));
-  std::sort(c->objectness.begin(), c->objectness.end());
 }
 
 }  // namespace
@@ -189,13 +180,7 @@ void ObjectTable::addView(int32_t candidate, View view) {
   c.id = candidate;
   newest_view_utime_ = std::max(newest_view_utime_, view.utime);
   const ViewKey key{view.utime, view.seq};
-  const bool again = c.views.count(key) > 0;  // the same frame again: replaces its view
-  if (!again && !view.log_prob.empty()) {
-    const auto entry = objectnessOf(view);
-    c.objectness.insert(std::upper_bound(c.objectness.begin(), c.objectness.end(), entry), entry);
-  }
-  c.views[key] = std::move(view);
-  if (again) refreshObjectness(&c);
+  c.views[key] = std::move(view);  // the same frame again replaces its view
 }
 
 namespace {
@@ -264,7 +249,6 @@ void ObjectTable::mergeOldViews(int64_t now_utime, bool objectness_weights) {
       continue;
     }
     auto& views = c->second.views;
-    bool changed = false;
     // Oldest first, bin after bin; stops at the first view within the full-rate period.
     for (auto it = views.begin(); it != views.end();) {
       const int k = ageLevel(now_utime - it->first.first, full_rate_us_);
@@ -288,7 +272,6 @@ void ObjectTable::mergeOldViews(int64_t now_utime, bool objectness_weights) {
       View merged = mergeViews(it, end, start, objectness_weights);
       it = views.erase(it, end);
       it = std::next(views.emplace_hint(it, ViewKey{start, kMergedViewSeq}, std::move(merged)));
-      changed = true;
     }
     int64_t frames = 0;
     for (const auto& [key, v] : views) frames += v.frames;
@@ -299,7 +282,6 @@ void ObjectTable::mergeOldViews(int64_t now_utime, bool objectness_weights) {
       c = candidates_.erase(c);
       continue;
     }
-    if (changed) refreshObjectness(&c->second);
     ++c;
   }
   // The full-rate period is the map's short-term memory: what it last called background (the last
@@ -328,7 +310,6 @@ std::vector<std::pair<VoxelKey, int32_t>> passingVotesScaled(const Candidate& c,
 }
 
 /// Folds candidate `from` into `into` (ObjectTable::foldStaleCandidates); `from` is dropped after.
-/// `into.objectness` is left for the caller to refresh once all its parts are folded in.
 void foldCandidate(Candidate& into, Candidate&& from, const VotingOptions& options) {
   for (auto& [key, v] : from.views) {
     auto [it, added] = into.views.try_emplace(key, std::move(v));
@@ -390,7 +371,6 @@ void ObjectTable::foldStaleCandidates(int64_t now_utime, const VotingOptions& op
         foldCandidate(keeper, std::move(candidates_.at(ids[k])), options);
         candidates_.erase(ids[k]);
       }
-      refreshObjectness(&keeper);  // once, from the united views
     }
   }
 }
@@ -467,8 +447,6 @@ const Object* ObjectTable::objectOfCandidate(int32_t candidate) const {
 
 void ObjectTable::restoreObject(int32_t id, std::vector<int32_t> candidates) {
   std::sort(candidates.begin(), candidates.end());
-  for (int32_t cid : candidates)
-    if (auto it = candidates_.find(cid); it != candidates_.end()) refreshObjectness(&it->second);
   Object& o = objects_[id];
   o.id = id;
   o.candidates = std::move(candidates);
@@ -513,7 +491,6 @@ void ObjectTable::remapClasses(const std::vector<int>& old_to_new, size_t new_si
           out[static_cast<size_t>(old_to_new[i])] = v.log_prob[i];
       v.log_prob = std::move(out);
     }
-    refreshObjectness(&c);
   }
 }
 

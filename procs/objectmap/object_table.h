@@ -72,11 +72,6 @@ struct Candidate {
   int32_t box_positions = 0;
   double box_size = 0;
   std::vector<VoxelKey> voxels;  ///< derived by ObjectTable::update(), sorted
-  /// p(object | view) = 1 - p(background | view) of each view with log-probabilities and the
-  /// frames it stands for, sorted: kept in step with `views` by ObjectTable (the medians of every
-  /// frame's labels are taken over it; walking the views' tree for them was a fifth of the node's
-  /// time in real time).
-  std::vector<std::pair<double, int32_t>> objectness;
   /// The class a user gave its object (ObjectTable::setUserLabel), "" if none. Held by the
   /// candidates, so that it stays with them whatever the grouping does.
   std::string user_label;

@@ -901,17 +901,6 @@ TEST(ObjectMapEngine, MergedViewsAreSavedWithTheFramesTheyStandFor) {
   back.restore(e.snapshot());
   EXPECT_EQ(encode(back.objectMap()), encode(m));
   EXPECT_EQ(back.snapshot().content, e.snapshot().content);
-  // Each candidate's sorted objectness is in step with its views, thinned and restored.
-  for (const ObjectMapEngine* engine : {&e, &back})
-    for (const auto& [id, c] : engine->segments().at(1)->table.candidates()) {
-      std::vector<std::pair<double, int32_t>> expected;
-      for (const auto& [k, v] : c.views)
-        expected.emplace_back(
-            v.objectness >= 0 ? v.objectness : std::exp(logObjectness(v.log_prob.back())),
-            v.frames);
-      std::sort(expected.begin(), expected.end());
-      EXPECT_EQ(c.objectness, expected) << "candidate " << id;
-    }
 }
 
 // The evaluator's accessor: a candidate id (of a SLAM map) leads to the object holding it now.
