@@ -146,14 +146,12 @@ std::vector<std::vector<int32_t>> concatenateJoined(const std::vector<std::vecto
   return out;
 }
 
-}  // namespace
-
+/// p(object | view): View::objectness of a merged view, else 1 - p(background | view) (background
+/// last); 0 for a view without log-probabilities.
 double viewObjectness(const View& v) {
   if (v.objectness >= 0) return v.objectness;
   return v.log_prob.empty() ? 0.0 : std::exp(logObjectness(v.log_prob.back()));
 }
-
-namespace {
 
 /// Of two views of one object with the same key (boxes of two of its candidates in one frame, or
 /// their views merged into one bin), whether `a` is the one to count: the one standing for more

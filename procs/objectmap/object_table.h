@@ -44,9 +44,6 @@ struct View {
   /// whose p(object) is 1 - p(background) from `log_prob`.
   float objectness = -1;
 };
-/// p(object | view): View::objectness of a merged view, else 1 - p(background | view) (background
-/// last); 0 for a view without log-probabilities.
-double viewObjectness(const View& v);
 
 /// The seq of a merged view's key (ObjectTable::mergeOldViews()): its utime is the start of its
 /// bin.
