@@ -88,20 +88,41 @@ DenseFeatureExtractor::DenseFeatureExtractor(const FeatureParams& params) : para
 void DenseFeatureExtractor::setImage(const cv::Mat& bgr) {
   if (bgr.empty() || bgr.type() != CV_8UC3)
     throw std::invalid_argument("setImage: expected an 8-bit BGR image");
+  bgr_ = bgr;
   width_ = bgr.cols;
   height_ = bgr.rows;
   const int T = params_.pool_cell_px;
   const CellRect cells = imageCells();
-  const int extra_x = cells.u1 * T - width_, extra_y = cells.v1 * T - height_;
-  cv::Mat grey, grey_f, rgb, rgb_f;
-  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
-  grey.convertTo(grey_f, CV_32F, 1.0 / 255.0);
-  cv::copyMakeBorder(grey_f, grey_padded_, margin_, margin_ + extra_y, margin_, margin_ + extra_x,
-                     cv::BORDER_REFLECT_101);
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  rgb.convertTo(rgb_f, CV_32FC3, 1.0 / 255.0);
-  cv::copyMakeBorder(rgb_f, rgb_padded_, margin_, margin_ + extra_y, margin_, margin_ + extra_x,
-                     cv::BORDER_REFLECT_101);
+  const int rows = cells.v1 * T + 2 * margin_, cols = cells.u1 * T + 2 * margin_;
+  // Allocated once per frame size (create() keeps a buffer of the same size and type).
+  grey_padded_.create(rows, cols, CV_32F);
+  rgb_padded_.create(rows, cols, CV_32FC3);
+}
+
+void DenseFeatureExtractor::fillPadded(const CellRect& block) {
+  // The block and its margin, in image coordinates; what of it lies beyond the image is the image
+  // mirrored at its border (reflect-101), exactly as if the whole image had been padded: the
+  // pixels copied include those that the mirrored border repeats.
+  const int T = params_.pool_cell_px, M = margin_;
+  const cv::Rect want(block.u0 * T - M, block.v0 * T - M, block.width() * T + 2 * M,
+                      block.height() * T + 2 * M);
+  const int left = std::max(0, -want.x), top = std::max(0, -want.y);
+  const int right = std::max(0, want.br().x - width_), bottom = std::max(0, want.br().y - height_);
+  const int x0 = std::min(std::max(0, want.x), std::max(0, width_ - 1 - right));
+  const int x1 = std::max(std::min(width_, want.br().x), std::min(width_, left + 1));
+  const int y0 = std::min(std::max(0, want.y), std::max(0, height_ - 1 - bottom));
+  const int y1 = std::max(std::min(height_, want.br().y), std::min(height_, top + 1));
+  cv::copyMakeBorder(bgr_(cv::Rect(x0, y0, x1 - x0, y1 - y0)), window_, top, bottom, left, right,
+                     cv::BORDER_REFLECT_101 | cv::BORDER_ISOLATED);
+  // window_'s pixel (0, 0) is the image's (x0 - left, y0 - top).
+  const cv::Mat pixels =
+      window_(cv::Rect(want.x - (x0 - left), want.y - (y0 - top), want.width, want.height));
+  cv::Mat grey = grey_padded_(cv::Rect(want.x + M, want.y + M, want.width, want.height));
+  cv::Mat rgb = rgb_padded_(cv::Rect(want.x + M, want.y + M, want.width, want.height));
+  cv::cvtColor(pixels, window_grey_, cv::COLOR_BGR2GRAY);
+  window_grey_.convertTo(grey, CV_32F, 1.0 / 255.0);
+  cv::cvtColor(pixels, window_rgb_, cv::COLOR_BGR2RGB);
+  window_rgb_.convertTo(rgb, CV_32FC3, 1.0 / 255.0);
 }
 
 CellRect DenseFeatureExtractor::imageCells() const {
@@ -159,10 +180,25 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
   grid.features.resize(int64_t{grid.nx} * grid.ny * grid.scales, kFeatureDims);
   grid.textured.resize(static_cast<size_t>(grid.features.rows()));
   if (!only) {
+    fillPadded(region);
     extractBlock(region, &grid);
     return;
   }
-  for (const CellRect& b : blocks(*only, region)) extractBlock(b, &grid);
+  // Each block's pixels with their margin, or the region's once when the blocks' margins would
+  // convert more pixels than that.
+  const std::vector<CellRect> parts = blocks(*only, region);
+  const int T = params_.pool_cell_px, M = margin_;
+  const auto padded_area = [&](const CellRect& r) {
+    return int64_t{r.width() * T + 2 * M} * (r.height() * T + 2 * M);
+  };
+  int64_t area = 0;
+  for (const CellRect& b : parts) area += padded_area(b);
+  const bool once = area >= padded_area(region);
+  if (once) fillPadded(region);
+  for (const CellRect& b : parts) {
+    if (!once) fillPadded(b);
+    extractBlock(b, &grid);
+  }
 }
 
 void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out) {

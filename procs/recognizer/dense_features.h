@@ -57,7 +57,9 @@ class DenseFeatureExtractor {
  public:
   explicit DenseFeatureExtractor(const FeatureParams& params);
 
-  /// Sets the image (8-bit BGR). Cheap: converts to grey and float RGB and pads the border.
+  /// Sets the image (8-bit BGR; shared, not copied: it must not change until the last extract()).
+  /// Cheap: each extract() converts to grey and float RGB, with the mirrored border, only the
+  /// pixels its blocks read.
   void setImage(const cv::Mat& bgr);
   int width() const { return width_; }
   int height() const { return height_; }
@@ -75,17 +77,23 @@ class DenseFeatureExtractor {
   const FeatureParams& params() const { return params_; }
 
  private:
+  /// Fills the part of grey_padded_ and rgb_padded_ that `block`'s features read.
+  void fillPadded(const CellRect& block);
   /// Features of the grid points of one block (inside grid->region) into their rows of *grid.
   void extractBlock(const CellRect& block, FeatureGrid* grid);
 
   FeatureParams params_;
   int margin_ = 0;
   int width_ = 0, height_ = 0;
-  cv::Mat grey_padded_;  ///< CV_32F, 0..1, margin_ px of mirrored border (more at right/bottom)
-  cv::Mat rgb_padded_;   ///< CV_32FC3 in R, G, B order, 0..1
-  cv::Mat smooth_, integral_;  ///< scratch
-  std::vector<float> norms_;   ///< scratch
-  std::vector<float> rgb_;     ///< scratch: mean R, G, B of one scale's grid points
+  cv::Mat bgr_;  ///< the image
+  /// The image with margin_ px of mirrored border (more at right/bottom), filled only where the
+  /// blocks of the last extract() read (fillPadded):
+  cv::Mat grey_padded_;                        ///< CV_32F, 0..1
+  cv::Mat rgb_padded_;                         ///< CV_32FC3 in R, G, B order, 0..1
+  cv::Mat window_, window_grey_, window_rgb_;  ///< scratch: one block's pixels, 8 bits
+  cv::Mat smooth_, integral_;                  ///< scratch
+  std::vector<float> norms_;                   ///< scratch
+  std::vector<float> rgb_;                     ///< scratch: mean R, G, B of one scale's grid points
 };
 
 }  // namespace slamaware::recognizer

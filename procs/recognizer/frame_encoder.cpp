@@ -123,8 +123,14 @@ EncoderKind FrameEncoder::choose(const std::vector<PyramidBox>& boxes) const {
 
 void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes,
                           EncoderKind kind, ReusableMatrix* out, Stats* stats) {
-  const int64_t dims = params_.encodedDims();
-  out->resize(static_cast<int64_t>(boxes.size()), dims);
+  Stats local;
+  Stats& st = stats ? *stats : local;
+  prepare(bgr, boxes, kind, &st);
+  encodeRows(boxes, 0, boxes.size(), out, &st);
+}
+
+void FrameEncoder::prepare(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes,
+                           EncoderKind kind, Stats* stats) {
   Stats local;
   Stats& st = stats ? *stats : local;
   st = Stats();
@@ -149,30 +155,40 @@ void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& box
 
   t0 = Clock::now();
   if (kind == EncoderKind::kAuto) kind = choose(boxes);
-  st.used = kind;
+  st.used = prepared_kind_ = kind;
   if (kind == EncoderKind::kFlair) {
     flair_.build(codes_, vocabulary_, region);
     st.table_bytes = flair_.tableBytes();
-    for (size_t i = 0; i < boxes.size(); ++i)
-      flair_.encode(boxes[i], out->row(static_cast<int64_t>(i)));
-  } else {
-    DirectEncoder direct(codes_, vocabulary_);
-    for (size_t i = 0; i < boxes.size(); ++i)
-      direct.encode(boxes[i], out->row(static_cast<int64_t>(i)));
   }
-  if (params_.shapeDims() > 0) {
-    const uint64_t image_hash = shape_noise_ > 0 ? contentHash(bgr) : 0;
-    for (size_t i = 0; i < boxes.size(); ++i) {
+  image_hash_ = shape_noise_ > 0 ? contentHash(bgr) : 0;
+  st.encode_ms = msSince(t0);
+}
+
+void FrameEncoder::encodeRows(const std::vector<PyramidBox>& boxes, size_t first, size_t count,
+                              ReusableMatrix* out, Stats* stats) {
+  if (first > boxes.size() || count > boxes.size() - first)
+    throw std::invalid_argument("FrameEncoder::encodeRows: boxes out of range");
+  const auto t0 = Clock::now();
+  out->resize(static_cast<int64_t>(count), params_.encodedDims());
+  DirectEncoder direct(codes_, vocabulary_);
+  for (size_t r = 0; r < count; ++r) {
+    const PyramidBox& box = boxes[first + r];
+    float* row = out->row(static_cast<int64_t>(r));
+    if (prepared_kind_ == EncoderKind::kFlair)
+      flair_.encode(box, row);
+    else
+      direct.encode(box, row);
+    if (params_.shapeDims() > 0) {
       double offset = 0;
       if (shape_noise_ > 0) {
-        std::mt19937_64 rng(hashBox(image_hash, boxes[i]));
+        std::mt19937_64 rng(hashBox(image_hash_, box));
         offset = shape_noise_ * standardNormal(rng);
       }
-      encodeBoxShape(boxes[i], params_.shape_bins, static_cast<int>(params_.shapeDims()),
-                     out->row(static_cast<int64_t>(i)) + params_.vladDims(), offset);
+      encodeBoxShape(box, params_.shape_bins, static_cast<int>(params_.shapeDims()),
+                     row + params_.vladDims(), offset);
     }
   }
-  st.encode_ms = msSince(t0);
+  if (stats) stats->encode_ms += msSince(t0);
 }
 
 double FrameEncoder::warmUp(int width, int height, EncoderKind kind) {

@@ -62,9 +62,21 @@ class FrameEncoder {
   double estimateMs(const std::vector<PyramidBox>& boxes, EncoderKind kind) const;
 
   /// Encodes `boxes` of the 8-bit BGR image into the rows of *out (boxes.size() x encodedDims:
-  /// each box's VLAD vector, then its shape block).
+  /// each box's VLAD vector, then its shape block): prepare(), then encodeRows() of every box.
   void encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes, EncoderKind kind,
               ReusableMatrix* out, Stats* stats = nullptr);
+
+  /// What the boxes of a frame share: the features and codes where they are and, with FLAIR
+  /// (`kind`, or the cost model's choice for kAuto), the tables. Sets *stats (encode_ms: the
+  /// tables).
+  void prepare(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes, EncoderKind kind,
+               Stats* stats = nullptr);
+  /// Encodes boxes[first, first + count) of the frame prepare() was given into the rows of *out
+  /// (count x encodedDims), in as many passes as suit the caller: a caller that encodes a few
+  /// boxes at a time needs memory for a few rows (430 KB each), whatever the number of boxes.
+  /// Adds its time to stats->encode_ms.
+  void encodeRows(const std::vector<PyramidBox>& boxes, size_t first, size_t count,
+                  ReusableMatrix* out, Stats* stats = nullptr);
 
   /// Encodes one box over a whole `width` x `height` frame of noise with the direct encoder and,
   /// unless `kind` is kDirect or the tables would exceed flair_max_table_mb, with FLAIR, so that
@@ -95,6 +107,8 @@ class FrameEncoder {
   FrameCodes codes_;
   std::vector<CellRect> box_cells_;
   FlairEncoder flair_;
+  EncoderKind prepared_kind_ = EncoderKind::kDirect;  ///< the encoder of the prepared frame
+  uint64_t image_hash_ = 0;                           ///< of the prepared frame (shape noise)
   double shape_noise_ = 0;
 };
 

@@ -89,6 +89,16 @@ FrameDetections Recognizer::carryOnly(int width, int height,
   return out;
 }
 
+double Recognizer::warmUp(int width, int height) {
+  const auto t0 = std::chrono::steady_clock::now();
+  encoder_.warmUp(width, height, kind_);
+  // Growing the encodings' buffer in the first frames with many boxes cost them tens of ms of
+  // page faults; it is made (and its pages touched) here instead.
+  if (width > 0 && height > 0)
+    encoded_.resize(static_cast<int64_t>(kRowsPerPass), encoder_.params().encodedDims());
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxRequest>& requests) {
   const auto t0 = std::chrono::steady_clock::now();
   FrameDetections out;
@@ -98,20 +108,26 @@ FrameDetections Recognizer::recognize(const cv::Mat& bgr, const std::vector<BoxR
   takeBoxes(bgr.cols, bgr.rows, requests, false, &out, &snapped, &classified);
   if (snapped.empty()) return out;
 
-  encoder_.encode(bgr, snapped, kind_, &encoded_, &out.stats);
-  model_->classifier.scores(encoded_.map(), &scores_);
-  model_->classifier.logProbabilities(scores_, &log_p_);
+  encoder_.prepare(bgr, snapped, kind_, &out.stats);
   const int C = static_cast<int>(classes_.size());
   const float log_objects =
       append_background_
           ? static_cast<float>(std::log1p(-std::exp(options_.missing_background_log_prob)))
           : 0.f;
-  for (size_t b = 0; b < classified.size(); ++b) {
-    auto& lp = out.boxes[classified[b]].log_prob;
-    lp.resize(static_cast<size_t>(C));
-    for (int c = 0; c < static_cast<int>(log_p_.cols()); ++c)
-      lp[static_cast<size_t>(c)] = log_p_(b, c) + log_objects;
-    if (append_background_) lp.back() = static_cast<float>(options_.missing_background_log_prob);
+  // kRowsPerPass boxes at a time: the encodings (430 KB a box) need a buffer of that many rows,
+  // made when the model loads (warmUp), and never a larger one, whatever the number of boxes.
+  for (size_t first = 0; first < snapped.size(); first += kRowsPerPass) {
+    const size_t n = std::min(kRowsPerPass, snapped.size() - first);
+    encoder_.encodeRows(snapped, first, n, &encoded_, &out.stats);
+    model_->classifier.scores(encoded_.map(), &scores_);
+    model_->classifier.logProbabilities(scores_, &log_p_);
+    for (size_t b = 0; b < n; ++b) {
+      auto& lp = out.boxes[classified[first + b]].log_prob;
+      lp.resize(static_cast<size_t>(C));
+      for (int c = 0; c < static_cast<int>(log_p_.cols()); ++c)
+        lp[static_cast<size_t>(c)] = log_p_(static_cast<int64_t>(b), c) + log_objects;
+      if (append_background_) lp.back() = static_cast<float>(options_.missing_background_log_prob);
+    }
   }
   out.total_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

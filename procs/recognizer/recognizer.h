@@ -145,8 +145,11 @@ class Recognizer {
   FrameDetections carryOnly(int width, int height, const std::vector<BoxRequest>& boxes) const;
 
   /// Prepares the buffers of frames of this size with the configured encoder
-  /// (FrameEncoder::warmUp); returns the ms spent.
-  double warmUp(int width, int height) { return encoder_.warmUp(width, height, kind_); }
+  /// (FrameEncoder::warmUp) and the buffer of the boxes' encodings; returns the ms spent.
+  double warmUp(int width, int height);
+
+  /// Boxes encoded and scored together: the encodings' buffer holds this many rows.
+  static constexpr size_t kRowsPerPass = 32;
 
  private:
   /// recognize() and carryOnly(): the valid boxes of `requests` in `out`, those to classify also

@@ -199,6 +199,38 @@ TEST(Encoders, FeaturesAreComputedInBlocksThatHoldEveryBoxCell) {
   EXPECT_LT(max_abs, 1e-6);
 }
 
+// Each block's pixels are converted and mirrored at the image border as it is extracted: blocks
+// in the corners of an image whose size is no multiple of the cell (the border reaches further
+// than the last cell's remainder) get the features of the whole image extracted at once, also when
+// the image is a view into a larger one (whose pixels beyond it are not the image's border).
+TEST(Encoders, BlocksAtTheBorderGetTheFeaturesOfTheWholeImage) {
+  Fixture& fx = fixture();
+  const cv::Mat big = test::texturedFrame(12, 400, 300);
+  const cv::Mat image = big(cv::Rect(37, 41, 315, 203));  // 40 x 26 cells of 8 px, 5 px short
+  DenseFeatureExtractor ex(fx.params.features), ref(fx.params.features);
+  ex.setImage(image);
+  ref.setImage(image.clone());
+  const CellRect all = ex.imageCells();
+  ASSERT_EQ(all, (CellRect{0, 0, 40, 26}));
+  FeatureGrid whole, some;
+  ref.extract(all, &whole);
+  const std::vector<CellRect> boxes{
+      {0, 0, 1, 1}, {39, 25, 40, 26}, {0, 24, 2, 26}, {38, 0, 40, 1}, {20, 10, 22, 12}};
+  ex.extract(all, &some, &boxes);
+  const int s = fx.params.features.stepsPerCell();
+  double max_abs = 0;
+  for (const CellRect& r : boxes)
+    for (int t = 0; t < whole.scales; ++t)
+      for (int j = r.v0 * s; j < r.v1 * s; ++j)
+        for (int i = r.u0 * s; i < r.u1 * s; ++i)
+          for (int c = 0; c < kFeatureDims; ++c)
+            max_abs = std::max(
+                max_abs,
+                static_cast<double>(std::fabs(some.features.row(some.rowOf(i, j, t))[c] -
+                                              whole.features.row(whole.rowOf(i, j, t))[c])));
+  EXPECT_LT(max_abs, 1e-6);
+}
+
 TEST(Encoders, FlairTablesCoverTheBoxesSpanAndAreReported) {
   Fixture& fx = fixture();
   FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
@@ -246,6 +278,34 @@ TEST(Encoders, WarmingUpForAFrameSizeChangesNoVector) {
       for (int64_t c = 0; c < a.cols(); ++c)
         ASSERT_EQ(a.row(r)[c], b.row(r)[c])
             << encoderName(kind) << " box " << r << " element " << c;
+  }
+}
+
+// A frame prepared once and its boxes encoded a few at a time give the rows of one encode().
+TEST(Encoders, BoxesEncodedInPassesEqualOneEncode) {
+  Fixture& fx = fixture();
+  FrameEncoder enc(fx.params, fx.pca, fx.vocabulary);
+  std::vector<PyramidBox> boxes(7);
+  for (size_t i = 0; i < boxes.size(); ++i)
+    ASSERT_TRUE(enc.snap(30.0 + 71.0 * static_cast<double>(i), 20.0 + 43.0 * static_cast<double>(i),
+                         60, 50, fx.frame.cols, fx.frame.rows, &boxes[i]));
+  for (const EncoderKind kind : {EncoderKind::kDirect, EncoderKind::kFlair}) {
+    ReusableMatrix whole, part;
+    enc.encode(fx.frame, boxes, kind, &whole);
+    FrameEncoder::Stats st;
+    enc.prepare(fx.frame, boxes, kind, &st);
+    EXPECT_EQ(st.used, kind);
+    for (size_t first = 0; first < boxes.size(); first += 3) {
+      const size_t n = std::min<size_t>(3, boxes.size() - first);
+      enc.encodeRows(boxes, first, n, &part, &st);
+      ASSERT_EQ(part.rows(), static_cast<int64_t>(n));
+      for (size_t r = 0; r < n; ++r)
+        for (int64_t c = 0; c < whole.cols(); ++c)
+          ASSERT_EQ(part.row(static_cast<int64_t>(r))[c],
+                    whole.row(static_cast<int64_t>(first + r))[c])
+              << encoderName(kind) << " box " << first + r << " element " << c;
+    }
+    EXPECT_THROW(enc.encodeRows(boxes, 6, 2, &part), std::invalid_argument);
   }
 }
 

@@ -293,6 +293,45 @@ TEST(Recognizer, CarriedBoxesTakeTheirResultAndTheOthersAreClassifiedAsAlways) {
   EXPECT_EQ(none.stats.features_ms, 0.0);  // no features computed
 }
 
+// A frame with more boxes than one pass encodes (Recognizer::kRowsPerPass) is classified in
+// several passes through one buffer of that many rows: every box gets the scores it gets when it
+// is classified alone, before and after the buffer is made by warmUp.
+TEST(Recognizer, ManyBoxesAreClassifiedInPassesWithTheScoresOfEachBoxAlone) {
+  const Trained& t = synthetic();
+  Recognizer rec(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions{});
+  cv::Mat frame = test::texturedFrame(902, 640, 480);
+  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
+  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  std::vector<BoxRequest> requests;
+  const int n = 2 * static_cast<int>(Recognizer::kRowsPerPass) + 5;
+  for (int i = 0; i < n; ++i)
+    requests.push_back({static_cast<double>(20 + (i * 37) % 500),
+                        static_cast<double>(15 + (i * 53) % 380), 40.0 + i % 7 * 10,
+                        30.0 + i % 5 * 12, i + 1});
+  requests[3] = {100, 100, 72, 72, 4};
+  requests[2 * Recognizer::kRowsPerPass + 1] = {400, 250, 72, 72, 66};
+  for (const bool warm : {false, true}) {
+    if (warm) {
+      EXPECT_GT(rec.warmUp(640, 480), 0.0);
+    }
+    const FrameDetections all = rec.recognize(frame, requests);
+    ASSERT_EQ(all.boxes.size(), requests.size());
+    for (size_t i = 0; i < requests.size(); i += 11) {
+      const FrameDetections alone = rec.recognize(frame, {requests[i]});
+      ASSERT_EQ(alone.boxes.size(), 1u);
+      for (size_t c = 0; c < all.classes.size(); ++c)
+        ASSERT_NEAR(all.boxes[i].log_prob[c], alone.boxes[0].log_prob[c], 1e-4)
+            << "box " << i << (warm ? " after warmUp" : "");
+    }
+    auto best = [&](size_t i) {
+      const auto& lp = all.boxes[i].log_prob;
+      return all.classes[static_cast<size_t>(std::max_element(lp.begin(), lp.end()) - lp.begin())];
+    };
+    EXPECT_EQ(best(3), "disc");
+    EXPECT_EQ(best(2 * Recognizer::kRowsPerPass + 1), "bar");  // in the third pass
+  }
+}
+
 // Suppression after classification: of two boxes overlapping by IoU > 0.5 the one surer of an
 // object class stays, whatever the order of the request; the background's probability does not
 // count; IoU 0.5 itself is not suppressed; the survivors keep the request's order.
