@@ -23,9 +23,9 @@
 namespace slamaware::recognizer {
 
 struct ViewSelectionOptions {
-  bool enabled = true;    ///< false: every box of every frame is classified
-  double angle_deg = 10;  ///< degrees of viewing direction that make a view new
-  double scale = 0.15;    ///< relative change of depth or metric box size that makes a view new
+  bool enabled = true;   ///< false: every box of every frame is classified
+  double angle_deg = 5;  ///< degrees of viewing direction that make a view new
+  double scale = 0.075;  ///< relative change of depth or metric box size that makes a view new
 
   template <class V>
   void visit(V& v) {
