@@ -70,6 +70,14 @@ const Trained& synthetic() {
   return t;
 }
 
+// A textured frame with a disc at (100, 100) and a bar at (400, 250), 72 px each.
+cv::Mat frameWithDiscAndBar(int seed) {
+  cv::Mat frame = test::texturedFrame(seed, 640, 480);
+  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
+  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  return frame;
+}
+
 std::vector<char> readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -232,9 +240,7 @@ TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
   auto model = std::make_shared<const RecognizerModel>(t.model);
   RecognizerOptions opts;
   Recognizer rec(model, opts);
-  cv::Mat frame = test::texturedFrame(900, 640, 480);
-  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
-  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  const cv::Mat frame = frameWithDiscAndBar(900);
   const FrameDetections d =
       rec.recognize(frame, {{100, 100, 72, 72, 1}, {400, 250, 72, 72, 2}, {250, 20, 100, 80, 3}});
   ASSERT_EQ(d.boxes.size(), 3u);
@@ -258,9 +264,7 @@ TEST(Training, RecognizerLabelsObjectsInAFrameAndBackgroundAroundThem) {
 TEST(Recognizer, CarriedBoxesTakeTheirResultAndTheOthersAreClassifiedAsAlways) {
   const Trained& t = synthetic();
   Recognizer rec(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions{});
-  cv::Mat frame = test::texturedFrame(901, 640, 480);
-  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
-  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  const cv::Mat frame = frameWithDiscAndBar(901);
   const FrameDetections all = rec.recognize(frame, {{100, 100, 72, 72, 1}, {400, 250, 72, 72, 2}});
   ASSERT_EQ(all.boxes.size(), 2u);
   CarriedView earlier{41,
@@ -299,9 +303,7 @@ TEST(Recognizer, CarriedBoxesTakeTheirResultAndTheOthersAreClassifiedAsAlways) {
 TEST(Recognizer, ManyBoxesAreClassifiedInPassesWithTheScoresOfEachBoxAlone) {
   const Trained& t = synthetic();
   Recognizer rec(std::make_shared<const RecognizerModel>(t.model), RecognizerOptions{});
-  cv::Mat frame = test::texturedFrame(902, 640, 480);
-  test::syntheticObjectView("disc", 3, 777, 72).copyTo(frame(cv::Rect(100, 100, 72, 72)));
-  test::syntheticObjectView("bar", 3, 778, 72).copyTo(frame(cv::Rect(400, 250, 72, 72)));
+  const cv::Mat frame = frameWithDiscAndBar(902);
   std::vector<BoxRequest> requests;
   const int n = 2 * static_cast<int>(Recognizer::kRowsPerPass) + 5;
   for (int i = 0; i < n; ++i)
