@@ -91,21 +91,18 @@ void DenseFeatureExtractor::setImage(const cv::Mat& bgr) {
   bgr_ = bgr;
   width_ = bgr.cols;
   height_ = bgr.rows;
-  const int T = params_.pool_cell_px;
-  const CellRect cells = imageCells();
-  const int rows = cells.v1 * T + 2 * margin_, cols = cells.u1 * T + 2 * margin_;
   // Allocated once per frame size (create() keeps a buffer of the same size and type).
-  grey_padded_.create(rows, cols, CV_32F);
-  rgb_padded_.create(rows, cols, CV_32FC3);
+  const cv::Size size = paddedRect(imageCells()).size();
+  grey_padded_.create(size, CV_32F);
+  rgb_padded_.create(size, CV_32FC3);
 }
 
 void DenseFeatureExtractor::fillPadded(const CellRect& block) {
   // The block and its margin, in image coordinates; what of it lies beyond the image is the image
   // mirrored at its border (reflect-101), exactly as if the whole image had been padded: the
   // pixels copied include those that the mirrored border repeats.
-  const int T = params_.pool_cell_px, M = margin_;
-  const cv::Rect want(block.u0 * T - M, block.v0 * T - M, block.width() * T + 2 * M,
-                      block.height() * T + 2 * M);
+  const cv::Rect padded = paddedRect(block);
+  const cv::Rect want = padded - cv::Point(margin_, margin_);
   const int left = std::max(0, -want.x), top = std::max(0, -want.y);
   const int right = std::max(0, want.br().x - width_), bottom = std::max(0, want.br().y - height_);
   const int x0 = std::min(std::max(0, want.x), std::max(0, width_ - 1 - right));
@@ -117,12 +114,22 @@ void DenseFeatureExtractor::fillPadded(const CellRect& block) {
   // window_'s pixel (0, 0) is the image's (x0 - left, y0 - top).
   const cv::Mat pixels =
       window_(cv::Rect(want.x - (x0 - left), want.y - (y0 - top), want.width, want.height));
-  cv::Mat grey = grey_padded_(cv::Rect(want.x + M, want.y + M, want.width, want.height));
-  cv::Mat rgb = rgb_padded_(cv::Rect(want.x + M, want.y + M, want.width, want.height));
+  cv::Mat grey = grey_padded_(padded), rgb = rgb_padded_(padded);
   cv::cvtColor(pixels, window_grey_, cv::COLOR_BGR2GRAY);
   window_grey_.convertTo(grey, CV_32F, 1.0 / 255.0);
   cv::cvtColor(pixels, window_rgb_, cv::COLOR_BGR2RGB);
   window_rgb_.convertTo(rgb, CV_32FC3, 1.0 / 255.0);
+}
+
+cv::Rect DenseFeatureExtractor::paddedRect(const CellRect& block) const {
+  const int T = params_.pool_cell_px;
+  return cv::Rect(block.u0 * T, block.v0 * T, block.width() * T + 2 * margin_,
+                  block.height() * T + 2 * margin_);
+}
+
+int64_t DenseFeatureExtractor::paddedArea(const CellRect& block) const {
+  const cv::Rect r = paddedRect(block);
+  return int64_t{r.width} * r.height;
 }
 
 CellRect DenseFeatureExtractor::imageCells() const {
@@ -134,10 +141,6 @@ std::vector<CellRect> DenseFeatureExtractor::blocks(const std::vector<CellRect>&
                                                     const CellRect& within) const {
   // Each block costs its pixels plus margin_ on every side (blur, gradients, filtering): two
   // blocks become their bounding rectangle when that costs no more than the two apart.
-  const int T = params_.pool_cell_px, M = margin_;
-  const auto cost = [&](const CellRect& r) {
-    return int64_t{r.width() * T + 2 * M} * (r.height() * T + 2 * M);
-  };
   std::vector<CellRect> out;
   for (const CellRect& r : rects) {
     const CellRect c = r.intersected(within);
@@ -148,7 +151,8 @@ std::vector<CellRect> DenseFeatureExtractor::blocks(const std::vector<CellRect>&
     for (size_t i = 0; i < out.size() && !merged; ++i)
       for (size_t j = i + 1; j < out.size() && !merged; ++j) {
         const CellRect u = out[i].united(out[j]);
-        if (!out[i].intersected(out[j]).empty() || cost(u) <= cost(out[i]) + cost(out[j])) {
+        if (!out[i].intersected(out[j]).empty() ||
+            paddedArea(u) <= paddedArea(out[i]) + paddedArea(out[j])) {
           out[i] = u;
           out.erase(out.begin() + static_cast<long>(j));
           merged = true;
@@ -179,21 +183,12 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
   grid.ny = region.height() * s;
   grid.features.resize(int64_t{grid.nx} * grid.ny * grid.scales, kFeatureDims);
   grid.textured.resize(static_cast<size_t>(grid.features.rows()));
-  if (!only) {
-    fillPadded(region);
-    extractBlock(region, &grid);
-    return;
-  }
   // Each block's pixels with their margin, or the region's once when the blocks' margins would
   // convert more pixels than that.
-  const std::vector<CellRect> parts = blocks(*only, region);
-  const int T = params_.pool_cell_px, M = margin_;
-  const auto padded_area = [&](const CellRect& r) {
-    return int64_t{r.width() * T + 2 * M} * (r.height() * T + 2 * M);
-  };
+  const std::vector<CellRect> parts = only ? blocks(*only, region) : std::vector<CellRect>{region};
   int64_t area = 0;
-  for (const CellRect& b : parts) area += padded_area(b);
-  const bool once = area >= padded_area(region);
+  for (const CellRect& b : parts) area += paddedArea(b);
+  const bool once = area >= paddedArea(region);
   if (once) fillPadded(region);
   for (const CellRect& b : parts) {
     if (!once) fillPadded(b);
@@ -203,16 +198,14 @@ void DenseFeatureExtractor::extract(const CellRect& requested, FeatureGrid* out,
 
 void DenseFeatureExtractor::extractBlock(const CellRect& block, FeatureGrid* out) {
   FeatureGrid& grid = *out;
-  const int T = params_.pool_cell_px, step = params_.step_px, s = params_.stepsPerCell();
+  const int step = params_.step_px, s = params_.stepsPerCell();
   const int M = margin_;
   const int nx = block.width() * s, ny = block.height() * s;
   const int64_t points = int64_t{nx} * ny;
   // Grid point (i, j) of the block is point (gx + i, gy + j) of the grid.
   const int gx = (block.u0 - grid.region.u0) * s, gy = (block.v0 - grid.region.v0) * s;
 
-  // The block plus its margin, in padded-image coordinates (the padding is M on the left/top).
-  const cv::Rect sub(block.u0 * T, block.v0 * T, block.width() * T + 2 * M,
-                     block.height() * T + 2 * M);
+  const cv::Rect sub = paddedRect(block);
   const cv::Mat grey_sub = grey_padded_(sub);
   const int c0 = M + step / 2;  // centre of grid point 0 inside `sub`
   std::vector<float>& norms = norms_;

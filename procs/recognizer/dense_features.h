@@ -77,6 +77,11 @@ class DenseFeatureExtractor {
   const FeatureParams& params() const { return params_; }
 
  private:
+  /// The block plus its margin of filter support, in padded-image coordinates (the padding is
+  /// margin_ on the left and top): what its features read.
+  cv::Rect paddedRect(const CellRect& block) const;
+  /// Its pixels: what computing the block costs.
+  int64_t paddedArea(const CellRect& block) const;
   /// Fills the part of grey_padded_ and rgb_padded_ that `block`'s features read.
   void fillPadded(const CellRect& block);
   /// Features of the grid points of one block (inside grid->region) into their rows of *grid.

@@ -123,10 +123,8 @@ EncoderKind FrameEncoder::choose(const std::vector<PyramidBox>& boxes) const {
 
 void FrameEncoder::encode(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes,
                           EncoderKind kind, ReusableMatrix* out, Stats* stats) {
-  Stats local;
-  Stats& st = stats ? *stats : local;
-  prepare(bgr, boxes, kind, &st);
-  encodeRows(boxes, 0, boxes.size(), out, &st);
+  prepare(bgr, boxes, kind, stats);
+  encodeRows(boxes, 0, boxes.size(), out, stats);
 }
 
 void FrameEncoder::prepare(const cv::Mat& bgr, const std::vector<PyramidBox>& boxes,
