@@ -1,5 +1,6 @@
 // Depth filter: the Gaussian x Beta update converges to the true inverse depth and tells
-// outlier-dominated seeds apart; the whole filter (seeding, epipolar search, updates) recovers
+// outlier-dominated seeds apart; one epipolar search finds most seeds of a textured plane and
+// never a match beyond the frame; the whole filter (seeding, epipolar search, updates) recovers
 // the depth of a textured plane seen from a moving camera.
 #include <gtest/gtest.h>
 
@@ -8,6 +9,7 @@
 #include <random>
 
 #include "procs/slam/depth/depth_filter.h"
+#include "procs/slam/depth/epipolar_search.h"
 #include "procs/slam/depth/seed.h"
 #include "tests/slam/synthetic_scene.h"
 
@@ -107,6 +109,51 @@ TEST(DepthSeedUpdate, DepthUncertaintyGrowsWithDistanceAndShrinksWithBaseline) {
   EXPECT_LT(wide, far);
   // Stereo rule of thumb: sigma_z ~ z^2 / (f b) x the angle's error in pixels (here one).
   EXPECT_NEAR(far, 9.0 / (500 * 0.1), 0.3 * 9.0 / (500 * 0.1));
+}
+
+// One search per seed of a grid over the plane, the frame 0.1 m to the side (25 px of disparity).
+// A single search is often wrong (the filter's outlier model is there for that), but most seeds
+// whose match is in the frame are found there; and no match, right or wrong, rests on a sample
+// beyond the frame's edge, also for seeds whose true match is beyond it.
+TEST(EpipolarSearch, FindsMostSeedsAtThePlanesDistanceAndNoMatchBeyondTheFrame) {
+  const test::PinholeCamera cam;
+  const cv::Mat texture = makeTexture(2048, 5);
+  const cv::Mat host = renderPlane(texture, kTexel, kPlaneZ, SE3::Identity(), cam);
+  SE3 T = SE3::Identity();
+  T.translation() = Eigen::Vector3d(0.1, 0, 0);
+  const cv::Mat frame = renderPlane(texture, kTexel, kPlaneZ, T, cam);
+  EpipolarSearchParams p;
+  p.fx = static_cast<float>(cam.fx), p.fy = static_cast<float>(cam.fy);
+  p.cx = static_cast<float>(cam.cx), p.cy = static_cast<float>(cam.cy);
+  const Eigen::Matrix3f R = Eigen::Matrix3f::Identity();
+  const Eigen::Vector3f t(-0.1f, 0, 0);  // host camera -> frame camera
+  const double disparity = cam.fx * 0.1 / kPlaneZ;
+  int inside = 0, found = 0, right = 0, beyond = 0, off_frame = 0;
+  for (int v = 20; v < cam.height - 20; v += 23)
+    for (int u = 3; u < cam.width - 3; u += 5) {
+      const Eigen::Vector3f f =
+          Eigen::Vector3f((u - p.cx) / p.fx, (v - p.cy) / p.fy, 1.f).normalized();
+      const DepthSeed seed = makeSeed(static_cast<float>(u), static_cast<float>(v), f, 2.6f, 1.f);
+      const EpipolarMatch m = searchEpipolar(host, frame, R, t, seed, p);
+      // Two samples each side, one pixel apart; sub-pixel refinement moves half a pixel at most.
+      if (m.result == EpipolarMatch::kFound && (m.px.x() < 1.5f || m.px.x() > cam.width - 2.5f))
+        ++off_frame;
+      const double u_frame = u - disparity;  // where the seed is in the frame
+      if (u_frame < 3) {
+        ++beyond;
+        continue;
+      }
+      ++inside;
+      if (m.result != EpipolarMatch::kFound) continue;
+      ++found;
+      const double truth = kPlaneZ / f.z();
+      right += std::abs(m.distance - truth) < 0.02 * truth && std::abs(m.px.x() - u_frame) < 0.5 &&
+               std::abs(m.px.y() - v) < 0.5;
+    }
+  ASSERT_GT(beyond, 50);
+  EXPECT_EQ(off_frame, 0) << "matches resting on samples beyond the frame";
+  EXPECT_GT(found, 0.8 * inside) << found << " of " << inside << " found";
+  EXPECT_GT(right, 0.85 * found) << right << " of " << found << " found at the plane";
 }
 
 TEST(DepthFilter, RecoversThePlaneDepthFromAMovingCamera) {

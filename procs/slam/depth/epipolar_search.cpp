@@ -41,6 +41,26 @@ bool referencePatch(const cv::Mat& host, const Eigen::Vector2f& u, const Eigen::
   return true;
 }
 
+// cost[c] = the SSD of the `ref` patch (zero mean) and x[c .. c + kSamples) less its mean, for
+// c < count. A loop without branches that the compiler vectorises; each position's sums run in
+// the order of one position at a time, so the costs have the same bits as computed one by one
+// (the same fused multiply-adds too). Not inlined: GCC judged the loop cold inside
+// searchEpipolar and left it scalar.
+[[gnu::noinline]] void windowCosts(const float* x, const float ref[kSamples], int count,
+                                   float* cost) {
+  for (int c = 0; c < count; ++c) {
+    float mean = 0;
+    for (int k = 0; k < kSamples; ++k) mean += x[c + k];
+    mean /= kSamples;
+    float ssd = 0;
+    for (int k = 0; k < kSamples; ++k) {
+      const float d = x[c + k] - mean - ref[k];
+      ssd += d * d;
+    }
+    cost[c] = ssd;
+  }
+}
+
 // Sub-pixel position of the best cost: the vertex of the parabola through its neighbours.
 float subPixelOffset(const float* costs, int best, int steps) {
   const float inf = std::numeric_limits<float>::max();
@@ -114,37 +134,32 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector2f s = px_far + float(k - kHalf) * dir;
     ok_buf[k] = sample(frame, s.x(), s.y(), &cur_buf[k]);
+    if (!ok_buf[k]) cur_buf[k] = 0;
   }
+  // The costs of all positions first, then those with a sample outside the frame set aside.
+  windowCosts(cur_buf.data(), ref, steps + 1, costs.data());
   const float inf = std::numeric_limits<float>::max();
   int best = -1;
   float best_cost = inf;
+  int outside = 0;  // samples outside the frame among the window's five
+  for (int k = 0; k < kSamples - 1; ++k) outside += !ok_buf[k];
   for (int c = 0; c <= steps; ++c) {
-    costs[c] = inf;
-    float mean = 0;
-    bool valid = true;
-    for (int k = 0; k < kSamples && valid; ++k) {
-      valid = ok_buf[c + k];
-      mean += cur_buf[c + k];
-    }
-    if (!valid) continue;
-    mean /= kSamples;
-    float ssd = 0;
-    for (int k = 0; k < kSamples; ++k) {
-      const float d = cur_buf[c + k] - mean - ref[k];
-      ssd += d * d;
-    }
-    costs[c] = ssd;
-    if (ssd < best_cost) {
-      best_cost = ssd;
+    outside += !ok_buf[c + kSamples - 1];
+    if (outside > 0) costs[c] = inf;
+    outside -= !ok_buf[c];
+    if (costs[c] < best_cost) {
+      best_cost = costs[c];
       best = c;
     }
   }
   if (best < 0) return m;  // the whole segment is outside the frame
   m.result = EpipolarMatch::kNoMatch;
   if (best_cost > p.max_ssd_per_sample * kSamples) return m;
+  // The best cost away from the best position and its neighbours (by value: std::min's reference
+  // kept `second` in memory, a chain of loads and stores through the stack).
   float second = inf;
-  for (int c = 0; c <= steps; ++c)
-    if (std::abs(c - best) > 1) second = std::min(second, costs[c]);
+  for (int c = 0; c < best - 1; ++c) second = costs[c] < second ? costs[c] : second;
+  for (int c = best + 2; c <= steps; ++c) second = costs[c] < second ? costs[c] : second;
   if (second < inf && best_cost > p.uniqueness_ratio * second) return m;
 
   const Eigen::Vector2f px =

@@ -322,12 +322,4 @@ void OrbExtractor::describeLevel(const cv::Mat& image, int l, std::vector<cv::Ke
   *out_desc = desc;
 }
 
-int descriptorDistance(const uint8_t* a, const uint8_t* b) {
-  uint64_t pa[4], pb[4];
-  std::memcpy(pa, a, 32);
-  std::memcpy(pb, b, 32);
-  return __builtin_popcountll(pa[0] ^ pb[0]) + __builtin_popcountll(pa[1] ^ pb[1]) +
-         __builtin_popcountll(pa[2] ^ pb[2]) + __builtin_popcountll(pa[3] ^ pb[3]);
-}
-
 }  // namespace slamaware::slam

@@ -4,6 +4,7 @@
 // cell is weak) and a quadtree keeps the strongest corner of each of N regions.
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
@@ -59,7 +60,14 @@ class OrbExtractor {
       pattern_;  ///< 256 point pairs (x1, y1, x2, y2) of the BRIEF tests
 };
 
-/// Hamming distance of two 32-byte descriptors.
-int descriptorDistance(const uint8_t* a, const uint8_t* b);
+/// Hamming distance of two 32-byte descriptors. Inline: the matchers call it in their innermost
+/// loops (the keyframe pairs' triangulation search compares every free feature with every other).
+inline int descriptorDistance(const uint8_t* a, const uint8_t* b) {
+  uint64_t pa[4], pb[4];
+  std::memcpy(pa, a, 32);
+  std::memcpy(pb, b, 32);
+  return __builtin_popcountll(pa[0] ^ pb[0]) + __builtin_popcountll(pa[1] ^ pb[1]) +
+         __builtin_popcountll(pa[2] ^ pb[2]) + __builtin_popcountll(pa[3] ^ pb[3]);
+}
 
 }  // namespace slamaware::slam

@@ -230,9 +230,15 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
   const bool epipole_valid = c1_in_2.z() > 1e-9;
   const Eigen::Vector2d epipole = epipole_valid ? in.project(c1_in_2) : Eigen::Vector2d(1e9, 1e9);
 
+  // kf2's features without a point, their descriptors side by side: every free feature of kf1 is
+  // compared with each of them.
   std::vector<int> free2;
+  std::vector<uint8_t> free2_desc;
   for (int j = 0; j < f2.size(); ++j)
-    if (!kf2.points[j]) free2.push_back(j);
+    if (!kf2.points[j]) {
+      free2.push_back(j);
+      free2_desc.insert(free2_desc.end(), f2.descriptor(j), f2.descriptor(j) + 32);
+    }
   std::vector<int> best_for_2(f2.size(), -1),
       best_dist_2(f2.size(), std::numeric_limits<int>::max());
   std::vector<int> match_of_1(f1.size(), -1);
@@ -243,9 +249,10 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
     const double line_norm2 = line.x() * line.x() + line.y() * line.y();
     if (line_norm2 < 1e-18) continue;
     int best = kMatchDistanceLow + 1, best_j = -1;
-    for (int j : free2) {
-      const int d = descriptorDistance(d1, f2.descriptor(j));
+    for (size_t k = 0; k < free2.size(); ++k) {
+      const int d = descriptorDistance(d1, free2_desc.data() + 32 * k);
       if (d >= best) continue;
+      const int j = free2[k];
       const int level2 = f2.level(j);
       if ((f2.px[j] - epipole).squaredNorm() < 100 * pyr.scale[level2]) continue;
       const double num = line.dot(f2.px[j].homogeneous());
