@@ -134,9 +134,9 @@ EpipolarMatch searchEpipolar(const cv::Mat& host, const cv::Mat& frame, const Ei
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector2f s = px_far + float(k - kHalf) * dir;
     ok_buf[k] = sample(frame, s.x(), s.y(), &cur_buf[k]);
-    if (!ok_buf[k]) cur_buf[k] = 0;
   }
-  // The costs of all positions first, then those with a sample outside the frame set aside.
+  // The costs of all positions first (a sample outside the frame holds an earlier call's value, a
+  // finite grey level), then those positions set aside.
   windowCosts(cur_buf.data(), ref, steps + 1, costs.data());
   const float inf = std::numeric_limits<float>::max();
   int best = -1;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <numeric>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
