@@ -63,9 +63,10 @@ class OrbExtractor {
 /// Hamming distance of two 32-byte descriptors. Inline: the matchers call it in their innermost
 /// loops (the keyframe pairs' triangulation search compares every free feature with every other).
 inline int descriptorDistance(const uint8_t* a, const uint8_t* b) {
+  static_assert(OrbExtractor::kDescriptorBytes == 4 * sizeof(uint64_t), "four 64-bit words");
   uint64_t pa[4], pb[4];
-  std::memcpy(pa, a, 32);
-  std::memcpy(pb, b, 32);
+  std::memcpy(pa, a, sizeof pa);
+  std::memcpy(pb, b, sizeof pb);
   return __builtin_popcountll(pa[0] ^ pb[0]) + __builtin_popcountll(pa[1] ^ pb[1]) +
          __builtin_popcountll(pa[2] ^ pb[2]) + __builtin_popcountll(pa[3] ^ pb[3]);
 }

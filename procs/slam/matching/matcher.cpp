@@ -232,12 +232,14 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
 
   // kf2's features without a point, their descriptors side by side: every free feature of kf1 is
   // compared with each of them.
+  constexpr int kBytes = OrbExtractor::kDescriptorBytes;
   std::vector<int> free2;
   std::vector<uint8_t> free2_desc;
+  free2_desc.reserve(static_cast<size_t>(f2.size()) * kBytes);
   for (int j = 0; j < f2.size(); ++j)
     if (!kf2.points[j]) {
       free2.push_back(j);
-      free2_desc.insert(free2_desc.end(), f2.descriptor(j), f2.descriptor(j) + 32);
+      free2_desc.insert(free2_desc.end(), f2.descriptor(j), f2.descriptor(j) + kBytes);
     }
   std::vector<int> best_for_2(f2.size(), -1),
       best_dist_2(f2.size(), std::numeric_limits<int>::max());
@@ -250,7 +252,7 @@ Matches searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const E
     if (line_norm2 < 1e-18) continue;
     int best = kMatchDistanceLow + 1, best_j = -1;
     for (size_t k = 0; k < free2.size(); ++k) {
-      const int d = descriptorDistance(d1, free2_desc.data() + 32 * k);
+      const int d = descriptorDistance(d1, free2_desc.data() + kBytes * k);
       if (d >= best) continue;
       const int j = free2[k];
       const int level2 = f2.level(j);
